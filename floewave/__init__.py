@@ -1,0 +1,32 @@
+"""floewave: wave attenuation in fields of colliding ice floes.
+
+A numba implementation of the coupled discrete-element / wave-energy model of
+Herman, Cheng & Shen (2019, The Cryosphere 13, 2887). Public API:
+
+- :class:`ModelConfig` — every parameter of the model (frozen, validated)
+- :func:`solve_dispersion` — k and c_g (eqs. 6, 7)
+- :func:`alpha_confined` — the confined-ice attenuation rate (eq. 24)
+- :func:`run_point` — the attenuation iteration for one point -> :class:`PointResult`
+"""
+from .config import (ConfigError, FloewaveError, InvalidPointError, ModelConfig,
+                     SWEPT_FIELDS)
+from .dispersion import DispersionError, alpha_confined, solve_dispersion
+from .results import PointResult
+
+__version__ = "0.1.0"
+
+#: Changes only when results can change (not with the package version): part of every
+#: point's identity hash in ``sweep``.
+MODEL_VERSION = "1"
+
+__all__ = ["ModelConfig", "PointResult", "run_point", "solve_dispersion", "alpha_confined",
+           "FloewaveError", "ConfigError", "InvalidPointError", "DispersionError",
+           "SWEPT_FIELDS", "MODEL_VERSION", "__version__"]
+
+
+def __getattr__(name: str):
+    if name == "run_point":
+        from .model import run_point
+
+        return run_point
+    raise AttributeError(name)

@@ -1,0 +1,290 @@
+"""Model configuration: every parameter of MODEL.md in one frozen, validated dataclass.
+
+``ModelConfig`` is the single source of truth for a model point. It is frozen and
+hashable, validated in one place (``__post_init__``), and round-trips exactly through
+``to_dict`` / ``from_dict``. The kernel variant that runs is decided from it once,
+outside the time loop.
+
+Field-local problems (a negative length, eps outside (0, 1], an unknown dispersion
+name...) raise :class:`ConfigError` (a ``ValueError``) naming the field and the value.
+Cross-field *physical* problems (T/dt not an integer, ``ml`` beyond its mass-loading
+cutoff, fewer than two floes) are found by :meth:`ModelConfig.check_physics`, which
+raises :class:`InvalidPointError` (also a ``ValueError``): a campaign records such a
+point as ``invalid`` instead of crashing.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, fields
+from typing import Any
+
+__all__ = [
+    "ModelConfig",
+    "FloewaveError",
+    "ConfigError",
+    "InvalidPointError",
+    "SWEPT_FIELDS",
+    "G",
+]
+
+G = 9.81  # [m s^-2] acceleration due to gravity (MODEL.md: g = 9.81)
+
+#: The seven swept dimensions of the paper's campaign (MODEL.md §7), in grid order.
+SWEPT_FIELDS = ("L_x", "T", "a0", "C_sd", "eps", "d_f", "dispersion")
+
+DISPERSIONS = ("ep", "ml", "ow")
+CONTACTS = ("hertz_disk", "linear")
+DAMPINGS = ("liggghts", "exact")
+DRAG_INTEGRATIONS = ("quadrature", "exact")
+INTEGRATORS = ("predictor", "half_step")
+
+
+class FloewaveError(Exception):
+    """Base class of every error raised by floewave."""
+
+
+class ConfigError(FloewaveError, ValueError):
+    """A configuration value is malformed (wrong type, out of range, unknown name)."""
+
+
+class InvalidPointError(FloewaveError, ValueError):
+    """A well-formed configuration that describes a physically impossible point."""
+
+
+@dataclass(frozen=True)
+class ModelConfig:
+    """All parameters of one model point (SI units; MODEL.md section in brackets).
+
+    Swept dimensions (paper §4.1)
+    ----------------------------
+    L_x : floe length [m] (§1)
+    T : wave period [s] (§2)
+    a0 : incident wave amplitude at the ice edge [m] (§4)
+    C_sd : skin-drag coefficient [-] (eq. 15)
+    eps : nominal restitution coefficient, in (0, 1] [-] (§3)
+    d_f : initial floe-floe distance [m] (§1)
+    dispersion : ``"ep"`` elastic plate, ``"ml"`` mass loading, ``"ow"`` open water (eq. 6)
+
+    Geometry and material (§1, §7; LS-WICE-like tank, documented assumptions)
+    ------------------------------------------------------------------------
+    L_sheet : length of the ice sheet [m]; N_f = round(L_sheet / L_x)
+    h : water depth [m]; L_y : floe width [m]; h_i : ice thickness [m]
+    rho_i, rho_w : ice and water density [kg m^-3]
+    E : Young's modulus [Pa]; nu : Poisson's ratio [-]
+    k_s : edge-spring constant on floes 1 and N_f [N m^-1]
+    C_m : added-mass coefficient [-]
+
+    Contact law (§3)
+    ----------------
+    contact : ``"hertz_disk"`` (DESIgn/LIGGGHTS law) or ``"linear"``
+    damping : ``"liggghts"`` (gamma = -beta sqrt(5 k m*)) or ``"exact"`` (-2 beta sqrt(k m*))
+    clip_attraction : clip the contact force at 0 at the end of a contact
+
+    Numerics (§3, §4)
+    -----------------
+    dt : time step [s]; T/dt must be an integer
+    dx : drag/dissipation quadrature spacing along the floe bottom [m]; L_x/dx integer
+    drag_integration : ``"quadrature"`` (the paper's dx grid)
+    integrator : ``"predictor"`` (velocity Verlet, velocity-dependent forces at the
+        predicted end-of-step velocity u + dt*a: second order) or ``"half_step"``
+        (forces at the half-step velocity as LIGGGHTS does: first order in the damping)
+    n0 : spin-up periods per iteration; nT : averaging periods per iteration
+    delta : convergence threshold on max_i |a_new - a| / a
+    relax : under-relaxation of the amplitude update (the paper has 1)
+    max_iterations : hard cap on iterations
+    noise_window : iterations over which a stalled residual marks the noise floor
+        (0 disables noise handling: the paper's plain algorithm)
+    n_average : iterations averaged once the noise floor is reached
+    warm_start : carry the DEM state over between iterations (default) instead of
+        restarting from the initial state
+    confined : hold all floes fixed (u = 0), the analytic limit of §5
+    overwash : include overwash dissipation (eqs. 17, 18, 21); c_ow [-], s_min [-]
+
+    Diagnostics (§6)
+    ----------------
+    gap_threshold : phase-averaged gap that ends the collisional zone [m]
+    """
+
+    # --- swept (paper §4.1) ---
+    L_x: float = 0.5
+    T: float = 1.2
+    a0: float = 0.0125
+    C_sd: float = 0.05
+    eps: float = 0.6
+    d_f: float = 0.005
+    dispersion: str = "ml"
+    # --- geometry and material ---
+    L_sheet: float = 42.0
+    h: float = 2.5
+    L_y: float = 10.0
+    h_i: float = 0.03
+    rho_i: float = 910.0
+    rho_w: float = 1000.0
+    E: float = 3.0e7
+    nu: float = 0.3
+    k_s: float = 9.0e4
+    C_m: float = 0.1
+    # --- contact ---
+    contact: str = "hertz_disk"
+    damping: str = "liggghts"
+    clip_attraction: bool = False
+    # --- numerics ---
+    dt: float = 1.0e-4
+    dx: float = 0.01
+    drag_integration: str = "quadrature"
+    integrator: str = "predictor"
+    n0: int = 10
+    nT: int = 5
+    delta: float = 1.0e-3
+    relax: float = 0.3
+    max_iterations: int = 100
+    noise_window: int = 6
+    n_average: int = 20
+    warm_start: bool = True
+    confined: bool = False
+    overwash: bool = False
+    c_ow: float = 1.0
+    s_min: float = 0.03
+    # --- diagnostics ---
+    gap_threshold: float = 1.0e-4
+
+    # ------------------------------------------------------------------ validation
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            object.__setattr__(self, f.name, _coerce(f.name, f.type, value))
+        positive = ("L_x", "T", "a0", "L_sheet", "h", "L_y", "h_i", "rho_i", "rho_w",
+                    "dt", "dx", "delta", "gap_threshold")
+        for name in positive:
+            _require(name, getattr(self, name) > 0, "must be > 0")
+        non_negative = ("C_sd", "d_f", "E", "k_s", "C_m", "c_ow", "s_min")
+        for name in non_negative:
+            _require(name, getattr(self, name) >= 0, "must be >= 0")
+        _require("eps", 0 < self.eps <= 1, "must be in (0, 1]")
+        _require("nu", 0 <= self.nu < 0.5, "must be in [0, 0.5)")
+        _require("relax", 0 < self.relax <= 1, "must be in (0, 1]")
+        _require("n0", self.n0 >= 0, "must be >= 0")
+        _require("nT", self.nT >= 1, "must be >= 1")
+        _require("max_iterations", self.max_iterations >= 1, "must be >= 1")
+        _require("noise_window", self.noise_window >= 0, "must be >= 0")
+        _require("n_average", self.n_average >= 2, "must be >= 2")
+        _require("rho_i", self.rho_i < self.rho_w or self.rho_i == self.rho_w,
+                 "must not exceed rho_w (floes float)")
+        for name, allowed in (("dispersion", DISPERSIONS), ("contact", CONTACTS),
+                              ("damping", DAMPINGS), ("drag_integration", DRAG_INTEGRATIONS),
+                              ("integrator", INTEGRATORS)):
+            _require(name, getattr(self, name) in allowed, f"must be one of {allowed}")
+
+    # ------------------------------------------------------------------ derived
+    @property
+    def n_floes(self) -> int:
+        """N_f = round(L_sheet / L_x) (MODEL.md §1)."""
+        return int(round(self.L_sheet / self.L_x))
+
+    @property
+    def n_t(self) -> int:
+        """Time steps per wave period, T / dt (must be an integer)."""
+        return int(round(self.T / self.dt))
+
+    @property
+    def n_x(self) -> int:
+        """Quadrature cells along a floe bottom, L_x / dx (must be an integer)."""
+        return int(round(self.L_x / self.dx))
+
+    @property
+    def omega(self) -> float:
+        """Angular frequency 2 pi / T [rad s^-1]."""
+        return 2.0 * math.pi / self.T
+
+    @property
+    def mass(self) -> float:
+        """Floe mass m = rho_i L_x L_y h_i [kg]."""
+        return self.rho_i * self.L_x * self.L_y * self.h_i
+
+    @property
+    def draft(self) -> float:
+        """Floe draft d = h_i rho_i / rho_w [m]."""
+        return self.h_i * self.rho_i / self.rho_w
+
+    def floe_steps_per_iteration(self) -> int:
+        """(n0 + nT) n_t N_f: the cost unit of MODEL.md §4 for one iteration."""
+        periods = self.nT if self.confined else self.n0 + self.nT
+        return periods * self.n_t * self.n_floes
+
+    def check_physics(self) -> None:
+        """Raise :class:`InvalidPointError` if this point cannot be simulated.
+
+        Checks: T/dt and L_x/dx integral, at least two floes, and (via the dispersion
+        solver) that eq. 6 has an admissible root (``ml`` below its cutoff).
+        """
+        _require_integral("T", self.T, self.dt, "dt")
+        _require_integral("L_x", self.L_x, self.dx, "dx")
+        if self.n_floes < 2:
+            raise InvalidPointError(
+                f"L_sheet / L_x = {self.L_sheet!r} / {self.L_x!r} gives {self.n_floes} floe(s);"
+                " at least 2 are needed")
+        from .dispersion import solve_dispersion  # local import: dispersion imports config
+
+        solve_dispersion(self)
+
+    # ------------------------------------------------------------------ (de)serialise
+    def to_dict(self) -> dict[str, Any]:
+        """All fields as plain Python values (exact round trip with :meth:`from_dict`)."""
+        return dataclasses.asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "ModelConfig":
+        """Build from a mapping; unknown keys raise :class:`ConfigError` naming them."""
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(data) - known)
+        if unknown:
+            raise ConfigError(f"unknown ModelConfig field(s): {', '.join(map(repr, unknown))}")
+        return cls(**data)
+
+    def replace(self, **changes: Any) -> "ModelConfig":
+        """A copy with some fields changed (validated again)."""
+        unknown = sorted(set(changes) - {f.name for f in fields(self)})
+        if unknown:
+            raise ConfigError(f"unknown ModelConfig field(s): {', '.join(map(repr, unknown))}")
+        return dataclasses.replace(self, **changes)
+
+
+def _require(name: str, ok: bool, what: str) -> None:
+    if not ok:
+        raise ConfigError(f"ModelConfig.{name} {what}")
+
+
+def _require_integral(name: str, value: float, step: float, step_name: str) -> None:
+    n = value / step
+    if round(n) < 1 or abs(n - round(n)) > 1e-9 * max(1.0, abs(n)):
+        raise InvalidPointError(
+            f"{name} / {step_name} = {value!r} / {step!r} = {n!r} is not an integer")
+
+
+def _coerce(name: str, type_name: Any, value: Any) -> Any:
+    """Check one field's type; ints are accepted for floats (1 == 1.0)."""
+    type_name = type_name if isinstance(type_name, str) else type_name.__name__
+    bad = ConfigError(f"ModelConfig.{name} = {value!r}: expected {type_name}")
+    if type_name == "float":
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise bad
+        value = float(value)
+        if not math.isfinite(value):
+            raise ConfigError(f"ModelConfig.{name} = {value!r}: must be finite")
+        return value
+    if type_name == "int":
+        if isinstance(value, bool) or not isinstance(value, int):
+            if isinstance(value, float) and value.is_integer():
+                return int(value)
+            raise bad
+        return int(value)
+    if type_name == "bool":
+        if not isinstance(value, bool):
+            raise bad
+        return value
+    if type_name == "str":
+        if not isinstance(value, str):
+            raise bad
+        return value
+    raise TypeError(f"unhandled field type {type_name!r}")

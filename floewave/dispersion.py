@@ -1,0 +1,96 @@
+"""Dispersion relations (eq. 6), group velocity (eq. 7) and the confined-ice rate (eq. 24)."""
+from __future__ import annotations
+
+import math
+
+from scipy.optimize import brentq
+
+from .config import G, InvalidPointError, ModelConfig
+
+__all__ = ["coefficients", "dispersion_residual", "omega_of_k", "group_velocity",
+           "solve_dispersion", "alpha_confined", "DispersionError"]
+
+
+class DispersionError(InvalidPointError):
+    """Eq. 6 has no admissible root (e.g. ``ml`` beyond its mass-loading cutoff)."""
+
+
+def coefficients(cfg: ModelConfig) -> tuple[float, float]:
+    """(beta1 [m], beta2 [m^5 s^-2]) of eq. 6 for ``cfg.dispersion``.
+
+    beta1 = rho_i h_i / rho_w, beta2 = E h_i^3 / (12 rho_w (1 - nu^2)); ``ml`` sets
+    beta2 = 0, ``ow`` sets both to 0.
+    """
+    b1 = cfg.rho_i * cfg.h_i / cfg.rho_w
+    b2 = cfg.E * cfg.h_i**3 / (12.0 * cfg.rho_w * (1.0 - cfg.nu**2))
+    if cfg.dispersion == "ow":
+        return 0.0, 0.0
+    if cfg.dispersion == "ml":
+        return b1, 0.0
+    return b1, b2
+
+
+def omega_of_k(k: float, h: float, b1: float, b2: float) -> float:
+    """omega(k) from eq. 6: omega^2 = (g + b2 k^4) k tanh(kh) / (1 + b1 k tanh(kh))."""
+    kt = k * math.tanh(k * h)
+    return math.sqrt((G + b2 * k**4) * kt / (1.0 + b1 * kt))
+
+
+def dispersion_residual(k: float, omega: float, h: float, b1: float, b2: float) -> float:
+    """Relative residual of eq. 6: [omega^2 (1 + b1 k tanh kh) - (g + b2 k^4) k tanh kh] / rhs."""
+    kt = k * math.tanh(k * h)
+    rhs = (G + b2 * k**4) * kt
+    return (omega**2 * (1.0 + b1 * kt) - rhs) / rhs
+
+
+def group_velocity(k: float, omega: float, h: float, b1: float, b2: float) -> float:
+    """Eq. 7: c_g = omega/(2k) [(1 - b1 w^2/(g + b2 k^4))(1 + 2kh/sinh 2kh) + 4 b2 k^4/(g + b2 k^4)]."""
+    gk = G + b2 * k**4
+    kh2 = 2.0 * k * h
+    shallow = 1.0 + (kh2 / math.sinh(kh2) if kh2 < 700.0 else 0.0)
+    return omega / (2.0 * k) * ((1.0 - b1 * omega**2 / gk) * shallow + 4.0 * b2 * k**4 / gk)
+
+
+def _solve(omega: float, h: float, b1: float, b2: float, what: str) -> tuple[float, float]:
+    if b2 == 0.0 and b1 > 0.0 and omega**2 * b1 >= G:
+        raise DispersionError(
+            f"{what}: omega^2 = {omega**2:.6g} s^-2 is at or above the mass-loading cutoff"
+            f" g / beta1 = g rho_w / (rho_i h_i) = {G / b1:.6g} s^-2: eq. 6 has no root with"
+            " positive group velocity")
+
+    def f(k: float) -> float:
+        kt = k * math.tanh(k * h)
+        return omega**2 * (1.0 + b1 * kt) - (G + b2 * k**4) * kt
+
+    # f(0+) > 0 (omega^2 > 0). Upper bracket: grow until f < 0. For ml, k -> inf gives
+    # f -> kt (omega^2 b1 - g) < 0 below the cutoff; for ow/ep, -(g + b2 k^4) k wins.
+    lo = 1e-12
+    hi = max(omega**2 / G, omega / math.sqrt(G * h)) * 2.0 + 1e-6
+    while f(hi) > 0.0:
+        hi *= 2.0
+        if hi > 1e12:
+            raise DispersionError(f"{what}: no root of eq. 6 found below k = 1e12 m^-1")
+    k = brentq(f, lo, hi, xtol=1e-300, rtol=4 * 2.2e-16, maxiter=500)
+    cg = group_velocity(k, omega, h, b1, b2)
+    if not (cg > 0.0 and math.isfinite(cg)):
+        raise DispersionError(f"{what}: group velocity c_g = {cg!r} is not positive")
+    return k, cg
+
+
+def solve_dispersion(cfg: ModelConfig) -> tuple[float, float]:
+    """Wavenumber k [m^-1] and group velocity c_g [m s^-1] for ``cfg`` (eqs. 6, 7).
+
+    Brent's method on the bracketed unique positive root, to ~1e-15 relative in k.
+    Raises :class:`DispersionError` (an :class:`InvalidPointError`) when ``ml`` is at or
+    beyond its cutoff omega^2 >= g rho_w / (rho_i h_i).
+    """
+    b1, b2 = coefficients(cfg)
+    what = f"dispersion {cfg.dispersion!r} at T = {cfg.T!r} s"
+    return _solve(cfg.omega, cfg.h, b1, b2, what)
+
+
+def alpha_confined(cfg: ModelConfig) -> float:
+    """Eq. 24: alpha_c = 4 C_sd omega^3 / (3 pi g c_g tanh^3 kh)  [m^-2]."""
+    k, cg = solve_dispersion(cfg)
+    w = cfg.omega
+    return 4.0 * cfg.C_sd * w**3 / (3.0 * math.pi * G * cg * math.tanh(k * cfg.h) ** 3)
