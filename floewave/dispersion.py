@@ -70,7 +70,7 @@ def _solve(omega: float, h: float, b1: float, b2: float, what: str) -> tuple[flo
         hi *= 2.0
         if hi > 1e12:
             raise DispersionError(f"{what}: no root of eq. 6 found below k = 1e12 m^-1")
-    k = brentq(f, lo, hi, xtol=1e-300, rtol=4 * 2.2e-16, maxiter=500)
+    k = brentq(f, lo, hi, xtol=1e-300, rtol=1e-15, maxiter=500)
     cg = group_velocity(k, omega, h, b1, b2)
     if not (cg > 0.0 and math.isfinite(cg)):
         raise DispersionError(f"{what}: group velocity c_g = {cg!r} is not positive")
