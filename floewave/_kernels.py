@@ -1,0 +1,242 @@
+"""Numba kernels: the DEM time loop (private; use :mod:`floewave.model`).
+
+Everything here is nopython, ``cache=True``. The kernels see only numpy arrays and a
+:class:`KernelParams` named tuple of numbers built once per point from the frozen
+:class:`~floewave.config.ModelConfig`; option switches are small integers fixed for the
+whole call (loop-invariant branches, no Python objects in the time loop).
+
+Time integration (velocity Verlet, MODEL.md §3), per step n -> n+1::
+
+    u_half = u_n + dt/2 acc_n
+    x_{n+1} = x_n + dt u_half
+    acc_{n+1} = a(x_{n+1}, v*, t_{n+1})       # eq. 8 / ((1 + C_m) m)
+    u_{n+1} = u_half + dt/2 acc_{n+1}
+
+with velocity-dependent forces (drag, contact damping) evaluated at
+``v* = u_n + dt acc_n`` (``integrator = "predictor"``, second order) or at
+``v* = u_half`` (``"half_step"``, as LIGGGHTS does; first order in the damping).
+"""
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+JIT = dict(cache=True, fastmath=True, nogil=True)
+
+# option codes (decided once from ModelConfig)
+CONTACT_HERTZ_DISK = 0
+CONTACT_LINEAR = 1
+DAMPING_LIGGGHTS = 0
+DAMPING_EXACT = 1
+INTEG_PREDICTOR = 0
+INTEG_HALF_STEP = 1
+
+# rows of the per-window statistics array ``stats`` (shape (N_STATS, N_f))
+ST_S3 = 0        # sum over steps and cells of |u_rel|^3            [m^3 s^-3]
+ST_X = 1         # sum over steps of x_i                            [m]
+ST_GAP = 2       # sum over steps of gap_i (pair i, i+1)            [m]
+ST_CONTACT = 3   # steps in contact (pair i, i+1)                   [-]
+ST_COLL = 4      # contact onsets (pair i, i+1)                     [-]
+ST_FW = 5        # sum over steps of |F_w,i|                        [N]
+ST_FC = 6        # sum over steps of |net contact force on i|       [N]
+ST_FD = 7        # sum over steps of |F_d,i|                        [N]
+N_STATS = 8
+
+
+class KernelParams(NamedTuple):
+    """Numbers the time loop needs, SI units (built by ``model.kernel_params``)."""
+
+    dt: float          # time step [s]
+    n_t: int           # steps per period [-]
+    k: float           # wavenumber [m^-1]
+    omega: float       # angular frequency [s^-1]
+    c_wave: float      # F_w,i = c_wave a_i sin(k x_i - omega t) / a ... per unit a [N m^-1]
+    u_amp: float       # surface orbital velocity per unit amplitude, omega / tanh(kh) [s^-1]
+    c_drag: float      # rho_w C_sd L_y dx [kg m^-2 ... ] so F_d = c_drag sum |u|u [N s^2 m^-2]
+    inv_mass: float    # 1 / ((1 + C_m) m) [kg^-1]
+    one_cm: float      # 1 + C_m [-]
+    L_x: float         # floe length [m]
+    k_s: float         # edge-spring constant [N m^-1]
+    m_star: float      # reduced mass m/2 [kg]
+    beta: float        # ln(eps) / sqrt(ln(eps)^2 + pi^2) [-]
+    kn_lin: float      # linear contact stiffness Y* L_y h_i / L_x [N m^-1]
+    kn_disk: float     # hertz_disk prefactor pi Y* h_i [N m^-1]
+    s_scale: float     # s = delta * s_scale, s_scale = R* / (2 h_i^2) [m^-1]
+    contact: int       # CONTACT_*
+    damping: int       # DAMPING_*
+    clip: int          # 1: clip contact force at 0
+    integrator: int    # INTEG_*
+
+
+@njit(**JIT)
+def contact_stiffness(delta, P):
+    """k_n for overlap ``delta`` [N m^-1] (MODEL.md §3: hertz_disk f(s) or linear)."""
+    if P.contact == CONTACT_LINEAR:
+        return P.kn_lin
+    s = delta * P.s_scale
+    f = (0.9117 * s * s + 0.2722 * s + 0.003324) / (s * s + 1.524 * s + 0.03159)
+    return P.kn_disk * f
+
+
+@njit(**JIT)
+def contact_force(delta, v_n, P):
+    """Normal contact force [N] pushing a pair apart: F = k_n delta - gamma_n v_n.
+
+    ``v_n = u_{i+1} - u_i`` (positive while separating); gamma_n = -beta sqrt(5 k_n m*)
+    (liggghts) or -2 beta sqrt(k_n m*) (exact); clipped at 0 if ``P.clip``.
+    """
+    kn = contact_stiffness(delta, P)
+    if P.damping == DAMPING_LIGGGHTS:
+        gamma = -P.beta * math.sqrt(5.0 * kn * P.m_star)
+    else:
+        gamma = -2.0 * P.beta * math.sqrt(kn * P.m_star)
+    F = kn * delta - gamma * v_n
+    if P.clip == 1 and F < 0.0:
+        F = 0.0
+    return F
+
+
+@njit(**JIT)
+def drag_sums(A, c, s, v, cxi, sxi):
+    """Sums over the floe-bottom cells of |u_rel| u_rel and |u_rel|^3 (eqs. 15, 19).
+
+    u_rel_j = A cos(theta + k xi_j) - v = A (c cxi_j - s sxi_j) - v, with c, s the cosine
+    and sine of the phase theta at the floe centre.
+    """
+    s2 = 0.0
+    s3 = 0.0
+    for j in range(cxi.shape[0]):
+        ur = A * (c * cxi[j] - s * sxi[j]) - v
+        au = abs(ur)
+        s2 += au * ur
+        s3 += au * ur * ur
+    return s2, s3
+
+
+@njit(**JIT)
+def eval_forces(x, vs, a, x0, wt, P, cxi, sxi, F, in_contact, accumulate, stats):
+    """Total force of eq. 8 scaled to the left-hand side, (1 + C_m) F_w + F_d + F_c + F_s,
+    on every floe at positions ``x``, velocities ``vs`` and wave phase ``wt`` = omega t.
+
+    Fills ``F`` [N]; when ``accumulate``, adds this step to ``stats`` and counts contact
+    onsets against ``in_contact`` (always updated).
+    """
+    n = x.shape[0]
+    # wave (Froude-Krylov) + ice-water drag, per floe
+    for i in range(n):
+        th = P.k * x[i] - wt
+        s = math.sin(th)
+        c = math.cos(th)
+        Fw = P.c_wave * a[i] * s
+        s2, s3 = drag_sums(a[i] * P.u_amp, c, s, vs[i], cxi, sxi)
+        Fd = P.c_drag * s2
+        F[i] = P.one_cm * Fw + Fd
+        if accumulate:
+            stats[ST_S3, i] += s3
+            stats[ST_X, i] += x[i]
+            stats[ST_FW, i] += abs(Fw)
+            stats[ST_FD, i] += abs(Fd)
+    # contacts between neighbours i, i+1
+    Fc_prev = 0.0   # force of pair (i-1, i) pushing floe i towards +x
+    for i in range(n - 1):
+        gap = x[i + 1] - x[i] - P.L_x
+        Fc = 0.0
+        if gap < 0.0:
+            Fc = contact_force(-gap, vs[i + 1] - vs[i], P)
+            F[i] -= Fc
+            F[i + 1] += Fc
+        if accumulate:
+            stats[ST_GAP, i] += gap
+            stats[ST_FC, i] += abs(Fc_prev - Fc)
+            if gap < 0.0:
+                stats[ST_CONTACT, i] += 1.0
+                if in_contact[i] == 0:
+                    stats[ST_COLL, i] += 1.0
+        in_contact[i] = 1 if gap < 0.0 else 0
+        Fc_prev = Fc
+    if accumulate:
+        stats[ST_FC, n - 1] += abs(Fc_prev)
+    # edge springs (boom and beach) on the first and last floe
+    F[0] -= P.k_s * (x[0] - x0[0])
+    F[n - 1] -= P.k_s * (x[n - 1] - x0[n - 1])
+
+
+@njit(**JIT)
+def initial_acceleration(x, u, a, x0, istep, P, cxi, sxi, acc, in_contact):
+    """acc = F / ((1 + C_m) m) at step ``istep`` with velocities ``u`` (fills ``acc``)."""
+    F = np.empty_like(x)
+    dummy = np.zeros((N_STATS, x.shape[0]))
+    wt = 2.0 * math.pi / P.n_t * (istep % P.n_t)
+    eval_forces(x, u, a, x0, wt, P, cxi, sxi, F, in_contact, False, dummy)
+    for i in range(x.shape[0]):
+        acc[i] = F[i] * P.inv_mass
+
+
+@njit(**JIT)
+def advance(x, u, acc, a, x0, in_contact, istep, nsteps, accumulate, P, cxi, sxi, stats,
+            work):
+    """Advance the floe chain ``nsteps`` time steps in place; return the new step index.
+
+    Parameters
+    ----------
+    x, u, acc : (N_f,) positions [m], velocities [m s^-1], accelerations [m s^-2] at step
+        ``istep`` (updated in place).
+    a : (N_f,) wave amplitude attached to each floe [m].
+    x0 : (N_f,) initial positions (edge springs act on floes 0 and N_f - 1) [m].
+    in_contact : (N_f,) int8, 1 if pair (i, i+1) was in contact at the last step.
+    istep : int, index of the current step (t = istep dt; the phase is taken modulo n_t).
+    accumulate : bool, add this window to ``stats`` (rows ST_*).
+    cxi, sxi : (n_x,) cos(k xi_j), sin(k xi_j) at the cell midpoints xi_j relative to the
+        floe centre.
+    work : (3, N_f) scratch: half-step velocity, v*, force.
+    """
+    n = x.shape[0]
+    dt = P.dt
+    uh = work[0]
+    vs = work[1]
+    F = work[2]
+    two_pi_nt = 2.0 * math.pi / P.n_t
+    for _ in range(nsteps):
+        istep += 1
+        for i in range(n):
+            uh[i] = u[i] + 0.5 * dt * acc[i]
+            if P.integrator == INTEG_PREDICTOR:
+                vs[i] = u[i] + dt * acc[i]
+            else:
+                vs[i] = uh[i]
+            x[i] += dt * uh[i]
+        eval_forces(x, vs, a, x0, two_pi_nt * (istep % P.n_t), P, cxi, sxi, F, in_contact,
+                    accumulate, stats)
+        for i in range(n):
+            acc[i] = F[i] * P.inv_mass
+            u[i] = uh[i] + 0.5 * dt * acc[i]
+    return istep
+
+
+@njit(**JIT)
+def confined_window(x0, a, nsteps, P, cxi, sxi, stats):
+    """Floes held fixed (u = 0, MODEL.md §5): accumulate ``stats`` over ``nsteps`` steps.
+
+    Only the wave-side rows (S3, X, FW, FD) are filled; gaps are constant.
+    """
+    n = x0.shape[0]
+    two_pi_nt = 2.0 * math.pi / P.n_t
+    for istep in range(nsteps):
+        wt = two_pi_nt * (istep % P.n_t)
+        for i in range(n):
+            th = P.k * x0[i] - wt
+            s = math.sin(th)
+            c = math.cos(th)
+            s2, s3 = drag_sums(a[i] * P.u_amp, c, s, 0.0, cxi, sxi)
+            stats[ST_S3, i] += s3
+            stats[ST_X, i] += x0[i]
+            stats[ST_FW, i] += abs(P.c_wave * a[i] * s)
+            stats[ST_FD, i] += abs(P.c_drag * s2)
+
+
+def new_stats(n: int) -> np.ndarray:
+    """Zeroed statistics array (N_STATS, n)."""
+    return np.zeros((N_STATS, n))
