@@ -1,0 +1,37 @@
+"""Paper §4 qualitative results (MODEL.md §8) on small, reduced-numerics points.
+
+Reduced: L_x = 1.5 m (28 floes), n0 = 3, nT = 2 periods per iteration, noise-floor averaging
+over 8 iterations. Each comparison is between far-end amplitudes whose difference is many
+standard errors wide (asserted).
+"""
+import pytest
+
+from floewave import ModelConfig, run_point
+
+REDUCED = dict(L_x=1.5, n0=3, nT=2, noise_window=4, n_average=8, max_iterations=60)
+
+
+@pytest.fixture(scope="module")
+def points():
+    out = {}
+    for eps in (0.2, 0.8):
+        for disp in ("ml", "ep"):
+            out[eps, disp] = run_point(ModelConfig(eps=eps, dispersion=disp, **REDUCED))
+    return out
+
+
+def _clearly_less(r1, r2, n_sigma=3.0):
+    """r1's far-end a is below r2's by more than n_sigma combined standard errors."""
+    diff = r2.a[-1] - r1.a[-1]
+    se = (r1.a_stderr[-1] ** 2 + r2.a_stderr[-1] ** 2) ** 0.5
+    return diff > n_sigma * se
+
+
+@pytest.mark.parametrize("disp", ["ml", "ep"])
+def test_higher_restitution_attenuates_more(points, disp):
+    assert _clearly_less(points[0.8, disp], points[0.2, disp])
+
+
+@pytest.mark.parametrize("eps", [0.2, 0.8])
+def test_elastic_plate_attenuates_less_than_mass_loading(points, eps):
+    assert _clearly_less(points[eps, "ml"], points[eps, "ep"])

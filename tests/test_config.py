@@ -1,0 +1,60 @@
+"""ModelConfig: defaults, validation naming the field, exact round trip."""
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from floewave import ConfigError, InvalidPointError, ModelConfig
+
+
+def test_defaults_match_model_md():
+    c = ModelConfig()
+    assert (c.n_floes, c.n_t, c.n_x) == (84, 12000, 50)
+    assert ModelConfig(L_x=1.5).n_floes == 28 and ModelConfig(L_x=3.0).n_floes == 14
+    assert (c.h, c.L_y, c.h_i, c.rho_i, c.rho_w, c.E, c.nu, c.k_s) == (
+        2.5, 10.0, 0.03, 910.0, 1000.0, 3e7, 0.3, 9e4)
+    assert (c.n0, c.nT, c.delta, c.dt, c.dx, c.max_iterations) == (10, 5, 1e-3, 1e-4, 0.01, 100)
+    assert c.contact == "hertz_disk" and c.damping == "liggghts" and not c.clip_attraction
+
+
+@pytest.mark.parametrize("field,value", [
+    ("L_x", 0.0), ("L_x", -1.0), ("T", 0), ("a0", -0.01), ("eps", 0.0), ("eps", 1.2),
+    ("C_sd", -0.1), ("d_f", -0.001), ("dispersion", "xx"), ("contact", "hooke"),
+    ("damping", "none"), ("nu", 0.5), ("relax", 0.0), ("relax", 1.5), ("nT", 0),
+    ("max_iterations", 0), ("n0", -1), ("dt", 0.0), ("L_x", "0.5"), ("n0", 2.5),
+    ("confined", 1), ("L_x", float("nan")), ("drag_integration", "simpson"),
+    ("rho_i", 1100.0),
+])
+def test_bad_values_name_the_field(field, value):
+    with pytest.raises(ConfigError, match=field):
+        ModelConfig(**{field: value})
+
+
+def test_unknown_field_rejected():
+    with pytest.raises(ConfigError, match="'L_z'"):
+        ModelConfig.from_dict({"L_z": 1.0})
+
+
+def test_physically_invalid_points():
+    with pytest.raises(InvalidPointError, match="T / dt"):
+        ModelConfig(T=1.23456, dt=1e-3).check_physics()
+    with pytest.raises(InvalidPointError, match="L_x / dx"):
+        ModelConfig(L_x=0.505, dx=0.01).check_physics()
+    with pytest.raises(InvalidPointError, match="floe"):
+        ModelConfig(L_x=40.0).check_physics()
+    ModelConfig().check_physics()
+
+
+def test_int_and_float_are_the_same_value():
+    assert ModelConfig(L_x=3, h=2) == ModelConfig(L_x=3.0, h=2.0)
+    assert isinstance(ModelConfig(L_x=3).L_x, float)
+
+
+@settings(max_examples=50, deadline=None)
+@given(L_x=st.sampled_from([0.5, 1.5, 3.0]), T=st.floats(0.5, 3.0), a0=st.floats(1e-3, 0.1),
+       eps=st.floats(0.01, 1.0), disp=st.sampled_from(["ep", "ml", "ow"]),
+       confined=st.booleans())
+def test_round_trip_is_exact(L_x, T, a0, eps, disp, confined):
+    c = ModelConfig(L_x=L_x, T=T, a0=a0, eps=eps, dispersion=disp, confined=confined)
+    d = c.to_dict()
+    assert ModelConfig.from_dict(d) == c
+    assert ModelConfig.from_dict(d).to_dict() == d

@@ -1,0 +1,86 @@
+"""The attenuation iteration (MODEL.md §4) on a reduced full-DEM point."""
+import numpy as np
+import pytest
+
+from floewave import ModelConfig, run_point
+from floewave.model import march_amplitude, noise_floor_reached, residual
+
+REDUCED = dict(L_x=1.5, n0=3, nT=2, noise_window=4, max_iterations=60)
+
+
+@pytest.fixture(scope="module")
+def windows():
+    """The same point averaged over 4 and over 16 iterations after the noise floor."""
+    return {n: run_point(ModelConfig(eps=0.8, n_average=n, **REDUCED)) for n in (4, 16)}
+
+
+def test_full_dem_point_converges_with_a_decreasing_profile(windows):
+    r = windows[16]
+    cfg = ModelConfig(eps=0.8, **REDUCED)
+    assert r.status in ("converged", "converged_noisy")
+    assert r.iterations <= cfg.max_iterations
+    assert len(r.residual_history) == r.iterations
+    assert np.all(r.a > 0) and np.all(r.a <= cfg.a0)
+    assert np.all(np.diff(r.a) <= 0)
+    assert r.a[-1] < 0.95 * cfg.a0          # the drag attenuates
+    assert r.floe_steps == r.iterations * cfg.floe_steps_per_iteration()
+    assert r.x_mean.shape == r.a.shape == r.gap_mean.shape == (cfg.n_floes,)
+    assert np.isnan(r.gap_mean[-1]) and np.all(np.isfinite(r.gap_mean[:-1]))
+    assert np.all((r.contact_fraction[:-1] >= 0) & (r.contact_fraction[:-1] <= 1))
+    assert np.all(r.collisions[:-1] >= 0)
+    assert np.all(r.S_sd < 0)
+    assert 0 < r.W_c <= cfg.L_sheet
+
+
+def test_standard_error_shrinks_with_the_averaging_window(windows):
+    short, long_ = windows[4], windows[16]
+    assert short.status == long_.status == "converged_noisy"
+    assert long_.noise > 0
+    assert np.mean(long_.a_stderr) < np.mean(short.a_stderr)
+
+
+def test_run_point_is_deterministic():
+    cfg = ModelConfig(eps=0.6, L_x=3.0, n0=1, nT=1, max_iterations=3)
+    r1, r2 = run_point(cfg), run_point(cfg)
+    for name in ("a", "S_sd", "x_mean", "gap_mean", "F_c_mean", "residual_history"):
+        np.testing.assert_array_equal(getattr(r1, name), getattr(r2, name))
+
+
+def test_paper_plain_algorithm_available():
+    """relax = 1, no noise handling: the paper's iteration; it stops at max_iterations."""
+    cfg = ModelConfig(eps=0.6, L_x=3.0, n0=2, nT=1, relax=1.0, noise_window=0,
+                      max_iterations=8)
+    r = run_point(cfg)
+    assert r.status in ("converged", "not_converged")
+    assert r.iterations == 8 or r.residual < cfg.delta
+
+
+def test_march_is_eq20():
+    cfg = ModelConfig(L_x=0.5)
+    S = -np.linspace(1e-3, 2e-3, 5)
+    a = march_amplitude(cfg, S, c_g=0.8, k=3.0)
+    fac = cfg.L_x / (cfg.rho_w * 9.81 * 0.8)
+    assert a[0] ** 2 == pytest.approx(cfg.a0**2 + fac * S[0])
+    for i in range(1, 5):
+        assert a[i] ** 2 == pytest.approx(a[i - 1] ** 2 + fac * (S[i - 1] + S[i]))
+    # clipped at zero, never NaN
+    assert np.all(march_amplitude(cfg, np.full(5, -1e3), 0.8, 3.0) == 0)
+
+
+def test_overwash_removes_energy_eq21():
+    cfg = ModelConfig(overwash=True, c_ow=0.05, s_min=0.0)
+    S = np.zeros(4)
+    a = march_amplitude(cfg, S, c_g=0.8, k=3.0)
+    h_ow = 0.05 * 3.0 * cfg.a0
+    assert a[1] ** 2 == pytest.approx(cfg.a0**2 - 3 * 9.81**0.5 * h_ow**2.5 / 0.8)
+    assert np.all(np.diff(a) < 0)
+    assert np.all(march_amplitude(cfg.replace(s_min=1.0), S, 0.8, 3.0) == cfg.a0)
+
+
+def test_residual_and_noise_floor_detection():
+    assert residual(np.array([1.0, 2.0, 0.0]), np.array([1.1, 1.0, 5.0])) == pytest.approx(0.5)
+    decaying = list(0.5 * 0.7 ** np.arange(12))
+    assert not noise_floor_reached(decaying, 4)
+    noisy = decaying[:4] + [0.03, 0.01, 0.04, 0.02, 0.025, 0.03, 0.015, 0.02]
+    assert noise_floor_reached(noisy, 4)
+    assert not noise_floor_reached(noisy, 0)
