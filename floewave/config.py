@@ -157,24 +157,24 @@ class ModelConfig:
         positive = ("L_x", "T", "a0", "L_sheet", "h", "L_y", "h_i", "rho_i", "rho_w",
                     "dt", "dx", "delta", "gap_threshold")
         for name in positive:
-            _require(name, getattr(self, name) > 0, "must be > 0")
+            _require(self, name, getattr(self, name) > 0, "must be > 0")
         non_negative = ("C_sd", "d_f", "E", "k_s", "C_m", "c_ow", "s_min")
         for name in non_negative:
-            _require(name, getattr(self, name) >= 0, "must be >= 0")
-        _require("eps", 0 < self.eps <= 1, "must be in (0, 1]")
-        _require("nu", 0 <= self.nu < 0.5, "must be in [0, 0.5)")
-        _require("relax", 0 < self.relax <= 1, "must be in (0, 1]")
-        _require("n0", self.n0 >= 0, "must be >= 0")
-        _require("nT", self.nT >= 1, "must be >= 1")
-        _require("max_iterations", self.max_iterations >= 1, "must be >= 1")
-        _require("noise_window", self.noise_window >= 0, "must be >= 0")
-        _require("n_average", self.n_average >= 2, "must be >= 2")
-        _require("rho_i", self.rho_i < self.rho_w or self.rho_i == self.rho_w,
+            _require(self, name, getattr(self, name) >= 0, "must be >= 0")
+        _require(self, "eps", 0 < self.eps <= 1, "must be in (0, 1]")
+        _require(self, "nu", 0 <= self.nu < 0.5, "must be in [0, 0.5)")
+        _require(self, "relax", 0 < self.relax <= 1, "must be in (0, 1]")
+        _require(self, "n0", self.n0 >= 0, "must be >= 0")
+        _require(self, "nT", self.nT >= 1, "must be >= 1")
+        _require(self, "max_iterations", self.max_iterations >= 1, "must be >= 1")
+        _require(self, "noise_window", self.noise_window >= 0, "must be >= 0")
+        _require(self, "n_average", self.n_average >= 2, "must be >= 2")
+        _require(self, "rho_i", self.rho_i < self.rho_w or self.rho_i == self.rho_w,
                  "must not exceed rho_w (floes float)")
         for name, allowed in (("dispersion", DISPERSIONS), ("contact", CONTACTS),
                               ("damping", DAMPINGS), ("drag_integration", DRAG_INTEGRATIONS),
                               ("integrator", INTEGRATORS)):
-            _require(name, getattr(self, name) in allowed, f"must be one of {allowed}")
+            _require(self, name, getattr(self, name) in allowed, f"must be one of {allowed}")
 
     # ------------------------------------------------------------------ derived
     @property
@@ -250,9 +250,9 @@ class ModelConfig:
         return dataclasses.replace(self, **changes)
 
 
-def _require(name: str, ok: bool, what: str) -> None:
+def _require(cfg: "ModelConfig", name: str, ok: bool, what: str) -> None:
     if not ok:
-        raise ConfigError(f"ModelConfig.{name} {what}")
+        raise ConfigError(f"ModelConfig.{name} = {getattr(cfg, name)!r} {what}")
 
 
 def _require_integral(name: str, value: float, step: float, step_name: str) -> None:

@@ -1,0 +1,146 @@
+"""``floewave run --set L_x=1.5 --set T=1.4 ... [--json out.json] [--plot out.png]``.
+
+Exit statuses: 0 success; 2 bad input (unknown field, bad value, physically invalid point);
+3 the point failed numerically.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from dataclasses import fields
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .config import FloewaveError, InvalidPointError, ModelConfig
+
+EXIT_OK = 0
+EXIT_BAD_INPUT = 2
+EXIT_FAILED = 3
+
+
+def _parse_value(name: str, text: str) -> Any:
+    types = {f.name: f.type for f in fields(ModelConfig)}
+    if name not in types:
+        raise FloewaveError(f"--set {name}={text}: unknown field {name!r}")
+    t = types[name] if isinstance(types[name], str) else types[name].__name__
+    try:
+        if t == "bool":
+            low = text.strip().lower()
+            if low not in ("true", "false", "1", "0", "yes", "no"):
+                raise ValueError(text)
+            return low in ("true", "1", "yes")
+        if t == "int":
+            return int(text)
+        if t == "float":
+            return float(text)
+    except ValueError:
+        raise FloewaveError(f"--set {name}={text}: expected {t}") from None
+    return text
+
+
+def config_from_sets(sets: list[str]) -> ModelConfig:
+    """Build a :class:`ModelConfig` from ``NAME=VALUE`` strings on top of the defaults."""
+    kw: dict[str, Any] = {}
+    for item in sets:
+        if "=" not in item:
+            raise FloewaveError(f"--set {item!r}: expected NAME=VALUE")
+        name, text = item.split("=", 1)
+        kw[name.strip()] = _parse_value(name.strip(), text.strip())
+    return ModelConfig(**kw)
+
+
+def _jsonable(v: Any) -> Any:
+    if isinstance(v, np.ndarray):
+        return [None if (isinstance(x, float) and not np.isfinite(x)) else x for x in v.tolist()]
+    if isinstance(v, (np.floating, float)):
+        return float(v) if np.isfinite(v) else None
+    if isinstance(v, np.integer):
+        return int(v)
+    return v
+
+
+def summary(cfg: ModelConfig, r) -> str:
+    """A few lines: iterations, status, W_c, alpha fits, wall time, floe-steps/s."""
+    rate = r.floe_steps / r.wall_time if r.wall_time > 0 else float("nan")
+    return "\n".join([
+        f"point: L_x={cfg.L_x} T={cfg.T} a0={cfg.a0} C_sd={cfg.C_sd} eps={cfg.eps} "
+        f"d_f={cfg.d_f} dispersion={cfg.dispersion}  (N_f={r.n_floes}, {r.kernel_mode})",
+        f"status: {r.status} after {r.iterations} iterations (final residual {r.residual:.3g},"
+        f" noise {r.noise:.3g})",
+        f"a/a0 at far end: {r.a_end / cfg.a0:.4f} +- {r.a_stderr[-1] / cfg.a0:.4f};"
+        f" collision-zone width W_c = {r.W_c:.2f} m",
+        f"alpha_all = {r.alpha_all:.4g} 1/m^2, alpha_edge = {r.alpha_edge:.4g},"
+        f" alpha_inner = {r.alpha_inner:.4g}, alpha_c (eq. 24) = {r.alpha_c:.4g};"
+        f" alpha_exp = {r.alpha_exp:.4g} 1/m",
+        f"wall time {r.wall_time:.2f} s, {r.floe_steps:.3g} floe-steps,"
+        f" {rate / 1e6:.1f} M floe-steps/s",
+    ])
+
+
+def plot(cfg: ModelConfig, r, path: Path) -> None:
+    """a/a0 (with standard error) versus x, and the eq. 25 curve with alpha_c (eq. 24)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 3.5))
+    x = r.x_mean
+    ax.errorbar(x, r.a / cfg.a0, yerr=r.a_stderr / cfg.a0, fmt=".-", ms=3, lw=1,
+                label=f"DEM, eps={cfg.eps}, {cfg.dispersion}")
+    xx = np.linspace(0, cfg.L_sheet, 200)
+    ax.plot(xx, 1.0 / (cfg.a0 * r.alpha_c * xx + 1.0), "k-", lw=1, label="eq. 25 (confined)")
+    if r.W_c < cfg.L_sheet:
+        ax.axvline(r.W_c, color="0.6", ls=":", label="W_c")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("a / a0")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="floewave", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="cmd", required=True)
+    run = sub.add_parser("run", help="run one model point and print a summary")
+    run.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                     help="override a ModelConfig field (repeatable)")
+    run.add_argument("--json", type=Path, help="write all results to this JSON file")
+    run.add_argument("--plot", type=Path, help="save a/a0 versus x to this PNG file")
+    args = parser.parse_args(argv)
+    from .model import run_point
+
+    try:
+        cfg = config_from_sets(args.set)
+        cfg.check_physics()
+    except (FloewaveError, ValueError) as exc:
+        print(f"floewave: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+    def progress(it: int, res: float, phase: str) -> None:
+        print(f"  iteration {it:3d}  residual {res:.4g}  ({phase})", file=sys.stderr)
+
+    try:
+        r = run_point(cfg, progress=progress)
+    except InvalidPointError as exc:
+        print(f"floewave: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except FloewaveError as exc:
+        print(f"floewave: point failed: {exc}", file=sys.stderr)
+        return EXIT_FAILED
+    print(summary(cfg, r))
+    if args.json:
+        out = {"config": cfg.to_dict(), "result": {k: _jsonable(v)
+                                                   for k, v in r.to_dict().items()}}
+        args.json.write_text(json.dumps(out, indent=1))
+    if args.plot:
+        plot(cfg, r, args.plot)
+    return EXIT_OK
+
+
+if __name__ == "__main__":
+    sys.exit(main())
