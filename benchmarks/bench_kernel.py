@@ -1,0 +1,63 @@
+"""Kernel speed in floe-steps per second (one core), numba versus the numpy twin, same run.
+
+    python benchmarks/bench_kernel.py [--steps 24000] [--repeat 5]
+
+For each floe size (L_x = 0.5, 1.5, 3.0 m at T = 1.2 s, the paper's lab setup) it times the
+numba kernel (best of --repeat windows of --steps steps, after compilation and a spin-up so
+contacts are active) and the plain vectorised-numpy implementation of the same time step
+(floewave._reference) for a shorter window, and prints both and their ratio. Timings on a
+shared machine are noisy: compare figures from the same run.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import time
+
+os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+
+from floewave import ModelConfig, solve_dispersion  # noqa: E402
+from floewave import _reference as ref  # noqa: E402
+from floewave.model import FloeChain  # noqa: E402
+
+
+def bench(cfg: ModelConfig, steps: int, repeat: int, numpy_steps: int) -> tuple[float, float]:
+    k, _ = solve_dispersion(cfg)
+    chain = FloeChain(cfg, k)
+    a = np.full(cfg.n_floes, cfg.a0)
+    chain.run(a, 2 * cfg.n_t)  # compile + spin-up
+    best = np.inf
+    for _ in range(repeat):
+        t = time.perf_counter()
+        chain.run(a, steps)
+        best = min(best, time.perf_counter() - t)
+    numba_rate = steps * cfg.n_floes / best
+    x, u, acc = chain.x.copy(), chain.u.copy(), chain.acc.copy()
+    best_np = np.inf
+    for _ in range(max(1, repeat // 2)):
+        t = time.perf_counter()
+        ref.advance(x, u, acc, a, chain.x0, chain.istep, numpy_steps, chain.P, chain.cxi,
+                    chain.sxi)
+        best_np = min(best_np, time.perf_counter() - t)
+    return numba_rate, numpy_steps * cfg.n_floes / best_np
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--steps", type=int, default=24000)
+    p.add_argument("--repeat", type=int, default=5)
+    p.add_argument("--numpy-steps", type=int, default=2000)
+    args = p.parse_args()
+    print(f"{'mode':<22}{'L_x':>5}{'N_f':>5}{'numba Mfs/s':>13}{'numpy Mfs/s':>13}{'ratio':>8}")
+    for mode in ("quadrature",):
+        for L_x in (0.5, 1.5, 3.0):
+            cfg = ModelConfig(L_x=L_x, T=1.2, drag_integration=mode)
+            nb, npy = bench(cfg, args.steps, args.repeat, args.numpy_steps)
+            print(f"{mode:<22}{L_x:>5}{cfg.n_floes:>5}{nb / 1e6:>13.2f}{npy / 1e6:>13.3f}"
+                  f"{nb / npy:>8.0f}")
+
+
+if __name__ == "__main__":
+    main()

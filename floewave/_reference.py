@@ -1,0 +1,58 @@
+"""Plain vectorised-numpy implementation of the same DEM time step as :mod:`._kernels`.
+
+Used as an independent check of the numba kernel (tests) and as the speed peer in
+``benchmarks/bench_kernel.py``. Same update formulas, vectorised over floes and drag cells;
+no statistics accumulation.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import _kernels as K
+
+
+def forces(x: np.ndarray, v: np.ndarray, a: np.ndarray, x0: np.ndarray, wt: float,
+           P: K.KernelParams, cxi: np.ndarray, sxi: np.ndarray) -> np.ndarray:
+    """(1 + C_m) F_w + F_d + F_c + F_s on every floe [N] (eq. 8, left-hand-side scaled)."""
+    th = P.k * x - wt
+    s, c = np.sin(th), np.cos(th)
+    Fw = P.c_wave * a * s
+    ur = (a * P.u_amp)[:, None] * (c[:, None] * cxi[None, :] - s[:, None] * sxi[None, :]) \
+        - v[:, None]
+    Fd = P.c_drag * np.sum(np.abs(ur) * ur, axis=1)
+    F = P.one_cm * Fw + Fd
+    delta = -(x[1:] - x[:-1] - P.L_x)
+    touch = delta > 0
+    d = np.where(touch, delta, 0.0)
+    if P.contact == K.CONTACT_LINEAR:
+        kn = np.full_like(d, P.kn_lin)
+    else:
+        sv = d * P.s_scale
+        kn = P.kn_disk * (0.9117 * sv**2 + 0.2722 * sv + 0.003324) / (sv**2 + 1.524 * sv
+                                                                        + 0.03159)
+    coef = math.sqrt(5.0) if P.damping == K.DAMPING_LIGGGHTS else 2.0
+    gamma = -P.beta * coef * np.sqrt(kn * P.m_star)
+    Fc = np.where(touch, kn * d - gamma * (v[1:] - v[:-1]), 0.0)
+    if P.clip:
+        Fc = np.maximum(Fc, 0.0)
+    F[:-1] -= Fc
+    F[1:] += Fc
+    F[0] -= P.k_s * (x[0] - x0[0])
+    F[-1] -= P.k_s * (x[-1] - x0[-1])
+    return F
+
+
+def advance(x, u, acc, a, x0, istep, nsteps, P, cxi, sxi):
+    """Numpy twin of :func:`floewave._kernels.advance` (no statistics); returns istep."""
+    dt = P.dt
+    for _ in range(nsteps):
+        istep += 1
+        uh = u + 0.5 * dt * acc
+        vs = u + dt * acc if P.integrator == K.INTEG_PREDICTOR else uh
+        x += dt * uh
+        F = forces(x, vs, a, x0, 2.0 * math.pi / P.n_t * (istep % P.n_t), P, cxi, sxi)
+        acc[:] = F * P.inv_mass
+        u[:] = uh + 0.5 * dt * acc
+    return istep
