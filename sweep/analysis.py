@@ -1,0 +1,140 @@
+"""Reading a store: pandas table, xarray grid, per-point profiles.
+
+Readers open the file read-only without HDF5 file locking, so they never block the
+writer; only committed rows (below ``/table.attrs["n_rows"]``) are returned.
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+import pandas as pd
+import xarray as xr
+
+from .errors import StoreError
+from .schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, column
+
+__all__ = ["load", "load_xarray", "load_profile", "store_attrs", "resolve_hash"]
+
+#: Columns that are bookkeeping, not results: left out of :func:`load_xarray`.
+_NOT_RESULTS = {"hash", "message", "host", "rank", "pid", "start_time", "end_time", "run",
+                "seq", "config_json", "provenance", "kernel_mode"}
+
+
+def _open(path: str | Path) -> h5py.File:
+    try:
+        return h5py.File(path, "r", locking=False)
+    except (OSError, FileNotFoundError) as exc:
+        raise StoreError(f"{path}: cannot open store: {exc}") from None
+
+
+def _decode(values: np.ndarray) -> np.ndarray:
+    if values.dtype.kind == "O" or values.dtype.kind == "S":
+        return np.array([v.decode() if isinstance(v, bytes) else v for v in values],
+                        dtype=object)
+    return values
+
+
+def store_attrs(path: str | Path) -> dict[str, Any]:
+    """The root attributes of a store (strings decoded)."""
+    with _open(path) as f:
+        return {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
+
+
+def load(path: str | Path) -> pd.DataFrame:
+    """The per-point table as a DataFrame: one row per stored point.
+
+    Columns are those of :data:`sweep.schema.COLUMNS` (swept values, status, message,
+    scalar results and diagnostics, provenance); ``DataFrame.attrs`` holds ``units`` and
+    ``long_name`` per column and the campaign JSON.
+    """
+    with _open(path) as f:
+        if "table" not in f:
+            raise StoreError(f"{path}: not a sweep store (no /table)")
+        table = f["table"]
+        n = int(table.attrs["n_rows"])
+        data = {c.name: _decode(table[c.name][:n]) for c in COLUMNS if c.name in table}
+        campaign = f.attrs.get("campaign_json", "")
+    df = pd.DataFrame(data)
+    df.attrs["units"] = {c.name: c.units for c in COLUMNS}
+    df.attrs["long_name"] = {c.name: c.long_name for c in COLUMNS}
+    df.attrs["campaign"] = campaign.decode() if isinstance(campaign, bytes) else campaign
+    return df
+
+
+def load_xarray(path: str | Path) -> xr.Dataset:
+    """The campaign as an xarray Dataset with one dimension per swept parameter.
+
+    Swept parameters are coordinates holding the campaign's full value lists, so a
+    point that is missing, ``failed`` or ``invalid`` is NaN in every numeric variable
+    (its ``status`` is kept). Every variable has ``units`` and ``long_name``; the
+    campaign definition is the JSON string attribute ``campaign``.
+    """
+    df = load(path)
+    attrs = store_attrs(path)
+    campaign = json.loads(attrs["campaign_json"])
+    dims = json.loads(attrs["swept_fields"])
+    coords = {d: np.asarray(sorted(campaign["sweep"][d])) for d in dims}
+    keep = [c.name for c in COLUMNS if c.name not in _NOT_RESULTS and c.name not in dims
+            and c.name not in ("L_x", "T", "a0", "C_sd", "eps", "d_f", "dispersion")]
+    bad = df["status"].isin(["failed", "invalid"])
+    values = df[dims + keep].copy()
+    for name in keep:
+        if column(name).kind != "str":
+            values[name] = values[name].astype(float)
+            values.loc[bad, name] = np.nan
+    ds = values.set_index(dims).to_xarray() if len(values) else xr.Dataset(
+        coords={d: [] for d in dims})
+    ds = ds.reindex(coords)
+    for name in list(ds.data_vars):
+        col = column(name)
+        ds[name].attrs.update(units=col.units, long_name=col.long_name)
+    for d in dims:
+        col = column(d)
+        ds[d].attrs.update(units=col.units, long_name=col.long_name)
+    ds.attrs.update(campaign=attrs["campaign_json"], campaign_toml=attrs["campaign_toml"],
+                    schema_version=int(attrs["schema_version"]), source=str(path))
+    return ds
+
+
+def resolve_hash(path: str | Path, prefix: str) -> str:
+    """The full hash of the one stored point whose hash starts with ``prefix``."""
+    df = load(path)
+    matches = [h for h in df["hash"] if h.startswith(prefix.lower())]
+    if len(matches) != 1:
+        raise KeyError(f"{path}: {len(matches)} stored points have a hash starting with"
+                       f" {prefix!r}")
+    return matches[0]
+
+
+def load_profile(path: str | Path, hash: str) -> xr.Dataset:
+    """One point's profiles along the floe index (and residual history per iteration).
+
+    Reads only that point's group. ``hash`` may be a unique prefix (the short hash).
+    """
+    h = hash if len(hash) == 64 else resolve_hash(path, hash)
+    with _open(path) as f:
+        name = f"profiles/{h[:2]}/{h}"
+        if name not in f:
+            raise KeyError(f"{path}: no profiles stored for point {h[:12]} (missing, failed"
+                           " or invalid)")
+        g = f[name]
+        data = {k: g[k][()] for k in PROFILE_VARS}
+        history = g[HISTORY_VAR[0]][()]
+    n = len(data["a"])
+    ds = xr.Dataset({k: ("floe", v) for k, v in data.items()},
+                    coords={"floe": np.arange(n)})
+    ds["x"] = ("floe", data["x_mean"])
+    ds = ds.set_coords("x")
+    ds["residual_history"] = ("iteration", history)
+    ds = ds.assign_coords(iteration=np.arange(1, len(history) + 1))
+    for k, (units, long_name) in PROFILE_VARS.items():
+        ds[k].attrs.update(units=units, long_name=long_name)
+    ds["x"].attrs.update(units="m", long_name="time-mean floe centre from the ice edge")
+    ds["residual_history"].attrs.update(units=HISTORY_VAR[1], long_name=HISTORY_VAR[2])
+    ds["floe"].attrs.update(long_name="floe index from the ice edge")
+    ds.attrs["hash"] = h
+    return ds

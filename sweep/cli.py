@@ -1,0 +1,278 @@
+"""The ``sweep`` command: plan, run, status, export, validate, merge.
+
+Exit statuses are those of :mod:`sweep.errors` (0 ok, 1 internal error, 2 bad input,
+3 store problem, 4 MPI launch problem, 5 worker failure, 6 interrupted but resumable).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+import traceback
+from pathlib import Path
+from typing import Any, Sequence
+
+from .errors import EXIT_CONFIG, EXIT_INTERNAL, EXIT_OK, EXIT_STORE, ConfigError, SweepError
+
+__all__ = ["main", "build_parser"]
+
+
+def _shard(text: str) -> tuple[int, int]:
+    try:
+        k, n = (int(x) for x in text.split("/"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--shard {text!r}: expected K/N, e.g. 3/40") from None
+    if not (n >= 1 and 0 <= k < n):
+        raise argparse.ArgumentTypeError(f"--shard {text!r}: need 0 <= K < N")
+    return k, n
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser (documented in sweep/README.md)."""
+    p = argparse.ArgumentParser(prog="sweep", description="Run and analyse floewave"
+                                " parameter campaigns (MPI master/worker, one HDF5 store).")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    r = sub.add_parser("run", help="run or resume a campaign into a store")
+    r.add_argument("config", type=Path, help="campaign TOML file")
+    r.add_argument("--store", type=Path, required=True, help="HDF5 store (created if missing)")
+    r.add_argument("--retry-failed", action="store_true", help="recompute points stored as"
+                   " failed")
+    r.add_argument("--extend", action="store_true", help="accept a store of this campaign"
+                   " with fewer grid values (the new values are added)")
+    r.add_argument("--shard", type=_shard, metavar="K/N", help="compute only shard K of N"
+                   " (points whose hash mod N is K), for Slurm job arrays")
+    r.add_argument("--compute", default="floewave:run_point", metavar="MODULE:FUNC",
+                   help="compute function (tests/benchmarks; default floewave:run_point)")
+    r.add_argument("--no-bar", action="store_true", help="log lines even on a terminal")
+    r.add_argument("--ignore-slurm-ntasks", action="store_true",
+                   help="skip the check that the MPI size equals SLURM_NTASKS")
+
+    pl = sub.add_parser("plan", help="count points and estimate the cost; writes nothing")
+    pl.add_argument("config", type=Path)
+    pl.add_argument("--rate", type=float, metavar="FLOE_STEPS_PER_S",
+                    help="kernel speed to assume instead of a calibration run")
+    pl.add_argument("--json", action="store_true", help="machine-readable output")
+
+    s = sub.add_parser("status", help="counts by status, failures, slowest points")
+    s.add_argument("store", type=Path)
+    s.add_argument("--json", action="store_true", help="machine-readable output")
+    s.add_argument("--slowest", type=int, default=5, metavar="N")
+
+    e = sub.add_parser("export", help="write the per-point table as CSV or Parquet")
+    e.add_argument("store", type=Path)
+    e.add_argument("--output", "-o", type=Path, required=True,
+                   help="file ending in .csv or .parquet")
+
+    v = sub.add_parser("validate", help="check a store against results_schema")
+    v.add_argument("store", type=Path)
+
+    m = sub.add_parser("merge", help="combine shard stores of one campaign (dedup by hash)")
+    m.add_argument("output", type=Path, help="merged store (created or extended)")
+    m.add_argument("inputs", type=Path, nargs="+", help="shard stores")
+    return p
+
+
+def _err(message: str) -> None:
+    for line in str(message).splitlines() or [""]:
+        print(f"sweep: error: {line}", file=sys.stderr)
+
+
+# ---------------------------------------------------------------------- commands
+def cmd_run(args: argparse.Namespace) -> int:
+    from .config import load_campaign
+    from .executor import check_launch, mpi_world, run_campaign
+
+    comm = mpi_world()
+    rank = comm.Get_rank() if comm is not None else 0
+    size = comm.Get_size() if comm is not None else 1
+    try:
+        if not args.ignore_slurm_ntasks:
+            check_launch(size)
+        campaign = load_campaign(args.config)
+        if args.shard:
+            campaign = campaign.shard(*args.shard)
+        summary = run_campaign(campaign, str(args.store), compute=args.compute,
+                               retry_failed=args.retry_failed, extend=args.extend, comm=comm,
+                               progress_bar=False if args.no_bar else None,
+                               command=" ".join(sys.argv))
+    except SweepError as exc:
+        if rank == 0:
+            _err(str(exc))
+        return exc.exit_status
+    if rank == 0 and summary is not None:
+        print(f"sweep: {summary}; store {args.store}")
+    return EXIT_OK
+
+
+def _calibrate(points: list[Any]) -> tuple[float, str]:
+    """Floe-steps per second of the kernel from a few-second run of a reduced point."""
+    import floewave
+
+    try:
+        run_point = floewave.run_point
+    except (AttributeError, ImportError) as exc:
+        return float("nan"), f"no calibration: floewave.run_point unavailable ({exc})"
+    valid = [p for p in points if not p.invalid]
+    if not valid:
+        return float("nan"), "no calibration: no valid point"
+    cfg = max(valid, key=lambda p: p.cost).config.replace(max_iterations=1, n0=0, nT=1)
+    run_point(cfg.replace(T=cfg.T, L_sheet=min(cfg.L_sheet, 4 * cfg.L_x)))  # compile/warm up
+    steps = 0
+    t0 = time.perf_counter()
+    while time.perf_counter() - t0 < 1.0 and steps < 10**9:
+        res = run_point(cfg)
+        steps += int(res.floe_steps)
+    elapsed = time.perf_counter() - t0
+    return steps / elapsed, (f"calibrated on {cfg.n_floes} floes, {steps} floe-steps in"
+                             f" {elapsed:.2f} s")
+
+
+def cmd_plan(args: argparse.Namespace) -> int:
+    from .config import load_campaign
+
+    try:
+        campaign = load_campaign(args.config)
+    except SweepError as exc:
+        _err(str(exc))
+        return exc.exit_status
+    points = campaign.points()
+    invalid = sum(1 for p in points if p.invalid)
+    cost = sum(p.cost for p in points if not p.invalid)
+    if args.rate:
+        rate, how = args.rate, "rate given with --rate"
+    else:
+        rate, how = _calibrate(points)
+    hours = cost / rate / 3600 if rate == rate and rate > 0 else float("nan")
+    out = {"config": str(args.config), "points": len(points), "invalid_points": invalid,
+           "swept": {k: list(v) for k, v in campaign.sweep.items()},
+           "floe_steps": cost, "floe_steps_per_s": rate, "core_hours": hours,
+           "calibration": how,
+           "assumed_iterations": campaign.run.expected_iterations or "min(max_iterations, 30)"}
+    if args.json:
+        print(json.dumps(out, indent=2))
+        return EXIT_OK
+    dims = " x ".join(f"{k}[{len(v)}]" for k, v in campaign.sweep.items())
+    print(f"{args.config}: {len(points)} points ({dims}), {invalid} physically invalid")
+    print(f"cost: {cost:.4g} floe-steps (iterations assumed per point:"
+          f" {out['assumed_iterations']})")
+    print(f"kernel: {rate:.4g} floe-steps/s per core ({how})")
+    print(f"projected: {hours:.4g} core-hours; nothing was written")
+    return EXIT_OK
+
+
+def status_report(path: Path, slowest: int = 5) -> dict[str, Any]:
+    """The data behind ``sweep status``."""
+    from .analysis import load, store_attrs
+
+    df = load(path)
+    attrs = store_attrs(path)
+    campaign = json.loads(attrs["campaign_json"])
+    total = 1
+    for values in campaign["sweep"].values():
+        total *= len(values)
+    counts = {str(k): int(v) for k, v in df["status"].value_counts().items()}
+    failures = [{"hash": r.hash[:12], "status": r.status, "swept": {k: getattr(r, k) for k in
+                                                                     campaign["sweep"]},
+                 "message": r.message.splitlines()[0] if r.message else ""}
+                for r in df[df["status"].isin(["failed", "invalid"])].itertuples()]
+    slow = df.sort_values("wall_time", ascending=False).head(slowest)
+    return {"store": str(path), "grid_points": total, "stored": len(df),
+            "remaining": max(total - len(df), 0), "counts": counts, "failures": failures,
+            "slowest": [{"hash": r.hash[:12], "wall_time": float(r.wall_time),
+                         "status": r.status, "host": r.host, "rank": int(r.rank)}
+                        for r in slow.itertuples()],
+            "total_wall_time": float(df["wall_time"].sum()) if len(df) else 0.0}
+
+
+def cmd_status(args: argparse.Namespace) -> int:
+    rep = status_report(args.store, args.slowest)
+    if args.json:
+        print(json.dumps(rep, indent=2, default=str))
+        return EXIT_OK
+    print(f"{rep['store']}: {rep['stored']}/{rep['grid_points']} points stored,"
+          f" {rep['remaining']} remaining; point wall time {rep['total_wall_time']:.1f} s")
+    for k, v in sorted(rep["counts"].items()):
+        print(f"  {k:16s} {v}")
+    if rep["failures"]:
+        print("failed / invalid:")
+        for f in rep["failures"]:
+            print(f"  {f['hash']} {f['status']:8s} {f['swept']}: {f['message']}")
+    if rep["slowest"]:
+        print("slowest:")
+        for s in rep["slowest"]:
+            print(f"  {s['hash']} {s['wall_time']:9.2f} s  {s['status']}  rank {s['rank']}"
+                  f" on {s['host']}")
+    return EXIT_OK
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    from .analysis import load
+
+    df = load(args.store)
+    suffix = args.output.suffix.lower()
+    if suffix == ".csv":
+        df.to_csv(args.output, index=False)
+    elif suffix == ".parquet":
+        try:
+            df.to_parquet(args.output, index=False)
+        except ImportError as exc:
+            _err(f"--output {args.output}: Parquet needs pyarrow ({exc}); use .csv")
+            return EXIT_CONFIG
+    else:
+        _err(f"--output {args.output}: expected a .csv or .parquet file name")
+        return EXIT_CONFIG
+    print(f"sweep: wrote {len(df)} rows to {args.output}")
+    return EXIT_OK
+
+
+def cmd_validate(args: argparse.Namespace) -> int:
+    from .schema import validate
+
+    problems = validate(args.store)
+    for p in problems:
+        _err(p)
+    if problems:
+        return EXIT_STORE
+    print(f"sweep: {args.store} is a valid store")
+    return EXIT_OK
+
+
+def cmd_merge(args: argparse.Namespace) -> int:
+    from .merge import merge
+
+    try:
+        report = merge(args.output, args.inputs)
+    except SweepError as exc:
+        _err(str(exc))
+        return exc.exit_status
+    print(f"sweep: {report}")
+    return EXIT_OK
+
+
+_COMMANDS = {"run": cmd_run, "plan": cmd_plan, "status": cmd_status, "export": cmd_export,
+             "validate": cmd_validate, "merge": cmd_merge}
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``sweep`` console script; returns the exit status."""
+    args = build_parser().parse_args(argv)
+    try:
+        return _COMMANDS[args.command](args)
+    except ConfigError as exc:
+        _err(str(exc))
+        return exc.exit_status
+    except SweepError as exc:
+        _err(str(exc))
+        return exc.exit_status
+    except (KeyError, FileNotFoundError) as exc:
+        _err(str(exc))
+        return EXIT_STORE
+    except Exception:  # noqa: BLE001 - a bug: show it
+        traceback.print_exc()
+        return EXIT_INTERNAL
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,303 @@
+"""Campaign files: TOML with ``[base]``, ``[sweep]`` and ``[run]``, validated up front.
+
+A campaign is a base :class:`floewave.ModelConfig` plus, per swept dimension, the list
+of values to try; the grid is their Cartesian product in :data:`floewave.SWEPT_FIELDS`
+order. Every problem found is reported, one message per bad key and value, before
+anything runs or is written (:class:`sweep.errors.ConfigError`, exit status 2).
+
+Physically impossible points (``T/dt`` not integral, an ``ml`` period beyond the
+mass-loading cutoff...) are found with :meth:`floewave.ModelConfig.check_physics`.
+When a swept value makes *every* point that carries it impossible (or the whole grid is
+impossible) that is a configuration error; otherwise the impossible points are part of
+the campaign and are stored with status ``invalid`` and the reason.
+"""
+from __future__ import annotations
+
+import dataclasses
+import functools
+import itertools
+import math
+import tomllib
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+from typing import Any
+
+import floewave
+from floewave import ModelConfig
+
+from .errors import ConfigError
+from .identity import canonical_json, point_hash, sha256_hex
+
+__all__ = ["Campaign", "Point", "RunOptions", "load_campaign", "parse_campaign",
+           "DEFAULT_EXPECTED_ITERATIONS"]
+
+#: Iterations assumed per point for cost estimates when ``[run] expected_iterations``
+#: is not given: the noise-floor detection (MODEL.md §4) typically ends a point after
+#: ``noise_window`` + ``n_average`` + a few iterations.
+DEFAULT_EXPECTED_ITERATIONS = 30
+
+
+@dataclass(frozen=True)
+class RunOptions:
+    """The ``[run]`` table: how to run, never what is computed (not part of any hash).
+
+    Attributes
+    ----------
+    name : campaign name shown in logs and stored in the store.
+    description : free text.
+    progress_interval : seconds between progress log lines when not on a terminal.
+    grace_period : seconds the master waits for running points after a stop signal.
+    expected_iterations : iterations per point assumed by cost estimates (0: the
+        default, ``min(max_iterations, DEFAULT_EXPECTED_ITERATIONS)``).
+    """
+
+    name: str = ""
+    description: str = ""
+    progress_interval: float = 30.0
+    grace_period: float = 60.0
+    expected_iterations: int = 0
+
+
+@dataclass(frozen=True)
+class Point:
+    """One grid point: its position, resolved configuration, identity and cost.
+
+    ``cost`` is floe-steps per iteration times the expected iterations (MODEL.md §4),
+    ``invalid`` the reason the point is physically impossible (``""`` when it is not).
+    """
+
+    index: int
+    hash: str
+    config: ModelConfig
+    swept: dict[str, Any]
+    cost: float
+    invalid: str = ""
+
+
+@dataclass(frozen=True)
+class Campaign:
+    """A validated campaign: base configuration, swept values and run options."""
+
+    base: ModelConfig
+    sweep: dict[str, tuple[Any, ...]]
+    run: RunOptions = field(default_factory=RunOptions)
+    text: str = ""
+    source: str = "<string>"
+    shard_of: tuple[int, int] | None = None
+
+    def shard(self, k: int, n: int) -> "Campaign":
+        """The same campaign restricted to shard ``k`` of ``n``: points whose hash,
+        as an integer, is ``k`` modulo ``n`` (stable under ``--extend``)."""
+        return dataclasses.replace(self, shard_of=(k, n))
+
+    @property
+    def swept_fields(self) -> tuple[str, ...]:
+        """The swept dimensions, in :data:`floewave.SWEPT_FIELDS` order."""
+        return tuple(self.sweep)
+
+    @property
+    def size(self) -> int:
+        """Number of grid points (of this shard, when sharded)."""
+        if self.shard_of is not None:
+            return len(self._grid)
+        return math.prod(len(v) for v in self.sweep.values())
+
+    def definition(self) -> dict[str, Any]:
+        """What the campaign computes: base fields, swept values and model version."""
+        return {"base": self.base.to_dict(),
+                "sweep": {k: list(v) for k, v in self.sweep.items()},
+                "model_version": floewave.MODEL_VERSION}
+
+    def definition_hash(self) -> str:
+        """SHA-256 of the canonical JSON of :meth:`definition` (comments do not count)."""
+        return sha256_hex(canonical_json(self.definition()))
+
+    def expected_iterations(self, cfg: ModelConfig) -> int:
+        """Iterations assumed for ``cfg`` in cost estimates."""
+        n = self.run.expected_iterations or DEFAULT_EXPECTED_ITERATIONS
+        return min(cfg.max_iterations, n)
+
+    def points(self) -> list[Point]:
+        """Expand the grid (product in SWEPT_FIELDS order), with hashes and costs."""
+        return list(self._grid)
+
+    @functools.cached_property
+    def _grid(self) -> tuple[Point, ...]:
+        names = self.swept_fields
+        out = []
+        for index, combo in enumerate(itertools.product(*self.sweep.values())):
+            swept = dict(zip(names, combo))
+            cfg = self.base.replace(**swept)
+            try:
+                cfg.check_physics()
+                invalid = ""
+            except floewave.InvalidPointError as exc:
+                invalid = str(exc) or type(exc).__name__
+            except ValueError as exc:  # e.g. DispersionError: no admissible root
+                invalid = f"{type(exc).__name__}: {exc}"
+            cost = float(cfg.floe_steps_per_iteration() * self.expected_iterations(cfg))
+            out.append(Point(index, point_hash(cfg), cfg, swept, cost, invalid))
+        if self.shard_of is not None:
+            k, n = self.shard_of
+            out = [p for p in out if int(p.hash, 16) % n == k]
+        return tuple(out)
+
+
+_RUN_TYPES = {f.name: f.type for f in fields(RunOptions)}
+_MODEL_FIELDS = {f.name for f in fields(ModelConfig)}
+
+
+def load_campaign(path: str | Path) -> Campaign:
+    """Read and validate a campaign file.
+
+    Parameters
+    ----------
+    path : the TOML file.
+
+    Raises
+    ------
+    ConfigError
+        With one message per problem, each naming the key and the value.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"{path}: cannot read campaign file: {exc}") from None
+    return parse_campaign(text, str(path))
+
+
+def parse_campaign(text: str, source: str = "<string>") -> Campaign:
+    """Validate campaign TOML text; see :func:`load_campaign`."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{source}: not valid TOML: {exc}") from None
+    errors: list[str] = []
+    for key in sorted(set(data) - {"base", "sweep", "run"}):
+        errors.append(f"{source}: unknown table or key [{key}] (allowed: [base], [sweep], [run])")
+    for section in ("base", "sweep", "run"):
+        if section in data and not isinstance(data[section], dict):
+            errors.append(f"{source}: {section} = {data[section]!r}: expected a table [{section}]")
+            data[section] = {}
+    if "sweep" not in data:
+        errors.append(f"{source}: missing table [sweep] (the swept values)")
+    base = _parse_base(data.get("base", {}), source, errors)
+    sweep = _parse_sweep(data.get("sweep", {}), base, source, errors)
+    run = _parse_run(data.get("run", {}), source, errors)
+    if errors:
+        raise ConfigError(errors)
+    assert base is not None
+    campaign = Campaign(base=base, sweep=sweep, run=run, text=text, source=source)
+    _check_physics(campaign, source)
+    return campaign
+
+
+def _field_problem(exc: Exception, key: str) -> str:
+    """The part of a floewave ConfigError message after the field name and value."""
+    msg = str(exc)
+    prefix = f"ModelConfig.{key}"
+    if msg.startswith(prefix):
+        msg = msg[len(prefix):].strip()
+        if msg.startswith("=") and ": " in msg:
+            msg = msg.split(": ", 1)[1]
+    return msg
+
+
+def _parse_base(table: dict[str, Any], source: str, errors: list[str]) -> ModelConfig | None:
+    ok: dict[str, Any] = {}
+    n_before = len(errors)
+    for key, value in table.items():
+        if key not in _MODEL_FIELDS:
+            errors.append(f"{source}: [base] {key} = {value!r}: unknown parameter"
+                          " (see floewave.ModelConfig)")
+            continue
+        try:
+            ModelConfig(**{key: value})
+        except (floewave.ConfigError, TypeError) as exc:
+            errors.append(f"{source}: [base] {key} = {value!r}: {_field_problem(exc, key)}")
+            continue
+        ok[key] = value
+    if len(errors) > n_before:
+        return None
+    try:
+        return ModelConfig(**ok)
+    except (floewave.ConfigError, TypeError) as exc:  # a cross-field rule
+        key = next((k for k in ok if str(exc).startswith(f"ModelConfig.{k} ")), None)
+        shown = f"{key} = {ok[key]!r}" if key else "(combination)"
+        errors.append(f"{source}: [base] {shown}: {_field_problem(exc, key or '')}")
+        return None
+
+
+def _parse_sweep(table: dict[str, Any], base: ModelConfig | None, source: str,
+                 errors: list[str]) -> dict[str, tuple[Any, ...]]:
+    sweep: dict[str, tuple[Any, ...]] = {}
+    allowed = floewave.SWEPT_FIELDS
+    for key, values in table.items():
+        if key not in allowed:
+            errors.append(f"{source}: [sweep] {key} = {values!r}: not a swept dimension"
+                          f" (allowed: {', '.join(allowed)})")
+            continue
+        if not isinstance(values, list) or not values:
+            errors.append(f"{source}: [sweep] {key} = {values!r}: expected a non-empty list"
+                          " of values")
+            continue
+        resolved = []
+        for value in values:
+            try:
+                cfg = (base or ModelConfig()).replace(**{key: value})
+            except (floewave.ConfigError, TypeError) as exc:
+                errors.append(f"{source}: [sweep] {key} = {value!r}: "
+                              f"{_field_problem(exc, key)}")
+                continue
+            resolved.append(getattr(cfg, key))  # coerced: 1 -> 1.0 for float fields
+        seen = set()
+        for value in resolved:
+            if value in seen:
+                errors.append(f"{source}: [sweep] {key} = {value!r}: listed twice")
+            seen.add(value)
+        sweep[key] = tuple(resolved)
+    return {k: sweep[k] for k in allowed if k in sweep}
+
+
+def _parse_run(table: dict[str, Any], source: str, errors: list[str]) -> RunOptions:
+    ok: dict[str, Any] = {}
+    for key, value in table.items():
+        kind = _RUN_TYPES.get(key)
+        if kind is None:
+            errors.append(f"{source}: [run] {key} = {value!r}: unknown option"
+                          f" (allowed: {', '.join(_RUN_TYPES)})")
+            continue
+        if kind == "str" and not isinstance(value, str):
+            errors.append(f"{source}: [run] {key} = {value!r}: expected a string")
+        elif kind == "float" and (isinstance(value, bool) or not isinstance(value, (int, float))
+                                  or not math.isfinite(value) or value < 0):
+            errors.append(f"{source}: [run] {key} = {value!r}: expected a number >= 0")
+        elif kind == "int" and (isinstance(value, bool) or not isinstance(value, int)
+                                or value < 0):
+            errors.append(f"{source}: [run] {key} = {value!r}: expected an integer >= 0")
+        else:
+            ok[key] = float(value) if kind == "float" else value
+    if ok.get("progress_interval") == 0:
+        errors.append(f"{source}: [run] progress_interval = 0: must be > 0")
+    return RunOptions(**ok)
+
+
+def _check_physics(campaign: Campaign, source: str) -> None:
+    """Refuse swept values (or a base) for which every point is physically impossible."""
+    points = campaign.points()
+    invalid = [p for p in points if p.invalid]
+    if not invalid:
+        return
+    if len(invalid) == len(points):
+        raise ConfigError(f"{source}: every one of the {len(points)} grid points is physically"
+                          f" impossible, e.g. {invalid[0].swept}: {invalid[0].invalid}")
+    errors = []
+    for key, values in campaign.sweep.items():
+        for value in values:
+            having = [p for p in points if p.swept[key] == value]
+            if all(p.invalid for p in having):
+                errors.append(f"{source}: [sweep] {key} = {value!r}: every point with this"
+                              f" value is physically impossible: {having[0].invalid}")
+    if errors:
+        raise ConfigError(errors)

@@ -1,0 +1,86 @@
+"""Errors raised by ``sweep`` and the exit status the CLI maps each one to.
+
+Every error derives from :class:`SweepError`; each subclass also inherits the builtin
+that describes it, so ``except ValueError`` keeps working for callers that do not know
+about ``sweep``.
+
+Exit statuses of the ``sweep`` command (documented in ``sweep/README.md``):
+
+==== ==========================================================================
+0    success (a campaign whose points failed still succeeds: failures are data)
+1    unexpected internal error (a bug: the traceback is printed)
+2    bad input: campaign file, command-line arguments (:class:`ConfigError`)
+3    store problem: locked, other campaign, newer schema, unreadable, invalid
+     (:class:`StoreError` and subclasses)
+4    MPI launch problem, e.g. size differs from ``SLURM_NTASKS`` (:class:`LaunchError`)
+5    a worker process failed outside a point (:class:`WorkerError`)
+6    interrupted by a signal; everything finished is stored and the campaign is
+     resumable by running the same command again (:class:`Interrupted`)
+==== ==========================================================================
+"""
+from __future__ import annotations
+
+__all__ = ["SweepError", "ConfigError", "StoreError", "StoreLockedError",
+           "SchemaVersionError", "CampaignMismatchError", "LaunchError", "WorkerError",
+           "Interrupted", "EXIT_OK", "EXIT_INTERNAL", "EXIT_CONFIG", "EXIT_STORE",
+           "EXIT_LAUNCH", "EXIT_WORKER", "EXIT_INTERRUPTED"]
+
+EXIT_OK = 0
+EXIT_INTERNAL = 1
+EXIT_CONFIG = 2
+EXIT_STORE = 3
+EXIT_LAUNCH = 4
+EXIT_WORKER = 5
+EXIT_INTERRUPTED = 6
+
+
+class SweepError(Exception):
+    """Base class of every error raised by sweep; ``exit_status`` is the CLI's status."""
+
+    exit_status = EXIT_INTERNAL
+
+
+class ConfigError(SweepError, ValueError):
+    """A campaign file or command-line argument is invalid (one message per bad value)."""
+
+    exit_status = EXIT_CONFIG
+
+    def __init__(self, messages: str | list[str]) -> None:
+        self.messages = [messages] if isinstance(messages, str) else list(messages)
+        super().__init__("\n".join(self.messages))
+
+
+class StoreError(SweepError, OSError):
+    """The result store cannot be used as asked."""
+
+    exit_status = EXIT_STORE
+
+
+class StoreLockedError(StoreError):
+    """Another live campaign is writing the store."""
+
+
+class SchemaVersionError(StoreError):
+    """The store was written by a newer schema version than this sweep understands."""
+
+
+class CampaignMismatchError(StoreError):
+    """The store belongs to a different campaign (use ``--extend`` to add grid values)."""
+
+
+class LaunchError(SweepError, RuntimeError):
+    """The MPI launch is not what the environment expects (e.g. N singletons)."""
+
+    exit_status = EXIT_LAUNCH
+
+
+class WorkerError(SweepError, RuntimeError):
+    """A worker failed outside a point (start-up, import); carries rank, host, traceback."""
+
+    exit_status = EXIT_WORKER
+
+
+class Interrupted(SweepError, RuntimeError):
+    """The campaign stopped on a signal; what finished is stored and it is resumable."""
+
+    exit_status = EXIT_INTERRUPTED

@@ -1,0 +1,255 @@
+"""The store's schema (version, datasets, attributes), its validator and migrations.
+
+This module is the single source of the layout: the store writes it, the analysis
+reads it, :func:`validate` checks a file against it, and
+``results_schema/schema_v1.json`` is generated from it (:func:`schema_document`; a test
+keeps the two identical). Layout of a store (one HDF5 file)::
+
+    /                      attrs: schema_version, format, created, campaign_toml,
+                                  campaign_json, campaign_hash, swept_fields (JSON)
+    /table/<column>        one 1-D dataset per column of :data:`COLUMNS`;
+                           attrs of /table: n_rows (rows beyond it are not committed)
+    /profiles/<hh>/<hash>  per point (hh = first two hash characters): one float64
+                           dataset per :data:`PROFILE_VARS` entry of length N_f, and
+                           residual_history (length = iterations); attrs: hash
+    /runs/<n>              attrs: provenance of the n-th ``sweep run`` on this store
+    /campaign_history/<n>  earlier campaign texts (``--extend``)
+
+A point is committed when its row index is below ``/table.attrs["n_rows"]``.
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["SCHEMA_VERSION", "FORMAT", "Column", "COLUMNS", "PROFILE_VARS", "MIGRATIONS",
+           "STATUSES", "schema_document", "validate", "column"]
+
+SCHEMA_VERSION = 1
+FORMAT = "sweep-store"
+
+#: Point statuses: the model's three plus sweep's two.
+STATUSES = ("converged", "converged_noisy", "not_converged", "failed", "invalid")
+
+
+@dataclass(frozen=True)
+class Column:
+    """One column of the per-point table: name, kind (float/int/str), units, meaning."""
+
+    name: str
+    kind: str
+    units: str
+    long_name: str
+
+    @property
+    def fill(self) -> Any:
+        """Value for a point that does not report this column."""
+        return {"float": np.nan, "int": -1, "str": ""}[self.kind]
+
+
+_C = Column
+#: The per-point table (``/table/<name>``), one row per point.
+COLUMNS: tuple[Column, ...] = (
+    _C("hash", "str", "", "point identity: SHA-256 of canonical config JSON"),
+    _C("L_x", "float", "m", "floe length"),
+    _C("T", "float", "s", "wave period"),
+    _C("a0", "float", "m", "incident wave amplitude"),
+    _C("C_sd", "float", "1", "skin-drag coefficient"),
+    _C("eps", "float", "1", "nominal restitution coefficient"),
+    _C("d_f", "float", "m", "initial floe-floe distance"),
+    _C("dispersion", "str", "", "dispersion relation (ep, ml, ow)"),
+    _C("status", "str", "", "converged, converged_noisy, not_converged, failed, invalid"),
+    _C("message", "str", "", "reason for failed/invalid (traceback with rank and host)"),
+    _C("n_floes", "int", "1", "number of floes N_f"),
+    _C("W_c", "float", "m", "collision-zone width"),
+    _C("alpha_all", "float", "m-2", "slope of 1/a over all floes"),
+    _C("alpha_all_resid", "float", "1", "RMS misfit of the 1/a fit over all floes / a0"),
+    _C("alpha_edge", "float", "m-2", "slope of 1/a in the collisional zone x < W_c"),
+    _C("alpha_edge_resid", "float", "1", "RMS misfit of the edge fit / a0"),
+    _C("alpha_inner", "float", "m-2", "slope of 1/a in the inner zone x >= W_c"),
+    _C("alpha_inner_resid", "float", "1", "RMS misfit of the inner fit / a0"),
+    _C("alpha_exp", "float", "m-1", "exponential attenuation rate (slope of -ln a)"),
+    _C("alpha_exp_resid", "float", "1", "RMS misfit of the exponential fit / a0"),
+    _C("alpha_c", "float", "m-2", "confined-ice attenuation rate (eq. 24)"),
+    _C("k", "float", "rad m-1", "wavenumber (eq. 6)"),
+    _C("c_g", "float", "m s-1", "group velocity (eq. 7)"),
+    _C("noise", "float", "1", "residual noise floor (converged_noisy)"),
+    _C("iterations", "int", "1", "attenuation iterations done"),
+    _C("residual", "float", "1", "final residual max |a_new - a| / a"),
+    _C("floe_steps", "int", "1", "floe-steps computed (cost unit)"),
+    _C("kernel_mode", "str", "", "kernel variant that ran"),
+    _C("a_end", "float", "m", "amplitude at the far end of the sheet"),
+    _C("model_wall_time", "float", "s", "wall time reported by the model"),
+    _C("host", "str", "", "host that computed the point"),
+    _C("rank", "int", "1", "MPI rank that computed the point (0: in-process)"),
+    _C("pid", "int", "1", "process id that computed the point"),
+    _C("start_time", "str", "", "start of computation, ISO 8601 UTC"),
+    _C("end_time", "str", "", "end of computation, ISO 8601 UTC"),
+    _C("wall_time", "float", "s", "wall time of the point measured by the worker"),
+    _C("run", "int", "1", "index of the sweep run (/runs/<n>) that stored the point"),
+    _C("seq", "int", "1", "journal sequence number of the stored record"),
+    _C("config_json", "str", "", "canonical JSON of the resolved ModelConfig"),
+    _C("provenance", "str", "", "JSON: versions of package, git, python, numpy, numba, MPI"),
+)
+_BY_NAME = {c.name: c for c in COLUMNS}
+
+#: Per-point profiles (``/profiles/<hh>/<hash>/<name>``): name -> (units, long_name).
+PROFILE_VARS: dict[str, tuple[str, str]] = {
+    "x_mean": ("m", "time-mean floe centre from the ice edge"),
+    "a": ("m", "wave amplitude at the floe"),
+    "a_stderr": ("m", "standard error of the amplitude"),
+    "S_sd": ("W m-2", "skin-drag dissipation (eq. 19)"),
+    "gap_mean": ("m", "mean gap to the next floe (last value NaN)"),
+    "contact_fraction": ("1", "fraction of time in contact with the next floe"),
+    "collisions": ("1", "contact onsets with the next floe in the averaging window"),
+    "F_w_mean": ("N", "time-mean |wave force|"),
+    "F_c_mean": ("N", "time-mean |contact force|"),
+    "F_d_mean": ("N", "time-mean |drag force|"),
+}
+HISTORY_VAR = ("residual_history", "1", "residual max |a_new - a| / a per iteration")
+
+#: Migrations: from-version -> (to-version, description, function(h5py.File)). A store
+#: older than SCHEMA_VERSION is migrated step by step on open; none exist yet.
+MIGRATIONS: dict[int, tuple[int, str, Any]] = {}
+
+ROOT_ATTRS = {
+    "schema_version": "int: version of this layout",
+    "format": f"str: always {FORMAT!r}",
+    "created": "str: ISO 8601 UTC time the store was created",
+    "campaign_toml": "str: text of the campaign file of the latest run",
+    "campaign_json": "str: canonical JSON of the campaign definition (base, sweep, "
+                     "model_version)",
+    "campaign_hash": "str: SHA-256 of campaign_json",
+    "swept_fields": "str: JSON list of the swept dimensions, in grid order",
+}
+RUN_ATTRS = ("started", "ended", "host", "mpi_size", "sweep_version", "floewave_version",
+             "model_version", "git_commit", "git_dirty", "python", "numpy", "numba",
+             "h5py", "mpi4py", "mpi_library", "command", "outcome")
+
+
+def column(name: str) -> Column:
+    """The :class:`Column` called ``name``."""
+    return _BY_NAME[name]
+
+
+def schema_document() -> dict[str, Any]:
+    """The human-readable schema as a JSON-able dict (``results_schema/schema_v1.json``)."""
+    return {
+        "schema_version": SCHEMA_VERSION,
+        "format": FORMAT,
+        "layout": __doc__.split("Layout of a store (one HDF5 file)::", 1)[1].strip()
+        .split("\n\nA point")[0].splitlines(),
+        "commit_rule": "a point is committed when its row index is below "
+                       "/table.attrs['n_rows']; rows and profile groups beyond that are "
+                       "removed on the next open",
+        "root_attributes": ROOT_ATTRS,
+        "run_attributes": list(RUN_ATTRS),
+        "table_columns": [{"name": c.name, "kind": c.kind, "units": c.units,
+                           "long_name": c.long_name,
+                           "dtype": {"float": "float64", "int": "int64",
+                                     "str": "variable-length UTF-8"}[c.kind]}
+                          for c in COLUMNS],
+        "profile_datasets": [{"name": n, "units": u, "long_name": ln, "dtype": "float64",
+                              "length": "N_f"} for n, (u, ln) in PROFILE_VARS.items()]
+        + [{"name": HISTORY_VAR[0], "units": HISTORY_VAR[1], "long_name": HISTORY_VAR[2],
+            "dtype": "float64", "length": "iterations"}],
+        "statuses": list(STATUSES),
+        "hash": {
+            "algorithm": "SHA-256, lower-case hex, 64 characters; displayed as the first 12",
+            "input": 'canonical JSON of {"config": <every floewave.ModelConfig field>, '
+                     '"model_version": floewave.MODEL_VERSION}',
+            "canonical_json": "keys sorted, separators ',' and ':', ASCII, numbers of float "
+                              "fields written as floats by Python repr (1 and 1.0 alike), "
+                              "-0.0 written as 0.0, NaN/inf refused",
+            "example": "see tests/test_sweep_identity.py for pinned values",
+        },
+        "journal": "<store>.journal beside the store: one JSON line per stored point "
+                   "(seq, hash, row, profiles, residual_history), fsynced before the HDF5 "
+                   "write; replayed on open, and used to rebuild an unreadable store",
+        "lock": "<store>.lock: flock-held by the live writer (pid, host, start); a lock "
+                "file whose flock is free is stale and is taken over",
+        "migrations": {str(k): {"to": v[0], "description": v[1]}
+                       for k, v in MIGRATIONS.items()},
+    }
+
+
+def validate(path: str | Path) -> list[str]:
+    """Check a store against this schema; returns the problems found (empty: valid).
+
+    Checks the root attributes and version, that every column exists, has the kind of
+    its schema entry and at least ``n_rows`` values, that hashes are unique 64-hex
+    strings and statuses known, and that every committed non-failed point has a profile
+    group whose datasets have length ``n_floes``.
+    """
+    import h5py
+
+    problems: list[str] = []
+    try:
+        f = h5py.File(path, "r", locking=False)
+    except OSError as exc:
+        return [f"{path}: not a readable HDF5 file: {exc}"]
+    with f:
+        for key in ROOT_ATTRS:
+            if key not in f.attrs:
+                problems.append(f"/: missing attribute {key!r}")
+        version = f.attrs.get("schema_version")
+        if version is not None and int(version) != SCHEMA_VERSION:
+            problems.append(f"/: schema_version {int(version)} != {SCHEMA_VERSION}")
+        if f.attrs.get("format") not in (FORMAT, FORMAT.encode()):
+            problems.append(f"/: format {f.attrs.get('format')!r} != {FORMAT!r}")
+        if "table" not in f:
+            return problems + ["/table: missing"]
+        n = int(f["table"].attrs.get("n_rows", -1))
+        if n < 0:
+            problems.append("/table: missing attribute 'n_rows'")
+        for col in COLUMNS:
+            if col.name not in f["table"]:
+                problems.append(f"/table/{col.name}: missing")
+                continue
+            ds = f["table"][col.name]
+            kind = ds.dtype.kind
+            ok = {"float": kind == "f", "int": kind in "iu", "str": kind in "OSU"}[col.kind]
+            if not ok:
+                problems.append(f"/table/{col.name}: dtype {ds.dtype} is not {col.kind}")
+            if ds.shape[0] < n:
+                problems.append(f"/table/{col.name}: {ds.shape[0]} values < n_rows {n}")
+        if problems:
+            return problems
+        table = f["table"]
+        hashes = [h.decode() if isinstance(h, bytes) else h for h in table["hash"][:n]]
+        status = [s.decode() if isinstance(s, bytes) else s for s in table["status"][:n]]
+        n_floes = table["n_floes"][:n]
+        if len(set(hashes)) != len(hashes):
+            problems.append("/table/hash: duplicate hashes")
+        for i, (h, s) in enumerate(zip(hashes, status)):
+            if len(h) != 64 or any(c not in "0123456789abcdef" for c in h):
+                problems.append(f"/table/hash[{i}]: {h!r} is not a 64-character hex hash")
+                continue
+            if s not in STATUSES:
+                problems.append(f"/table/status[{i}]: unknown status {s!r}")
+            if s in ("failed", "invalid"):
+                continue
+            name = f"profiles/{h[:2]}/{h}"
+            if name not in f:
+                problems.append(f"/{name}: missing profile group of a {s} point")
+                continue
+            for var in PROFILE_VARS:
+                if var not in f[name]:
+                    problems.append(f"/{name}/{var}: missing")
+                elif f[name][var].shape != (int(n_floes[i]),):
+                    problems.append(f"/{name}/{var}: shape {f[name][var].shape} != "
+                                    f"({int(n_floes[i])},)")
+            if HISTORY_VAR[0] not in f[name]:
+                problems.append(f"/{name}/{HISTORY_VAR[0]}: missing")
+    return problems
+
+
+def write_schema_file(directory: str | Path) -> Path:
+    """Write ``schema_v<N>.json`` into ``directory`` (used to regenerate results_schema/)."""
+    path = Path(directory) / f"schema_v{SCHEMA_VERSION}.json"
+    path.write_text(json.dumps(schema_document(), indent=2) + "\n", encoding="utf-8")
+    return path

@@ -1,0 +1,419 @@
+"""The result store: one HDF5 file written only by the master, plus a journal and a lock.
+
+Writing a point (:meth:`Store.put`):
+
+1. append one JSON line with the whole record to ``<store>.journal`` and ``fsync`` it;
+2. write the profile group ``/profiles/<hh>/<hash>`` (replacing a leftover), then the
+   table row, then raise ``/table.attrs["n_rows"]`` (the commit);
+3. ``flush`` the HDF5 file and ``fsync`` it.
+
+Only then is the next point accepted. On open, rows and profile groups beyond the last
+commit are removed and journal records missing from the file are written again, so a
+point is either wholly present or absent after any crash; if HDF5 left the file
+unreadable (``kill -9`` during a metadata write) it is moved aside and rebuilt from the
+journal. ``<store>.lock`` is held with ``flock`` by the live writer, so a second writer
+is refused and the lock of a killed writer (whose flock the kernel released) is taken
+over.
+"""
+from __future__ import annotations
+
+import contextlib
+import datetime as _dt
+import fcntl
+import json
+import os
+import socket
+from pathlib import Path
+from typing import Any, Iterator
+
+import h5py
+import numpy as np
+
+from .errors import (CampaignMismatchError, SchemaVersionError, StoreError,
+                     StoreLockedError)
+from .schema import COLUMNS, FORMAT, HISTORY_VAR, MIGRATIONS, PROFILE_VARS, SCHEMA_VERSION
+
+__all__ = ["Store", "Record", "journal_path", "lock_path", "utc_now", "read_journal"]
+
+Record = dict[str, Any]
+"""A point record: ``{"row": {column: value}, "profiles": {name: array},
+"residual_history": array}``."""
+
+_STR = h5py.string_dtype("utf-8")
+_DTYPES = {"float": np.float64, "int": np.int64, "str": _STR}
+
+
+def utc_now() -> str:
+    """The current time, ISO 8601 UTC with microseconds."""
+    return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="microseconds")
+
+
+def journal_path(path: str | Path) -> Path:
+    """The journal kept beside a store."""
+    return Path(str(path) + ".journal")
+
+
+def lock_path(path: str | Path) -> Path:
+    """The lock file kept beside a store."""
+    return Path(str(path) + ".lock")
+
+
+def _fsync_dir(path: Path) -> None:
+    with contextlib.suppress(OSError):
+        fd = os.open(path.parent, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+
+
+class _Lock:
+    """An flock-held lock file; a lock file nobody holds is stale and taken over."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.fd: int | None = None
+        self.stale_owner = ""
+
+    def acquire(self) -> None:
+        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            owner = os.pread(fd, 4096, 0).decode(errors="replace").strip() or "owner unknown"
+            os.close(fd)
+            raise StoreLockedError(
+                f"{self.path}: the store is being written by a live campaign ({owner});"
+                " wait for it to finish or stop it first") from None
+        self.stale_owner = os.pread(fd, 4096, 0).decode(errors="replace").strip()
+        info = json.dumps({"pid": os.getpid(), "host": socket.gethostname(),
+                           "since": utc_now()})
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, info.encode(), 0)
+        os.fsync(fd)
+        self.fd = fd
+
+    def release(self) -> None:
+        if self.fd is not None:
+            with contextlib.suppress(OSError):
+                os.unlink(self.path)
+            fcntl.flock(self.fd, fcntl.LOCK_UN)
+            os.close(self.fd)
+            self.fd = None
+
+
+def read_journal(path: str | Path) -> Iterator[Record]:
+    """Yield the complete records of a journal (a torn last line is skipped)."""
+    path = Path(path)
+    if not path.exists():
+        return
+    with open(path, "rb") as fh:
+        for line in fh:
+            if not line.endswith(b"\n"):
+                break  # torn write of a killed master: that point was never acknowledged
+            try:
+                rec = json.loads(line)
+            except ValueError:
+                continue
+            rec["profiles"] = {k: np.asarray(v, dtype=np.float64)
+                               for k, v in rec.get("profiles", {}).items()}
+            rec["residual_history"] = np.asarray(rec.get("residual_history", []),
+                                                 dtype=np.float64)
+            yield rec
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def _text(value: Any) -> str:
+    return value.decode() if isinstance(value, bytes) else str(value)
+
+
+class Store:
+    """The single writer of a campaign store.
+
+    Parameters
+    ----------
+    path : the HDF5 file (created if missing).
+    campaign : the :class:`sweep.config.Campaign` being run; the store must belong to it
+        (same definition hash) unless ``extend`` is true.
+    extend : accept a store of the same base whose swept values are a subset of the
+        campaign's (new grid values are added; old points stay).
+
+    Raises
+    ------
+    StoreLockedError, SchemaVersionError, CampaignMismatchError, StoreError
+    """
+
+    def __init__(self, path: str | Path, campaign: Any = None, *, extend: bool = False,
+                 run_info: dict[str, Any] | None = None) -> None:
+        self.path = Path(path)
+        self.journal_path = journal_path(self.path)
+        self._lock = _Lock(lock_path(self.path))
+        if not self.path.parent.is_dir():
+            raise StoreError(f"{self.path}: directory {self.path.parent} does not exist")
+        self._lock.acquire()
+        try:
+            self._open(campaign, extend)
+            self._repair()
+            self.run_index = self._start_run(run_info or {})
+        except BaseException:
+            self._close_file()
+            self._lock.release()
+            raise
+        self._journal = open(self.journal_path, "ab")
+
+    # ------------------------------------------------------------------ opening
+    def _open(self, campaign: Any, extend: bool) -> None:
+        self.repaired_from_journal = False
+        self.file: h5py.File | None = None
+        if self.path.exists():
+            try:
+                self.file = h5py.File(self.path, "r+")
+                self._check_version()
+            except OSError:
+                if not self.journal_path.exists():
+                    raise StoreError(f"{self.path}: not a readable HDF5 store and no journal"
+                                     f" {self.journal_path.name} to rebuild it from") from None
+                aside = self.path.with_name(f"{self.path.name}.corrupt-{os.getpid()}")
+                os.replace(self.path, aside)
+                self.file = None
+                self.repaired_from_journal = True
+        if self.file is None:
+            if campaign is None:
+                raise StoreError(f"{self.path}: no store here")
+            self._create(campaign)
+        elif campaign is not None:
+            self._check_campaign(campaign, extend)
+
+    def _check_version(self) -> None:
+        assert self.file is not None
+        fmt = _text(self.file.attrs.get("format", ""))
+        if fmt != FORMAT:
+            raise StoreError(f"{self.path}: not a sweep store (format {fmt!r})")
+        version = int(self.file.attrs.get("schema_version", 0))
+        if version > SCHEMA_VERSION:
+            raise SchemaVersionError(
+                f"{self.path}: store schema version {version} is newer than this sweep's"
+                f" schema version {SCHEMA_VERSION}; upgrade sweep to use it")
+        while version < SCHEMA_VERSION:
+            if version not in MIGRATIONS:
+                raise SchemaVersionError(f"{self.path}: no migration from schema version"
+                                         f" {version} to {SCHEMA_VERSION}")
+            version, _, migrate = MIGRATIONS[version]
+            migrate(self.file)
+            self.file.attrs["schema_version"] = version
+
+    def _create(self, campaign: Any) -> None:
+        f = h5py.File(self.path, "w")
+        f.attrs["schema_version"] = SCHEMA_VERSION
+        f.attrs["format"] = FORMAT
+        f.attrs["created"] = utc_now()
+        self._set_campaign(f, campaign)
+        table = f.create_group("table")
+        table.attrs["n_rows"] = 0
+        for col in COLUMNS:
+            table.create_dataset(col.name, shape=(0,), maxshape=(None,), chunks=(1024,),
+                                 dtype=_DTYPES[col.kind])
+        f.create_group("profiles")
+        f.create_group("runs")
+        f.flush()
+        self.file = f
+        _fsync_dir(self.path)
+
+    @staticmethod
+    def _set_campaign(f: h5py.File, campaign: Any) -> None:
+        from .identity import canonical_json
+
+        f.attrs["campaign_toml"] = campaign.text
+        f.attrs["campaign_json"] = canonical_json(campaign.definition())
+        f.attrs["campaign_hash"] = campaign.definition_hash()
+        f.attrs["swept_fields"] = json.dumps(list(campaign.swept_fields))
+
+    def _check_campaign(self, campaign: Any, extend: bool) -> None:
+        assert self.file is not None
+        stored_hash = _text(self.file.attrs.get("campaign_hash", ""))
+        if stored_hash == campaign.definition_hash():
+            return
+        old = json.loads(_text(self.file.attrs["campaign_json"]))
+        new = campaign.definition()
+        if not extend:
+            diff = sorted(k for k in set(old["base"]) | set(new["base"])
+                          if old["base"].get(k) != new["base"].get(k))
+            sweep_diff = sorted(k for k in set(old["sweep"]) | set(new["sweep"])
+                                if old["sweep"].get(k) != new["sweep"].get(k))
+            what = ", ".join([f"[base] {k}" for k in diff] + [f"[sweep] {k}" for k in
+                                                              sweep_diff]) or "model_version"
+            raise CampaignMismatchError(
+                f"{self.path}: the store belongs to a different campaign (differs in {what});"
+                " use another --store, or --extend to add grid values to this one")
+        problems = []
+        if old["base"] != new["base"] or old["model_version"] != new["model_version"]:
+            problems.append("its [base] (or model version) differs")
+        if set(old["sweep"]) != set(new["sweep"]):
+            problems.append("its swept dimensions differ")
+        else:
+            for k, values in old["sweep"].items():
+                missing = [v for v in values if v not in new["sweep"][k]]
+                if missing:
+                    problems.append(f"[sweep] {k} drops {missing}")
+        if problems:
+            raise CampaignMismatchError(f"{self.path}: cannot --extend this store: "
+                                        + "; ".join(problems))
+        hist = self.file.require_group("campaign_history")
+        hist.create_dataset(str(len(hist)), data=_text(self.file.attrs["campaign_toml"]),
+                            dtype=_STR)
+        self._set_campaign(self.file, campaign)
+        self.file.flush()
+
+    def _repair(self) -> None:
+        """Drop uncommitted rows/groups, then write journal records the file lacks."""
+        f = self.file
+        assert f is not None
+        table = f["table"]
+        n = int(table.attrs["n_rows"])
+        for col in COLUMNS:
+            if table[col.name].shape[0] != n:
+                table[col.name].resize((n,))
+        hashes = [_text(h) for h in table["hash"][:n]]
+        self.rows: dict[str, int] = {h: i for i, h in enumerate(hashes)}
+        seqs = table["seq"][:n]
+        self._seq: dict[str, int] = {h: int(s) for h, s in zip(hashes, seqs)}
+        removed = []
+        for hh in list(f["profiles"]):
+            for h in list(f["profiles"][hh]):
+                if h not in self.rows:
+                    del f["profiles"][hh][h]
+                    removed.append(h)
+        self.next_seq = max(self._seq.values(), default=-1) + 1
+        replayed = 0
+        latest: dict[str, Record] = {}
+        for rec in read_journal(self.journal_path):
+            latest[rec["row"]["hash"]] = rec
+            self.next_seq = max(self.next_seq, int(rec["row"]["seq"]) + 1)
+        for h, rec in latest.items():
+            if self._seq.get(h, -1) < int(rec["row"]["seq"]):
+                self._write(rec)
+                replayed += 1
+        self.replayed = replayed
+        self.orphans_removed = len(removed)
+        f.flush()
+
+    def _start_run(self, info: dict[str, Any]) -> int:
+        assert self.file is not None
+        runs = self.file.require_group("runs")
+        index = len(runs)
+        g = runs.create_group(str(index))
+        g.attrs["started"] = utc_now()
+        g.attrs["outcome"] = "running"
+        for k, v in info.items():
+            g.attrs[k] = v if isinstance(v, (int, float, bool)) else str(v)
+        if self._lock.stale_owner:
+            g.attrs["took_over_stale_lock"] = self._lock.stale_owner
+        if self.repaired_from_journal or self.replayed:
+            g.attrs["repaired"] = (f"rebuilt from journal: {self.repaired_from_journal};"
+                                   f" records replayed: {self.replayed}")
+        self._durable()
+        return index
+
+    # ------------------------------------------------------------------ queries
+    def __contains__(self, h: str) -> bool:
+        return h in self.rows
+
+    def status_of(self, h: str) -> str:
+        """The stored status of point ``h``."""
+        return _text(self.file["table"]["status"][self.rows[h]])
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+    # ------------------------------------------------------------------ writing
+    def put(self, record: Record) -> None:
+        """Store one point durably (journal, then HDF5, both synced to disk)."""
+        row = dict(record["row"])
+        row["seq"] = self.next_seq
+        row["run"] = self.run_index
+        record = {"row": row, "profiles": record.get("profiles", {}),
+                  "residual_history": record.get("residual_history", np.zeros(0))}
+        line = json.dumps({"row": {k: _jsonable(v) for k, v in row.items()},
+                           "profiles": {k: _jsonable(v) for k, v in
+                                        record["profiles"].items()},
+                           "residual_history": _jsonable(record["residual_history"])},
+                          separators=(",", ":"))
+        self._journal.write(line.encode() + b"\n")
+        self._journal.flush()
+        os.fsync(self._journal.fileno())
+        self.next_seq += 1
+        self._write(record)
+        self._durable()
+
+    def _write(self, record: Record) -> None:
+        f = self.file
+        assert f is not None
+        row = record["row"]
+        h = row["hash"]
+        group_name = f"profiles/{h[:2]}/{h}"
+        if group_name in f:
+            del f[group_name]
+        profiles = record.get("profiles") or {}
+        if profiles:
+            g = f.create_group(group_name)
+            g.attrs["hash"] = h
+            for name in PROFILE_VARS:
+                data = np.asarray(profiles.get(name, []), dtype=np.float64)
+                g.create_dataset(name, data=data)
+            g.create_dataset(HISTORY_VAR[0], data=np.asarray(
+                record.get("residual_history", []), dtype=np.float64))
+        table = f["table"]
+        n = int(table.attrs["n_rows"])
+        index = self.rows.get(h, n)
+        for col in COLUMNS:
+            ds = table[col.name]
+            if ds.shape[0] <= index:
+                ds.resize((index + 1,))
+            value = row.get(col.name, col.fill)
+            if value is None:
+                value = col.fill
+            ds[index] = value
+        if index == n:
+            table.attrs["n_rows"] = n + 1
+        self.rows[h] = index
+        self._seq[h] = int(row["seq"])
+
+    def _durable(self) -> None:
+        assert self.file is not None
+        self.file.flush()
+        with contextlib.suppress(Exception):
+            os.fsync(self.file.id.get_vfd_handle())
+
+    # ------------------------------------------------------------------ closing
+    def _close_file(self) -> None:
+        f = getattr(self, "file", None)
+        if f is not None:
+            with contextlib.suppress(Exception):
+                f.close()
+            self.file = None
+
+    def close(self, outcome: str = "complete") -> None:
+        """Record the run's end and outcome, close the file, release the lock."""
+        if self.file is not None:
+            g = self.file["runs"][str(self.run_index)]
+            g.attrs["ended"] = utc_now()
+            g.attrs["outcome"] = outcome
+            self._durable()
+            self._close_file()
+        if not self._journal.closed:
+            self._journal.close()
+        self._lock.release()
+
+    def __enter__(self) -> "Store":
+        return self
+
+    def __exit__(self, exc_type: Any, exc: Any, tb: Any) -> None:
+        if self.file is not None:
+            self.close("complete" if exc_type is None else f"error: {exc_type.__name__}")

@@ -1,0 +1,76 @@
+"""Stand-in compute functions for tests and benchmarks (``--compute sweep.testing:NAME``).
+
+They take a :class:`floewave.ModelConfig` and return a dict shaped like
+``floewave.PointResult.to_dict()``, deterministically from the configuration, so
+campaigns can be tested without the DEM kernel: :func:`fake_point` (a smooth 1/a
+profile), :func:`raising_point` (raises for eps = 0.4), :func:`nan_point` (NaN
+amplitudes for d_f = 0.01), :func:`trivial_point` (no work: the master benchmark) and
+:func:`sleepy_point` (sleeps 0.2 s: signal and CPU-share tests).
+"""
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+
+from floewave import ModelConfig
+
+__all__ = ["fake_point", "raising_point", "nan_point", "trivial_point", "sleepy_point"]
+
+
+def fake_point(cfg: ModelConfig) -> dict[str, Any]:
+    """A deterministic PointResult-like dict: a = 1 / (1/a0 + alpha x)."""
+    n = cfg.n_floes
+    x = (np.arange(n) + 0.5) * (cfg.L_x + cfg.d_f)
+    alpha = cfg.C_sd * (1 + cfg.eps) / cfg.T ** 4 * (2.0 if cfg.dispersion == "ml" else 1.0)
+    a = 1.0 / (1.0 / cfg.a0 + alpha * x)
+    gap = np.full(n, cfg.d_f)
+    gap[-1] = np.nan
+    hist = np.geomspace(0.5, 1e-4, 5 + int(10 * cfg.eps))
+    return {
+        "x_mean": x, "a": a, "a_stderr": 0.01 * a, "S_sd": -cfg.C_sd * a ** 3,
+        "gap_mean": gap, "contact_fraction": np.linspace(0, 1, n),
+        "collisions": np.arange(n, dtype=float), "F_w_mean": a * 100, "F_c_mean": a * 50,
+        "F_d_mean": a * 5, "n_floes": n, "W_c": float(x[n // 3]), "alpha_all": alpha,
+        "alpha_all_resid": 1e-3, "alpha_edge": 2 * alpha, "alpha_edge_resid": 2e-3,
+        "alpha_inner": alpha, "alpha_inner_resid": 1e-3, "alpha_exp": alpha * cfg.a0,
+        "alpha_exp_resid": 5e-3, "alpha_c": 0.9 * alpha, "k": 4.0 / cfg.T ** 2,
+        "c_g": 0.5 * cfg.T, "status": "converged" if cfg.eps < 0.7 else "converged_noisy",
+        "noise": 0.0 if cfg.eps < 0.7 else 0.02, "iterations": len(hist),
+        "residual": float(hist[-1]), "floe_steps": len(hist) * cfg.floe_steps_per_iteration(),
+        "wall_time": 1e-3, "kernel_mode": "fake", "a_end": float(a[-1]), "a0": cfg.a0,
+        "residual_history": hist,
+    }
+
+
+def raising_point(cfg: ModelConfig) -> dict[str, Any]:
+    """:func:`fake_point`, but raises RuntimeError for eps = 0.4."""
+    if cfg.eps == 0.4:
+        raise RuntimeError(f"deliberate failure for eps = {cfg.eps}")
+    return fake_point(cfg)
+
+
+def nan_point(cfg: ModelConfig) -> dict[str, Any]:
+    """:func:`fake_point`, with NaN amplitudes for d_f = 0.01."""
+    out = fake_point(cfg)
+    if cfg.d_f == 0.01:
+        out["a"] = np.full_like(out["a"], np.nan)
+    return out
+
+
+_TRIVIAL = {name: np.zeros(4) for name in ("x_mean", "a", "a_stderr", "S_sd", "gap_mean",
+                                           "contact_fraction", "collisions", "F_w_mean",
+                                           "F_c_mean", "F_d_mean")}
+
+
+def trivial_point(cfg: ModelConfig) -> dict[str, Any]:
+    """Almost no work: four-floe zero profiles (benchmarks the master, not the model)."""
+    return {**_TRIVIAL, "a": np.full(4, cfg.a0), "n_floes": 4, "status": "converged",
+            "iterations": 1, "kernel_mode": "trivial", "residual_history": np.zeros(1)}
+
+
+def sleepy_point(cfg: ModelConfig) -> dict[str, Any]:
+    """:func:`fake_point` after sleeping 0.2 s."""
+    time.sleep(0.2)
+    return fake_point(cfg)
