@@ -23,24 +23,30 @@ from floewave import _reference as ref  # noqa: E402
 from floewave.model import FloeChain  # noqa: E402
 
 
-def bench(cfg: ModelConfig, steps: int, repeat: int, numpy_steps: int) -> tuple[float, float]:
-    k, _ = solve_dispersion(cfg)
-    chain = FloeChain(cfg, k)
-    a = np.full(cfg.n_floes, cfg.a0)
-    chain.run(a, 2 * cfg.n_t)  # compile + spin-up
+def _best(fn, repeat: int) -> float:
     best = np.inf
     for _ in range(repeat):
         t = time.perf_counter()
-        chain.run(a, steps)
+        fn()
         best = min(best, time.perf_counter() - t)
-    numba_rate = steps * cfg.n_floes / best
+    return best
+
+
+def bench(cfg: ModelConfig, steps: int, repeat: int, numpy_steps: int) -> tuple[float, float]:
+    """(numba, numpy) floe-steps/s; numba's is the iteration mix of n0 spin-up periods and
+    nT periods accumulating the statistics, (n0 + nT) / (n0 / r_spin + nT / r_acc)."""
+    k, _ = solve_dispersion(cfg)
+    chain = FloeChain(cfg, k)
+    a = np.full(cfg.n_floes, cfg.a0)
+    stats = np.zeros((8, cfg.n_floes))
+    chain.run(a, 2 * cfg.n_t)  # compile + spin-up
+    chain.run(a, 10, stats)
+    t_spin = _best(lambda: chain.run(a, steps), repeat)
+    t_acc = _best(lambda: chain.run(a, steps, stats), repeat)
+    numba_rate = (cfg.n0 + cfg.nT) * steps * cfg.n_floes / (cfg.n0 * t_spin + cfg.nT * t_acc)
     x, u, acc = chain.x.copy(), chain.u.copy(), chain.acc.copy()
-    best_np = np.inf
-    for _ in range(max(1, repeat // 2)):
-        t = time.perf_counter()
-        ref.advance(x, u, acc, a, chain.x0, chain.istep, numpy_steps, chain.P, chain.cxi,
-                    chain.sxi)
-        best_np = min(best_np, time.perf_counter() - t)
+    best_np = _best(lambda: ref.advance(x, u, acc, a, chain.x0, chain.istep, numpy_steps,
+                                        chain.P, chain.cxi, chain.sxi), max(1, repeat // 2))
     return numba_rate, numpy_steps * cfg.n_floes / best_np
 
 
