@@ -5,18 +5,18 @@ import pytest
 from floewave import ModelConfig, run_point
 from floewave.model import march_amplitude, noise_floor_reached, residual
 
-REDUCED = dict(L_x=1.5, n0=3, nT=2, noise_window=4, max_iterations=60)
+REDUCED = dict(L_x=1.5, n0=3, nT=2, noise_window=4, max_iterations=80)
 
 
 @pytest.fixture(scope="module")
 def windows():
-    """The same point averaged over 4 and over 16 iterations after the noise floor."""
-    return {n: run_point(ModelConfig(eps=0.8, n_average=n, **REDUCED)) for n in (4, 16)}
+    """The same point averaged over 5 and over 30 iterations after the noise floor."""
+    return {n: run_point(ModelConfig(eps=0.4, n_average=n, **REDUCED)) for n in (5, 30)}
 
 
 def test_full_dem_point_converges_with_a_decreasing_profile(windows):
-    r = windows[16]
-    cfg = ModelConfig(eps=0.8, **REDUCED)
+    r = windows[30]
+    cfg = ModelConfig(eps=0.4, **REDUCED)
     assert r.status in ("converged", "converged_noisy")
     assert r.iterations <= cfg.max_iterations
     assert len(r.residual_history) == r.iterations
@@ -33,10 +33,12 @@ def test_full_dem_point_converges_with_a_decreasing_profile(windows):
 
 
 def test_standard_error_shrinks_with_the_averaging_window(windows):
-    short, long_ = windows[4], windows[16]
+    """Six times the samples: 1/sqrt(6) = 0.41 for independent samples; asserted < 0.75.
+    (At eps = 0.8 this reduced point drifts slowly and the error shrinks much less.)"""
+    short, long_ = windows[5], windows[30]
     assert short.status == long_.status == "converged_noisy"
     assert long_.noise > 0
-    assert np.mean(long_.a_stderr) < np.mean(short.a_stderr)
+    assert np.mean(long_.a_stderr) < 0.75 * np.mean(short.a_stderr)
 
 
 def test_run_point_is_deterministic():
