@@ -8,8 +8,7 @@ Herman, Cheng & Shen (2019, The Cryosphere 13, 2887). Public API:
 - :func:`alpha_confined` — the confined-ice attenuation rate (eq. 24)
 - :func:`run_point` — the attenuation iteration for one point -> :class:`PointResult`
 """
-from .config import (ConfigError, FloewaveError, InvalidPointError, ModelConfig,
-                     SWEPT_FIELDS)
+from .config import SWEPT_FIELDS, ConfigError, FloewaveError, InvalidPointError, ModelConfig
 from .dispersion import DispersionError, alpha_confined, solve_dispersion
 from .results import PointResult
 

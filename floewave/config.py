@@ -234,7 +234,7 @@ class ModelConfig:
         return dataclasses.asdict(self)
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> "ModelConfig":
+    def from_dict(cls, data: dict[str, Any]) -> ModelConfig:
         """Build from a mapping; unknown keys raise :class:`ConfigError` naming them."""
         known = {f.name for f in fields(cls)}
         unknown = sorted(set(data) - known)
@@ -242,7 +242,7 @@ class ModelConfig:
             raise ConfigError(f"unknown ModelConfig field(s): {', '.join(map(repr, unknown))}")
         return cls(**data)
 
-    def replace(self, **changes: Any) -> "ModelConfig":
+    def replace(self, **changes: Any) -> ModelConfig:
         """A copy with some fields changed (validated again)."""
         unknown = sorted(set(changes) - {f.name for f in fields(self)})
         if unknown:
@@ -250,7 +250,7 @@ class ModelConfig:
         return dataclasses.replace(self, **changes)
 
 
-def _require(cfg: "ModelConfig", name: str, ok: bool, what: str) -> None:
+def _require(cfg: ModelConfig, name: str, ok: bool, what: str) -> None:
     if not ok:
         raise ConfigError(f"ModelConfig.{name} = {getattr(cfg, name)!r} {what}")
 

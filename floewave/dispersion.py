@@ -44,7 +44,8 @@ def dispersion_residual(k: float, omega: float, h: float, b1: float, b2: float) 
 
 
 def group_velocity(k: float, omega: float, h: float, b1: float, b2: float) -> float:
-    """Eq. 7: c_g = omega/(2k) [(1 - b1 w^2/(g + b2 k^4))(1 + 2kh/sinh 2kh) + 4 b2 k^4/(g + b2 k^4)]."""
+    """Eq. 7: c_g = omega/(2k) [(1 - b1 w^2/(g + b2 k^4)) (1 + 2kh/sinh 2kh)
+    + 4 b2 k^4/(g + b2 k^4)]."""
     gk = G + b2 * k**4
     kh2 = 2.0 * k * h
     shallow = 1.0 + (kh2 / math.sinh(kh2) if kh2 < 700.0 else 0.0)

@@ -8,7 +8,7 @@ from collections.abc import Callable
 import numpy as np
 
 from . import _kernels as K
-from .config import G, FloewaveError, ModelConfig
+from .config import FloewaveError, G, ModelConfig
 from .dispersion import alpha_confined, solve_dispersion
 from .forces import cell_offsets, kernel_params
 from .results import PointResult, collision_zone_width, fit_exponential, fit_inverse
@@ -105,7 +105,8 @@ def march_amplitude(cfg: ModelConfig, S_sd: np.ndarray, c_g: float, k: float) ->
 
     a_1^2 = a0^2 + L_x S_1 / (rho_w g c_g);
     a_i^2 = a_{i-1}^2 + L_x (S_{i-1} + S_i) / (rho_w g c_g)
-            [- 3 g^(1/2) h_ow,i-1^(5/2) / c_g  with overwash, h_ow = c_ow max(k a_{i-1} - s_min, 0)].
+            [- 3 g^(1/2) h_ow,i-1^(5/2) / c_g with overwash,
+             h_ow = c_ow max(k a_{i-1} - s_min, 0)].
     """
     fac = cfg.L_x / (cfg.rho_w * G * c_g)
     n = S_sd.shape[0]

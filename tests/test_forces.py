@@ -34,7 +34,7 @@ TABLE = {  # MODEL.md §3, realised restitution at nominal eps 0.2, 0.4, 0.6, 0.
 @pytest.mark.parametrize("law", list(TABLE))
 def test_realised_restitution_matches_table(law):
     contact, damping, clip = law
-    for eps, expected in zip((0.2, 0.4, 0.6, 0.8), TABLE[law]):
+    for eps, expected in zip((0.2, 0.4, 0.6, 0.8), TABLE[law], strict=True):
         cfg = collision_config(eps=eps, contact=contact, damping=damping, clip_attraction=clip)
         e, _, _ = two_floe_collision(cfg, chunk=1)
         assert e == pytest.approx(expected, abs=0.01), (law, eps)

@@ -1,0 +1,42 @@
+"""``floewave run``: summary, JSON and plot output, bad input -> exit 2 with one message."""
+import json
+import subprocess
+import sys
+
+import pytest
+
+FAST = ["--set", "L_x=3.0", "--set", "n0=1", "--set", "nT=1", "--set", "max_iterations=3"]
+
+
+def run(args, tmp_path):
+    return subprocess.run([sys.executable, "-m", "floewave", "run", *args], cwd=tmp_path,
+                          capture_output=True, text=True, timeout=300)
+
+
+def test_run_prints_summary_and_writes_json_and_plot(tmp_path):
+    pytest.importorskip("matplotlib")
+    p = run(FAST + ["--json", "out.json", "--plot", "out.png"], tmp_path)
+    assert p.returncode == 0, p.stderr
+    assert "iterations" in p.stdout and "W_c" in p.stdout and "floe-steps/s" in p.stdout
+    data = json.loads((tmp_path / "out.json").read_text())
+    assert data["config"]["L_x"] == 3.0
+    assert len(data["result"]["a"]) == 14
+    assert (tmp_path / "out.png").stat().st_size > 1000
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["--set", "L_x=-1"], "L_x"),
+    (["--set", "eps=1.5"], "eps"),
+    (["--set", "bogus=1"], "bogus"),
+    (["--set", "n0=two"], "n0"),
+    (["--set", "dispersion=ml", "--set", "h_i=0.5"], "cutoff"),
+    (["--set", "T=1.23456", "--set", "dt=0.001"], "T / dt"),
+    (["--set", "confined=maybe"], "confined"),
+    (["--set", "noequals"], "NAME=VALUE"),
+])
+def test_bad_input_exits_2_and_writes_nothing(tmp_path, args, needle):
+    p = run(args + ["--json", "out.json"], tmp_path)
+    assert p.returncode == 2
+    assert needle in p.stderr
+    assert p.stderr.count("error:") == 1
+    assert not (tmp_path / "out.json").exists()
