@@ -199,8 +199,8 @@ def _field_problem(exc: Exception, key: str) -> str:
     prefix = f"ModelConfig.{key}"
     if msg.startswith(prefix):
         msg = msg[len(prefix):].strip()
-        if msg.startswith("=") and ": " in msg:
-            msg = msg.split(": ", 1)[1]
+        if msg.startswith("="):  # "= <value>: problem" or "= <value> problem"
+            msg = msg.split(": ", 1)[1] if ": " in msg else msg[1:].strip().partition(" ")[2]
     return msg
 
 

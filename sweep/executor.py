@@ -273,11 +273,18 @@ class RunSummary:
     interrupted: str = ""
     abandoned: int = 0
     elapsed: float = 0.0
+    master_cpu: float = 0.0
+
+    @property
+    def master_cpu_share(self) -> float:
+        """CPU seconds of the master process per wall second of the run."""
+        return self.master_cpu / self.elapsed if self.elapsed > 0 else 0.0
 
     def __str__(self) -> str:
         counts = ", ".join(f"{k} {v}" for k, v in sorted(self.counts.items())) or "none"
         return (f"{self.total} grid points: {self.skipped} already stored, {self.computed}"
-                f" stored now ({counts}) in {self.elapsed:.1f} s")
+                f" stored now ({counts}) in {self.elapsed:.1f} s; master CPU"
+                f" {100 * self.master_cpu_share:.1f}% of a core")
 
 
 class _StopSignals:
@@ -467,7 +474,7 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
         worker_loop(comm, compute)
         return None
     mpi = comm is not None and comm.Get_size() > 1
-    t0 = time.monotonic()
+    t0, cpu0 = time.monotonic(), time.process_time()
     info = environment(with_mpi=comm is not None)
     info.update(mpi_size=comm.Get_size() if comm is not None else 1, command=command,
                 compute=compute)
@@ -518,6 +525,7 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
             finally:
                 progress.close()
         summary.elapsed = time.monotonic() - t0
+        summary.master_cpu = time.process_time() - cpu0
     except Interrupted:
         outcome = "interrupted (resumable)"
         raise

@@ -74,3 +74,37 @@ def sleepy_point(cfg: ModelConfig) -> dict[str, Any]:
     """:func:`fake_point` after sleeping 0.2 s."""
     time.sleep(0.2)
     return fake_point(cfg)
+
+
+#: A tiny real campaign: 8 points of a 6-floe sheet, well under a second each.
+TINY_TOML = """\
+[base]
+L_sheet = 3.0
+n0 = 1
+nT = 1
+max_iterations = 3
+noise_window = 2
+n_average = 2
+
+[sweep]
+L_x = [0.5, 1.0]
+eps = [0.2, 0.6]
+dispersion = ["ml", "ep"]
+
+[run]
+name = "tiny"
+progress_interval = 5.0
+grace_period = 5.0
+"""
+
+
+def find_mpiexec() -> str | None:
+    """The ``mpiexec`` on PATH or beside the Python interpreter (the mpich wheel's)."""
+    import shutil
+    import sys
+    from pathlib import Path
+
+    beside = Path(sys.executable).parent / "mpiexec"
+    if beside.exists():
+        return str(beside)
+    return shutil.which("mpiexec")

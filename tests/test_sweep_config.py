@@ -1,0 +1,162 @@
+"""Campaign files: grid expansion and counts, shipped configs, validation of bad input."""
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import floewave
+from floewave import ModelConfig
+from sweep import ConfigError, load_campaign, parse_campaign
+from sweep.cli import main
+
+CONFIGS = Path(__file__).resolve().parent.parent / "configs"
+MINIMAL = "[sweep]\neps = [0.2, 0.6]\n"
+
+
+def test_herman2019_grid_is_24192_points():
+    c = load_campaign(CONFIGS / "herman2019.toml")
+    assert c.size == 24192
+    points = c.points()
+    assert len(points) == 24192
+    assert len({p.hash for p in points}) == 24192
+    assert not any(p.invalid for p in points)
+    assert c.swept_fields == floewave.SWEPT_FIELDS
+    assert {p.config.L_x for p in points} == {0.5, 1.5, 3.0}
+    assert sum(1 for p in points if p.config.dispersion == "ml") == 24192 // 3
+
+
+def test_herman2019_base_is_modelconfig_defaults():
+    c = load_campaign(CONFIGS / "herman2019.toml")
+    assert c.base == ModelConfig()
+
+
+@pytest.mark.parametrize("name, n", [("demo", 16), ("fig2", 8), ("fig5", 6), ("fig6a", 8),
+                                     ("fig6b", 8)])
+def test_shipped_configs(name, n):
+    import tomllib
+
+    path = CONFIGS / f"{name}.toml"
+    c = load_campaign(path)
+    assert c.size == n == len(c.points())
+    data = tomllib.loads(path.read_text())
+    written = set(data["base"]) | set(data["sweep"])
+    assert written == set(ModelConfig().to_dict()), "every parameter written out"
+
+
+def test_fig2_values():
+    c = load_campaign(CONFIGS / "fig2.toml")
+    assert c.sweep["eps"] == (0.2, 0.4, 0.6, 0.8)
+    assert set(c.sweep["dispersion"]) == {"ml", "ep"}
+    assert (c.sweep["L_x"], c.sweep["T"], c.sweep["a0"], c.sweep["d_f"], c.sweep["C_sd"]) == (
+        (0.5,), (1.2,), (0.0125,), (0.005,), (0.05,))
+
+
+def test_grid_order_and_coercion():
+    c = parse_campaign("[base]\nn0 = 2\n[sweep]\nT = [1, 2]\nL_x = [1, 0.5]\n")
+    pts = c.points()
+    assert [p.swept for p in pts] == [{"L_x": 1.0, "T": 1.0}, {"L_x": 1.0, "T": 2.0},
+                                      {"L_x": 0.5, "T": 1.0}, {"L_x": 0.5, "T": 2.0}]
+    assert all(isinstance(p.config.T, float) for p in pts)
+    assert pts[0].config.n0 == 2
+    assert pts[0].cost == pts[0].config.floe_steps_per_iteration() * 30
+
+
+def test_invalid_points_inside_a_valid_grid_are_kept():
+    c = parse_campaign("[base]\nh_i = 0.1\n[sweep]\nT = [0.6, 1.2]\ndispersion = ['ml', 'ep']\n")
+    bad = [p for p in c.points() if p.invalid]
+    assert len(bad) == 1 and bad[0].swept == {"T": 0.6, "dispersion": "ml"}
+    assert "cutoff" in bad[0].invalid
+
+
+def test_shard_partition():
+    c = load_campaign(CONFIGS / "fig2.toml")
+    shards = [c.shard(k, 3).points() for k in range(3)]
+    hashes = [p.hash for s in shards for p in s]
+    assert sorted(hashes) == sorted(p.hash for p in c.points())
+    assert c.shard(0, 3).definition_hash() == c.definition_hash()
+
+
+BAD = [
+    ("unknown_table", "[oops]\nx = 1\n" + MINIMAL, "oops"),
+    ("unknown_base_key", "[base]\nL_xx = 1.0\n" + MINIMAL, "L_xx"),
+    ("base_wrong_type", "[base]\nL_sheet = 'long'\n" + MINIMAL, "L_sheet"),
+    ("base_negative_length", "[base]\nL_sheet = -42.0\n" + MINIMAL, "L_sheet"),
+    ("base_zero_period", "[base]\nh = 0\n" + MINIMAL, "h"),
+    ("base_bad_contact", "[base]\ncontact = 'glue'\n" + MINIMAL, "contact"),
+    ("base_bool_type", "[base]\nconfined = 1\n" + MINIMAL, "confined"),
+    ("base_int_type", "[base]\nn0 = 2.5\n" + MINIMAL, "n0"),
+    ("base_rho", "[base]\nrho_i = 1100.0\n" + MINIMAL, "rho_i"),
+    ("base_nu", "[base]\nnu = 0.7\n" + MINIMAL, "nu"),
+    ("base_relax", "[base]\nrelax = 0.0\n" + MINIMAL, "relax"),
+    ("base_nan", "[base]\nE = nan\n" + MINIMAL, "E"),
+    ("base_not_table", "base = 3\n" + MINIMAL, "base"),
+    ("missing_sweep", "[base]\nn0 = 1\n", "[sweep]"),
+    ("sweep_unknown_dim", "[sweep]\nn0 = [1, 2]\n", "n0"),
+    ("sweep_not_list", "[sweep]\neps = 0.5\n", "eps"),
+    ("sweep_empty", "[sweep]\neps = []\n", "eps"),
+    ("sweep_eps_zero", "[sweep]\neps = [0.0, 0.5]\n", "eps"),
+    ("sweep_eps_above_one", "[sweep]\neps = [0.5, 1.5]\n", "eps"),
+    ("sweep_negative_L_x", "[sweep]\nL_x = [-0.5]\n", "L_x"),
+    ("sweep_zero_T", "[sweep]\nT = [0.0, 1.2]\n", "T"),
+    ("sweep_bad_dispersion", "[sweep]\ndispersion = ['ml', 'xx']\n", "dispersion"),
+    ("sweep_string_number", "[sweep]\na0 = ['0.01']\n", "a0"),
+    ("sweep_duplicate", "[sweep]\nT = [1.2, 1.2]\n", "T"),
+    ("sweep_duplicate_int_float", "[sweep]\nL_x = [3, 3.0]\n", "L_x"),
+    ("T_over_dt_not_integral", "[sweep]\nT = [1.2, 1.23456]\n", "T = 1.23456"),
+    ("L_x_over_dx_not_integral", "[sweep]\nL_x = [0.5, 0.555]\n", "L_x = 0.555"),
+    ("ml_beyond_cutoff", "[base]\nh_i = 0.5\n[sweep]\nT = [0.8, 1.1]\ndispersion = ['ml']\n",
+     "cutoff"),
+    ("too_few_floes", "[sweep]\nL_x = [50.0, 0.5]\n", "L_x = 50.0"),
+    ("run_unknown", MINIMAL + "[run]\nworkers = 4\n", "workers"),
+    ("run_negative_grace", MINIMAL + "[run]\ngrace_period = -1\n", "grace_period"),
+    ("run_name_type", MINIMAL + "[run]\nname = 3\n", "name"),
+    ("run_zero_interval", MINIMAL + "[run]\nprogress_interval = 0\n", "progress_interval"),
+    ("not_toml", "[sweep\neps = [0.2]\n", "TOML"),
+]
+
+
+@pytest.mark.parametrize("label, text, key", BAD, ids=[b[0] for b in BAD])
+def test_bad_config_exits_2_names_key_writes_nothing(tmp_path, capsys, label, text, key):
+    cfg = tmp_path / "bad.toml"
+    cfg.write_text(text)
+    with pytest.raises(ConfigError) as info:
+        load_campaign(cfg)
+    assert key in str(info.value)
+    store = tmp_path / "out.h5"
+    status = main(["run", str(cfg), "--store", str(store), "--compute",
+                   "sweep.testing:fake_point"])
+    assert status == 2
+    err = capsys.readouterr().err
+    assert key in err and "sweep: error:" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.toml"]
+
+
+def test_each_bad_value_gives_its_own_message():
+    text = "[base]\nL_sheet = -1.0\nh = 'deep'\n[sweep]\neps = [0.5, 2.0]\nT = [-1.0]\n"
+    with pytest.raises(ConfigError) as info:
+        parse_campaign(text)
+    msgs = info.value.messages
+    assert len(msgs) == 4
+    for key, value in [("L_sheet", "-1.0"), ("h", "'deep'"), ("eps", "2.0"), ("T", "-1.0")]:
+        assert any(key in m and value in m for m in msgs), (key, msgs)
+
+
+def test_missing_file_and_bad_cli(tmp_path):
+    assert main(["plan", str(tmp_path / "nope.toml"), "--rate", "1e7"]) == 2
+    proc = subprocess.run([sys.executable, "-m", "sweep", "run", str(CONFIGS / "demo.toml")],
+                          capture_output=True, text=True)
+    assert proc.returncode == 2 and "--store" in proc.stderr
+    proc = subprocess.run([sys.executable, "-m", "sweep", "run", str(CONFIGS / "demo.toml"),
+                           "--store", str(tmp_path / "s.h5"), "--shard", "5/3"],
+                          capture_output=True, text=True)
+    assert proc.returncode == 2 and "shard" in proc.stderr
+    assert not (tmp_path / "s.h5").exists()
+
+
+def test_plan_writes_nothing(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(["plan", str(CONFIGS / "herman2019.toml"), "--rate", "3e7"]) == 0
+    out = capsys.readouterr().out
+    assert "24192 points" in out and "core-hours" in out
+    assert list(tmp_path.iterdir()) == []

@@ -1,0 +1,100 @@
+"""Point identity: pinned hashes, sensitivity to every field, canonical form."""
+import json
+import random
+
+import pytest
+
+import floewave
+from floewave import ModelConfig
+from sweep.identity import canonical_json, point_hash, short_hash
+
+# Pinned: these change only if the hash definition, ModelConfig's fields/defaults or
+# MODEL_VERSION change -- which must be a deliberate, documented event.
+KNOWN = {
+    "default": "16efdaaf4ab066911d46e2302b4a590a774792b0f2ecb97f16f790adf9982bca",
+}
+
+
+def test_known_hash_of_default_config():
+    assert floewave.MODEL_VERSION == "1"
+    assert point_hash(ModelConfig()) == KNOWN["default"]
+
+
+@pytest.mark.parametrize("changes, expected", [
+    ({"L_x": 1.5, "T": 1.4, "dispersion": "ep"}, "KNOWN_1"),
+    ({"eps": 0.2, "C_sd": 0.2, "d_f": 0.05, "a0": 0.025}, "KNOWN_2"),
+])
+def test_known_hashes(changes, expected):
+    assert point_hash(ModelConfig(**changes)) == PINNED[expected]
+
+
+PINNED = {
+    "KNOWN_1": "8fc6264b2ed59ecf0ec2960cbd31d307590fd94dfec88089debf2b4a1c79d4d3",
+    "KNOWN_2": "b13a07d75aa94b58b1477f68b5822e95e6b939e153257b50046ec6c95cc1c948",
+}
+
+
+def test_canonical_json_form():
+    text = canonical_json({"b": 1.0, "a": [1, "x", True], "c": {"z": -0.0, "y": 2}})
+    assert text == '{"a":[1,"x",true],"b":1.0,"c":{"y":2,"z":0.0}}'
+    with pytest.raises(ValueError):
+        canonical_json({"a": float("nan")})
+
+
+def test_int_and_float_hash_alike():
+    assert point_hash(ModelConfig(L_x=3, T=2, eps=1)) == point_hash(
+        ModelConfig(L_x=3.0, T=2.0, eps=1.0))
+    assert point_hash({"L_x": 3, "n0": 10.0}) == point_hash({"L_x": 3.0, "n0": 10})
+
+
+def test_shuffled_keys_hash_alike():
+    d = ModelConfig(eps=0.4).to_dict()
+    items = list(d.items())
+    random.Random(1).shuffle(items)
+    assert list(dict(items)) != list(d)
+    assert point_hash(dict(items)) == point_hash(d)
+
+
+def _other_value(name, value):
+    if isinstance(value, bool):
+        return not value
+    if isinstance(value, str):
+        options = {"dispersion": "ep", "contact": "linear", "damping": "exact",
+                   "drag_integration": "exact", "integrator": "half_step"}
+        return options[name] if value != options[name] else "ml"
+    if name == "relax":
+        return 0.5
+    if name == "eps":
+        return 0.4
+    if name == "nu":
+        return 0.25
+    if name == "rho_i":
+        return 900.0
+    return value + 1 if isinstance(value, int) else value * 1.5 + 1e-3
+
+
+def test_every_field_changes_the_hash():
+    base = ModelConfig()
+    h0 = point_hash(base)
+    seen = {h0}
+    for name, value in base.to_dict().items():
+        changed = base.replace(**{name: _other_value(name, value)})
+        h = point_hash(changed)
+        assert h != h0, name
+        seen.add(h)
+    assert len(seen) == len(base.to_dict()) + 1
+
+
+def test_model_version_changes_the_hash():
+    assert point_hash(ModelConfig(), "1") != point_hash(ModelConfig(), "2")
+    assert point_hash(ModelConfig(), floewave.MODEL_VERSION) == point_hash(ModelConfig())
+
+
+def test_hash_input_is_documented_form():
+    import hashlib
+
+    cfg = ModelConfig(T=1.4)
+    text = json.dumps({"config": cfg.to_dict(), "model_version": floewave.MODEL_VERSION},
+                      sort_keys=True, separators=(",", ":"))
+    assert point_hash(cfg) == hashlib.sha256(text.encode()).hexdigest()
+    assert short_hash(point_hash(cfg)) == point_hash(cfg)[:12]

@@ -1,0 +1,182 @@
+"""In-process campaigns: store contents, resume, failures, retry, invalid points, analysis."""
+import json
+
+import h5py
+import numpy as np
+import pytest
+
+import sweep
+from sweep import parse_campaign, run_campaign
+from sweep.cli import main
+from sweep.testing import fake_point
+
+TOML = """\
+[base]
+L_sheet = 6.0
+[sweep]
+L_x = [0.5, 1.5]
+eps = [0.2, 0.4, 0.6]
+dispersion = ["ml", "ep"]
+[run]
+progress_interval = 100.0
+"""
+
+
+@pytest.fixture
+def campaign():
+    return parse_campaign(TOML, "test.toml")
+
+
+def test_run_stores_every_point(tmp_path, campaign):
+    store = tmp_path / "s.h5"
+    summary = run_campaign(campaign, str(store), compute="sweep.testing:fake_point")
+    assert summary.computed == 12 and summary.skipped == 0
+    df = sweep.load(store)
+    assert len(df) == 12 and df["hash"].is_unique
+    assert set(df["hash"]) == {p.hash for p in campaign.points()}
+    assert set(df["status"]) == {"converged"}
+    for p in campaign.points():
+        row = df[df["hash"] == p.hash].iloc[0]
+        expected = fake_point(p.config)
+        assert row["W_c"] == expected["W_c"]
+        assert row["L_x"] == p.config.L_x and row["dispersion"] == p.config.dispersion
+        assert row["n_floes"] == p.config.n_floes
+        assert json.loads(row["config_json"]) == p.config.to_dict()
+        prov = json.loads(row["provenance"])
+        for key in ("python", "numpy", "numba", "git_commit", "git_dirty", "mpi4py",
+                    "mpi_library", "sweep_version", "kernel_mode"):
+            assert key in prov, key
+        assert row["start_time"] <= row["end_time"] and row["wall_time"] >= 0
+        prof = sweep.load_profile(store, p.hash[:12])
+        np.testing.assert_array_equal(prof["a"].values, expected["a"])
+        np.testing.assert_array_equal(prof["residual_history"].values,
+                                      expected["residual_history"])
+        assert prof["a"].attrs["units"] == "m"
+    assert sweep.validate(store) == []
+    with h5py.File(store, "r") as f:
+        assert f.attrs["campaign_toml"] == TOML
+        assert f.attrs["schema_version"] == sweep.SCHEMA_VERSION
+        assert f["runs/0"].attrs["outcome"] == "complete"
+
+
+def test_costliest_first(tmp_path, campaign):
+    run_campaign(campaign, str(tmp_path / "s.h5"), compute="sweep.testing:fake_point")
+    df = sweep.load(tmp_path / "s.h5").sort_values("seq")
+    assert list(df["L_x"]) == [0.5] * 6 + [1.5] * 6  # 12 floes before 4 floes
+
+
+def test_resume_recomputes_nothing(tmp_path, campaign):
+    store = tmp_path / "s.h5"
+    run_campaign(campaign, str(store), compute="sweep.testing:fake_point")
+    before = sweep.load(store)
+    again = run_campaign(campaign, str(store), compute="sweep.testing:raising_point")
+    assert again.computed == 0 and again.skipped == 12
+    after = sweep.load(store)
+    assert len(after) == 12
+    assert list(after["seq"]) == list(before["seq"])
+    assert set(after["status"]) == {"converged"}  # raising_point was never called
+
+
+def test_partial_then_resume(tmp_path, campaign):
+    store = tmp_path / "s.h5"
+    small = parse_campaign(TOML.replace("[0.2, 0.4, 0.6]", "[0.2]"), "test.toml")
+    run_campaign(small, str(store), compute="sweep.testing:fake_point")
+    with pytest.raises(sweep.CampaignMismatchError, match="--extend"):
+        run_campaign(campaign, str(store), compute="sweep.testing:fake_point")
+    s = run_campaign(campaign, str(store), compute="sweep.testing:fake_point", extend=True)
+    assert (s.skipped, s.computed) == (4, 8)
+    df = sweep.load(store)
+    assert len(df) == 12 and df["hash"].is_unique
+    with h5py.File(store, "r") as f:
+        assert len(f["campaign_history"]) == 1
+
+
+def test_raising_points_recorded_and_campaign_completes(tmp_path, campaign):
+    store = tmp_path / "s.h5"
+    s = run_campaign(campaign, str(store), compute="sweep.testing:raising_point")
+    assert s.counts == {"converged": 8, "failed": 4}
+    df = sweep.load(store)
+    failed = df[df["status"] == "failed"]
+    assert set(failed["eps"]) == {0.4}
+    for msg in failed["message"]:
+        assert "RuntimeError: deliberate failure" in msg
+        assert "rank 0" in msg and "host" in msg and "Traceback" in msg
+    ds = sweep.load_xarray(store)
+    assert np.isnan(ds["W_c"].sel(eps=0.4)).all()
+    assert np.isfinite(ds["W_c"].sel(eps=0.2)).all()
+    assert sweep.validate(store) == []
+    # retry: without the flag nothing is recomputed, with it only the failed ones
+    assert run_campaign(campaign, str(store), compute="sweep.testing:fake_point").computed == 0
+    s = run_campaign(campaign, str(store), compute="sweep.testing:fake_point",
+                     retry_failed=True)
+    assert s.computed == 4
+    df = sweep.load(store)
+    assert len(df) == 12 and set(df["status"]) == {"converged"}
+
+
+def test_nan_results_are_failed(tmp_path):
+    c = parse_campaign("[base]\nL_sheet = 6.0\n[sweep]\nd_f = [0.005, 0.01]\n")
+    run_campaign(c, str(tmp_path / "s.h5"), compute="sweep.testing:nan_point")
+    df = sweep.load(tmp_path / "s.h5").set_index("d_f")
+    assert df.loc[0.01, "status"] == "failed" and "non-finite" in df.loc[0.01, "message"]
+    assert df.loc[0.005, "status"] == "converged"
+
+
+def test_invalid_points_stored_as_invalid(tmp_path):
+    c = parse_campaign("[base]\nh_i = 0.1\nL_sheet = 6.0\n[sweep]\nT = [0.6, 1.2]\n"
+                       "dispersion = ['ml', 'ep']\n")
+    s = run_campaign(c, str(tmp_path / "s.h5"), compute="sweep.testing:fake_point")
+    assert s.counts == {"converged": 3, "invalid": 1}
+    df = sweep.load(tmp_path / "s.h5")
+    row = df[df["status"] == "invalid"].iloc[0]
+    assert (row["T"], row["dispersion"]) == (0.6, "ml") and "cutoff" in row["message"]
+    assert sweep.validate(tmp_path / "s.h5") == []
+
+
+def test_xarray_layout(tmp_path, campaign):
+    store = tmp_path / "s.h5"
+    small = parse_campaign(TOML.replace("[0.2, 0.4, 0.6]", "[0.2]"), "test.toml")
+    run_campaign(small, str(store), compute="sweep.testing:fake_point")
+    run_campaign(campaign, str(store), compute="sweep.testing:fake_point", extend=True)
+    ds = sweep.load_xarray(store)
+    assert dict(ds.sizes) == {"L_x": 2, "eps": 3, "dispersion": 2}
+    assert list(ds["eps"].values) == [0.2, 0.4, 0.6]
+    assert ds["W_c"].attrs["units"] == "m" and ds["W_c"].attrs["long_name"]
+    assert ds["L_x"].attrs["units"] == "m"
+    assert json.loads(ds.attrs["campaign"])["sweep"]["eps"] == [0.2, 0.4, 0.6]
+    assert ds["alpha_all"].sel(L_x=0.5, eps=0.4, dispersion="ml").item() == fake_point(
+        campaign.base.replace(L_x=0.5, eps=0.4, dispersion="ml"))["alpha_all"]
+
+
+def test_missing_points_are_nan(tmp_path, campaign):
+    store = tmp_path / "s.h5"
+    run_campaign(campaign.shard(0, 2), str(store), compute="sweep.testing:fake_point")
+    n = len(campaign.shard(0, 2).points())
+    assert 0 < n < 12
+    ds = sweep.load_xarray(store)
+    assert int(np.isfinite(ds["W_c"]).sum()) == n
+    assert dict(ds.sizes) == {"L_x": 2, "eps": 3, "dispersion": 2}
+
+
+def test_cli_status_and_export(tmp_path, capsys, campaign):
+    store = tmp_path / "s.h5"
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(TOML)
+    assert main(["run", str(cfg), "--store", str(store), "--compute",
+                 "sweep.testing:raising_point", "--no-bar"]) == 0
+    capsys.readouterr()
+    assert main(["status", str(store), "--json"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    assert rep["counts"] == {"converged": 8, "failed": 4}
+    assert rep["grid_points"] == 12 and rep["remaining"] == 0
+    assert len(rep["failures"]) == 4 and "deliberate" in rep["failures"][0]["message"]
+    assert len(rep["slowest"]) == 5
+    assert main(["status", str(store)]) == 0
+    assert "failed" in capsys.readouterr().out
+    assert main(["export", str(store), "-o", str(tmp_path / "t.csv")]) == 0
+    import pandas as pd
+
+    assert len(pd.read_csv(tmp_path / "t.csv")) == 12
+    assert main(["export", str(store), "-o", str(tmp_path / "t.xlsx")]) == 2
+    assert main(["validate", str(store)]) == 0
+    assert main(["status", str(tmp_path / "none.h5")]) == 3
