@@ -95,7 +95,12 @@ class ModelConfig:
     max_iterations : hard cap on iterations
     noise_window : iterations over which a stalled residual marks the noise floor
         (0 disables noise handling: the paper's plain algorithm)
-    n_average : iterations averaged once the noise floor is reached
+    n_average : iterations averaged once the noise floor is reached (the minimum when
+        ``target_stderr`` > 0)
+    target_stderr : if > 0, keep averaging until max_i a_stderr_i / a0 <= target_stderr
+        (adaptive window; status ``not_converged`` if max_iterations comes first)
+    n0_warm : spin-up periods of every iteration after the first when ``warm_start``
+        (the state is already developed and a changes by at most ~relax x residual)
     warm_start : carry the DEM state over between iterations (default) instead of
         restarting from the initial state
     confined : hold all floes fixed (u = 0), the analytic limit of §5
@@ -141,6 +146,8 @@ class ModelConfig:
     max_iterations: int = 100
     noise_window: int = 6
     n_average: int = 20
+    target_stderr: float = 0.0
+    n0_warm: int = 10
     warm_start: bool = True
     confined: bool = False
     overwash: bool = False
@@ -169,6 +176,8 @@ class ModelConfig:
         _require(self, "max_iterations", self.max_iterations >= 1, "must be >= 1")
         _require(self, "noise_window", self.noise_window >= 0, "must be >= 0")
         _require(self, "n_average", self.n_average >= 2, "must be >= 2")
+        _require(self, "n0_warm", self.n0_warm >= 0, "must be >= 0")
+        _require(self, "target_stderr", 0 <= self.target_stderr < 1, "must be in [0, 1)")
         _require(self, "rho_i", self.rho_i < self.rho_w or self.rho_i == self.rho_w,
                  "must not exceed rho_w (floes float)")
         for name, allowed in (("dispersion", DISPERSIONS), ("contact", CONTACTS),
@@ -210,6 +219,16 @@ class ModelConfig:
     def floe_steps_per_iteration(self) -> int:
         """(n0 + nT) n_t N_f: the cost unit of MODEL.md §4 for one iteration."""
         periods = self.nT if self.confined else self.n0 + self.nT
+        return periods * self.n_t * self.n_floes
+
+    def floe_steps_of(self, iterations: int) -> int:
+        """Floe-steps of ``iterations`` iterations (n0 in the first, n0_warm after it)."""
+        if iterations <= 0:
+            return 0
+        if self.confined:
+            return iterations * self.floe_steps_per_iteration()
+        n0_later = self.n0_warm if self.warm_start else self.n0
+        periods = (self.n0 + self.nT) + (iterations - 1) * (n0_later + self.nT)
         return periods * self.n_t * self.n_floes
 
     def check_physics(self) -> None:

@@ -155,6 +155,17 @@ def effective_sample_size(samples: np.ndarray) -> float:
     return max(n * (1.0 - rho) / (1.0 + rho), 2.0)
 
 
+def stderr(samples: list[np.ndarray]) -> np.ndarray:
+    """Per-floe standard error of the mean of iteration samples (autocorrelation-corrected)."""
+    S = np.asarray(samples)
+    return S.std(axis=0, ddof=1) / math.sqrt(effective_sample_size(S))
+
+
+def max_stderr(samples: list[np.ndarray]) -> float:
+    """max_i of :func:`stderr` [m]."""
+    return float(np.max(stderr(samples)))
+
+
 def kernel_mode(cfg: ModelConfig) -> str:
     """Which kernel ran, e.g. ``numba/quadrature/predictor`` or ``numba/confined``."""
     if cfg.confined:
@@ -205,7 +216,8 @@ def run_point(cfg: ModelConfig,
         else:
             if not cfg.warm_start:
                 chain.reset()
-            chain.run(a, cfg.n0 * n_t)
+            n0 = cfg.n0 if (it == 1 or not cfg.warm_start) else cfg.n0_warm
+            chain.run(a, n0 * n_t)
             chain.run(a, cfg.nT * n_t, stats)
             chain.check()
         window = Window(cfg, stats, cfg.nT * n_t, chain.x0)
@@ -231,15 +243,14 @@ def run_point(cfg: ModelConfig,
         if phase == "iterate" and noise_floor_reached(history, cfg.noise_window):
             phase = "average"
         elif phase == "average" and len(samples) >= cfg.n_average:
-            status = "converged_noisy"
-            break
+            if cfg.target_stderr <= 0 or max_stderr(samples) <= cfg.target_stderr * cfg.a0:
+                status = "converged_noisy"
+                break
     iterations = len(history)
 
     if samples:
-        S = np.array(samples)
-        a_out = S.mean(axis=0)
-        a_stderr = S.std(axis=0, ddof=1) / math.sqrt(effective_sample_size(S)) \
-            if len(samples) > 1 else np.full(n, np.nan)
+        a_out = np.mean(samples, axis=0)
+        a_stderr = stderr(samples) if len(samples) > 1 else np.full(n, np.nan)
         prof = {name: win_sum[name] / n_win for name in Window.FIELDS}
         noise = float(np.median(history[-len(samples):]))
     else:
@@ -265,7 +276,7 @@ def run_point(cfg: ModelConfig,
         alpha_edge_resid=r_edge, alpha_inner=alpha_inner, alpha_inner_resid=r_inner,
         alpha_exp=alpha_exp, alpha_exp_resid=r_exp, alpha_c=alpha_c, k=k, c_g=c_g,
         status=status, noise=noise, iterations=iterations, residual=float(history[-1]),
-        floe_steps=iterations * cfg.floe_steps_per_iteration(), wall_time=wall,
+        floe_steps=cfg.floe_steps_of(iterations), wall_time=wall,
         kernel_mode=kernel_mode(cfg), a_end=float(a_out[-1]), a0=cfg.a0,
         residual_history=np.array(history),
     )

@@ -5,7 +5,7 @@ import pytest
 from floewave import ModelConfig, run_point
 from floewave.model import march_amplitude, noise_floor_reached, residual
 
-REDUCED = dict(L_x=1.5, n0=3, nT=2, noise_window=4, max_iterations=80)
+REDUCED = dict(L_x=1.5, n0=3, n0_warm=3, nT=2, noise_window=4, max_iterations=80)
 
 
 @pytest.fixture(scope="module")
@@ -23,7 +23,9 @@ def test_full_dem_point_converges_with_a_decreasing_profile(windows):
     assert np.all(r.a > 0) and np.all(r.a <= cfg.a0)
     assert np.all(np.diff(r.a) <= 0)
     assert r.a[-1] < 0.95 * cfg.a0          # the drag attenuates
-    assert r.floe_steps == r.iterations * cfg.floe_steps_per_iteration()
+    assert r.floe_steps == r.iterations * cfg.floe_steps_per_iteration()  # n0_warm == n0
+    later = cfg.replace(n0_warm=1)
+    assert later.floe_steps_of(5) == (cfg.n0 + cfg.nT + 4 * (1 + cfg.nT)) * cfg.n_t * 28
     assert r.x_mean.shape == r.a.shape == r.gap_mean.shape == (cfg.n_floes,)
     assert np.isnan(r.gap_mean[-1]) and np.all(np.isfinite(r.gap_mean[:-1]))
     assert np.all((r.contact_fraction[:-1] >= 0) & (r.contact_fraction[:-1] <= 1))
@@ -86,3 +88,13 @@ def test_residual_and_noise_floor_detection():
     noisy = decaying[:4] + [0.03, 0.01, 0.04, 0.02, 0.025, 0.03, 0.015, 0.02]
     assert noise_floor_reached(noisy, 4)
     assert not noise_floor_reached(noisy, 0)
+
+
+def test_adaptive_window_meets_its_stderr_target():
+    """target_stderr: averaging continues until max_i a_stderr_i <= target a0."""
+    loose = run_point(ModelConfig(eps=0.4, n_average=3, target_stderr=0.05, **REDUCED))
+    tight = run_point(ModelConfig(eps=0.4, n_average=3, target_stderr=0.002, **REDUCED))
+    for r, target in ((loose, 0.05), (tight, 0.002)):
+        assert r.status == "converged_noisy"
+        assert np.max(r.a_stderr) <= target * r.a0
+    assert tight.iterations > loose.iterations
