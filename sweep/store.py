@@ -175,7 +175,6 @@ class Store:
         if self.path.exists():
             try:
                 self.file = h5py.File(self.path, "r+")
-                self._check_version()
             except OSError:
                 if not self.journal_path.exists():
                     raise StoreError(f"{self.path}: not a readable HDF5 store and no journal"
@@ -184,6 +183,8 @@ class Store:
                 os.replace(self.path, aside)
                 self.file = None
                 self.repaired_from_journal = True
+            else:
+                self._check_version()
         if self.file is None:
             if campaign is None:
                 raise StoreError(f"{self.path}: no store here")

@@ -1,0 +1,87 @@
+"""``sweep merge``: combine shard stores of one campaign into one store, by hash."""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Iterator
+
+import h5py
+
+from .config import parse_campaign
+from .errors import CampaignMismatchError, StoreError
+from .provenance import environment
+from .schema import COLUMNS, HISTORY_VAR, PROFILE_VARS
+from .store import Store
+
+__all__ = ["merge", "iter_records"]
+
+
+def _text(v: Any) -> Any:
+    return v.decode() if isinstance(v, bytes) else v
+
+
+def iter_records(path: str | Path) -> Iterator[dict[str, Any]]:
+    """Every committed point of a store as a record for :meth:`Store.put`."""
+    with h5py.File(path, "r", locking=False) as f:
+        table = f["table"]
+        n = int(table.attrs["n_rows"])
+        cols = {c.name: table[c.name][:n] for c in COLUMNS}
+        for i in range(n):
+            row = {name: _text(values[i]) for name, values in cols.items()}
+            row = {k: (v.item() if hasattr(v, "item") else v) for k, v in row.items()}
+            h = row["hash"]
+            name = f"profiles/{h[:2]}/{h}"
+            profiles, history = {}, []
+            if name in f:
+                profiles = {k: f[name][k][()] for k in PROFILE_VARS}
+                history = f[name][HISTORY_VAR[0]][()]
+            yield {"row": row, "profiles": profiles, "residual_history": history}
+
+
+def merge(output: str | Path, inputs: list[str | Path]) -> str:
+    """Merge shard stores into ``output`` (created, or extended if it exists).
+
+    All inputs (and an existing output) must hold the same campaign definition. A point
+    present in several inputs is stored once; a ``failed`` copy is replaced by a
+    successful one.
+
+    Raises
+    ------
+    CampaignMismatchError
+        When the inputs belong to different campaigns.
+    """
+    hashes, texts = [], []
+    for path in inputs:
+        try:
+            with h5py.File(path, "r", locking=False) as f:
+                hashes.append(_text(f.attrs["campaign_hash"]))
+                texts.append(_text(f.attrs["campaign_toml"]))
+        except (OSError, KeyError) as exc:
+            raise StoreError(f"{path}: not a readable sweep store: {exc}") from None
+    if len(set(hashes)) != 1:
+        odd = [str(p) for p, h in zip(inputs, hashes) if h != hashes[0]]
+        raise CampaignMismatchError(f"cannot merge stores of different campaigns: "
+                                    f"{', '.join(odd)} differ from {inputs[0]}")
+    campaign = parse_campaign(texts[0], f"{inputs[0]}:campaign_toml")
+    if campaign.definition_hash() != hashes[0]:
+        raise CampaignMismatchError(f"{inputs[0]}: its campaign text no longer gives its"
+                                    " campaign hash (model version or defaults changed)")
+    added = replaced = duplicates = 0
+    info = environment()
+    info["command"] = f"sweep merge {output} " + " ".join(map(str, inputs))
+    with Store(output, campaign, run_info=info) as store:
+        for path in inputs:
+            for rec in iter_records(path):
+                h = rec["row"]["hash"]
+                if h in store:
+                    if store.status_of(h) == "failed" and rec["row"]["status"] != "failed":
+                        store.put(rec)
+                        replaced += 1
+                    else:
+                        duplicates += 1
+                    continue
+                store.put(rec)
+                added += 1
+        total = len(store)
+    return (f"merged {len(inputs)} store(s) into {output}: {added} points added,"
+            f" {replaced} failed points replaced, {duplicates} duplicates skipped;"
+            f" {total} points stored")

@@ -1,0 +1,168 @@
+"""Real mpiexec runs (the mpich wheel's launcher): tiny campaigns with run_point and fakes."""
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+import sweep
+from sweep.testing import TINY_TOML, find_mpiexec
+
+MPIEXEC = find_mpiexec()
+pytestmark = pytest.mark.skipif(MPIEXEC is None, reason="no mpiexec (pip install mpich)")
+
+FAKE_TOML = """\
+[base]
+L_sheet = 6.0
+[sweep]
+L_x = [0.5, 1.5]
+eps = [0.2, 0.4, 0.6, 0.8]
+dispersion = ["ml", "ep"]
+d_f = [0.005, 0.01]
+[run]
+progress_interval = 1.0
+grace_period = 5.0
+"""
+
+
+def _env(**extra):
+    env = dict(os.environ)
+    env.pop("SLURM_NTASKS", None)
+    env.update(extra)
+    return env
+
+
+def mpirun(n, *args, env=None, timeout=120):
+    cmd = [MPIEXEC, "-n", str(n), sys.executable, "-m", "sweep", *map(str, args)]
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout,
+                          env=env or _env())
+
+
+def inproc(*args, env=None, timeout=120):
+    cmd = [sys.executable, "-m", "sweep", *map(str, args)]
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout,
+                          env=env or _env())
+
+
+@pytest.fixture
+def tiny(tmp_path):
+    path = tmp_path / "tiny.toml"
+    path.write_text(TINY_TOML)
+    return path
+
+
+def test_mpiexec_3_real_points_equal_one_rank(tmp_path, tiny):
+    mpi_store, one_store = tmp_path / "mpi.h5", tmp_path / "one.h5"
+    proc = mpirun(3, "run", tiny, "--store", mpi_store)
+    assert proc.returncode == 0, proc.stderr
+    proc1 = inproc("run", tiny, "--store", one_store)
+    assert proc1.returncode == 0, proc1.stderr
+
+    df = sweep.load(mpi_store)
+    assert len(df) == 8 and df["hash"].is_unique
+    assert set(df["rank"]) == {1, 2}, "ranks 1 and 2 computed, rank 0 only stored"
+    assert set(df["status"]) <= {"converged", "converged_noisy", "not_converged"}
+    ds = sweep.load_xarray(mpi_store)
+    assert dict(ds.sizes) == {"L_x": 2, "eps": 2, "dispersion": 2}
+    assert np.isfinite(ds["W_c"]).all()
+    assert sweep.validate(mpi_store) == []
+    prov = __import__("json").loads(df["provenance"][0])
+    assert prov["mpi_library"].startswith("MPICH")
+
+    one = sweep.load(one_store).set_index("hash").sort_index()
+    mpi = df.set_index("hash").sort_index()
+    assert list(one.index) == list(mpi.index)
+    for col in ("W_c", "alpha_all", "alpha_c", "a_end", "residual", "iterations", "noise",
+                "floe_steps", "status"):
+        assert list(one[col].astype(str)) == list(mpi[col].astype(str)), col
+    for h in one.index:
+        a1 = sweep.load_profile(one_store, h)
+        a3 = sweep.load_profile(mpi_store, h)
+        for var in ("a", "x_mean", "S_sd", "gap_mean", "residual_history"):
+            np.testing.assert_array_equal(a1[var].values, a3[var].values)
+
+    again = mpirun(3, "run", tiny, "--store", mpi_store)
+    assert again.returncode == 0, again.stderr
+    assert "8 already stored, 0 stored now" in again.stdout
+    after = sweep.load(mpi_store)
+    assert list(after["seq"]) == list(df["seq"])
+
+
+def test_mpiexec_raising_points_recorded(tmp_path):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(FAKE_TOML)
+    store = tmp_path / "s.h5"
+    proc = mpirun(3, "run", cfg, "--store", store, "--compute", "sweep.testing:raising_point")
+    assert proc.returncode == 0, proc.stderr
+    df = sweep.load(store)
+    assert len(df) == 32
+    failed = df[df["status"] == "failed"]
+    assert len(failed) == 8 and set(failed["eps"]) == {0.4}
+    assert all(f"rank {r}" in m for r, m in zip(failed["rank"], failed["message"]))
+    assert set(failed["rank"]) <= {1, 2}
+
+
+def test_slurm_ntasks_mismatch_refused(tmp_path, tiny):
+    store = tmp_path / "s.h5"
+    proc = mpirun(2, "run", tiny, "--store", store, env=_env(SLURM_NTASKS="4"))
+    assert proc.returncode == 4
+    assert "SLURM_NTASKS=4" in proc.stderr
+    assert not store.exists()
+    proc = inproc("run", tiny, "--store", store, env=_env(SLURM_NTASKS="3"))
+    assert proc.returncode == 4 and "singletons" in proc.stderr
+    assert not store.exists()
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGUSR1])
+def test_signal_stops_cleanly_and_resumes(tmp_path, sig):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(FAKE_TOML)
+    store = tmp_path / "s.h5"
+    cmd = [MPIEXEC, "-n", "3", sys.executable, "-m", "sweep", "run", str(cfg), "--store",
+           str(store), "--compute", "sweep.testing:sleepy_point"]
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         env=_env())
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:  # wait for the first stored points
+        time.sleep(0.2)
+        if store.exists() and (tmp_path / "s.h5.journal").exists() and \
+                (tmp_path / "s.h5.journal").stat().st_size > 0:
+            break
+    p.send_signal(sig)
+    out, err = p.communicate(timeout=60)
+    assert p.returncode == 6, err
+    assert "resumable" in err
+    assert not (tmp_path / "s.h5.lock").exists()
+    first = sweep.load(store)
+    assert 0 < len(first) < 32
+    assert sweep.validate(store) == []
+    proc = mpirun(3, "run", cfg, "--store", store, "--compute", "sweep.testing:fake_point")
+    assert proc.returncode == 0, proc.stderr
+    df = sweep.load(store)
+    assert len(df) == 32 and df["hash"].is_unique
+    kept = df.set_index("hash").loc[first["hash"], "seq"]
+    assert list(kept) == list(first["seq"]), "points stored before the stop were kept"
+
+
+def test_grace_expiry_aborts_but_store_consistent(tmp_path):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(FAKE_TOML.replace("grace_period = 5.0", "grace_period = 0.0"))
+    store = tmp_path / "s.h5"
+    cmd = [MPIEXEC, "-n", "3", sys.executable, "-m", "sweep", "run", str(cfg), "--store",
+           str(store), "--compute", "sweep.testing:sleepy_point"]
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         env=_env())
+    time.sleep(3.0)
+    p.send_signal(signal.SIGTERM)
+    out, err = p.communicate(timeout=60)
+    assert p.returncode != 0
+    assert "resumable" in err
+    assert sweep.validate(store) == []
+    n = len(sweep.load(store))
+    proc = inproc("run", cfg, "--store", store, "--compute", "sweep.testing:fake_point")
+    assert proc.returncode == 0, proc.stderr
+    assert f"{n} already stored" in proc.stdout
+    assert len(sweep.load(store)) == 32

@@ -1,0 +1,202 @@
+"""The store: lock, schema version, repair after a crash, journal rebuild, merge, schema."""
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import h5py
+import pytest
+
+import sweep
+from sweep import parse_campaign, run_campaign
+from sweep.cli import main
+from sweep.schema import schema_document
+from sweep.store import Store
+
+ROOT = Path(__file__).resolve().parent.parent
+TOML = "[base]\nL_sheet = 6.0\n[sweep]\nL_x = [0.5, 1.5]\neps = [0.2, 0.4, 0.6]\n"
+
+
+@pytest.fixture
+def campaign():
+    return parse_campaign(TOML, "t.toml")
+
+
+def fill(campaign, path, compute="sweep.testing:fake_point"):
+    return run_campaign(campaign, str(path), compute=compute)
+
+
+def test_schema_file_matches_code():
+    doc = json.loads((ROOT / "results_schema" / "schema_v1.json").read_text())
+    assert doc == json.loads(json.dumps(schema_document()))
+
+
+def test_second_writer_refused_stale_lock_taken_over(tmp_path, campaign):
+    path = tmp_path / "s.h5"
+    with Store(path, campaign):
+        with pytest.raises(sweep.StoreLockedError, match="live campaign"):
+            Store(path, campaign)
+        cfg = tmp_path / "c.toml"
+        cfg.write_text(TOML)
+        proc = subprocess.run([sys.executable, "-m", "sweep", "run", str(cfg), "--store",
+                               str(path)], capture_output=True, text=True)
+        assert proc.returncode == 3 and "live campaign" in proc.stderr
+    # a lock left by a killed writer: the file exists but nobody holds its flock
+    holder = subprocess.Popen([sys.executable, "-c", "import sys, sweep;"
+                               "from sweep.store import Store;"
+                               f"s = Store({str(path)!r}, sweep.parse_campaign({TOML!r}));"
+                               "print('locked', flush=True); sys.stdin.read()"],
+                              stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    assert holder.stdout.readline().strip() == "locked"
+    os.kill(holder.pid, signal.SIGKILL)
+    holder.wait()
+    assert (tmp_path / "s.h5.lock").exists()
+    s = fill(campaign, path)
+    assert s.computed == 6
+    with h5py.File(path, "r") as f:
+        assert "took_over_stale_lock" in f["runs"][str(len(f["runs"]) - 1)].attrs
+
+
+def test_newer_schema_refused(tmp_path, campaign):
+    path = tmp_path / "s.h5"
+    fill(campaign, path)
+    with h5py.File(path, "r+") as f:
+        f.attrs["schema_version"] = 99
+    with pytest.raises(sweep.SchemaVersionError, match="99.*newer.*1"):
+        fill(campaign, path)
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(TOML)
+    assert main(["run", str(cfg), "--store", str(path)]) == 3
+
+
+def test_other_campaign_refused(tmp_path, campaign):
+    path = tmp_path / "s.h5"
+    fill(campaign, path)
+    other = parse_campaign(TOML.replace("L_sheet = 6.0", "L_sheet = 9.0"))
+    with pytest.raises(sweep.CampaignMismatchError, match="L_sheet"):
+        fill(other, path)
+    with pytest.raises(sweep.CampaignMismatchError, match="base"):
+        run_campaign(other, str(path), compute="sweep.testing:fake_point", extend=True)
+    fewer = parse_campaign(TOML.replace("[0.2, 0.4, 0.6]", "[0.2]"))
+    with pytest.raises(sweep.CampaignMismatchError, match="drops"):
+        run_campaign(fewer, str(path), compute="sweep.testing:fake_point", extend=True)
+    # comments and [run] options do not make another campaign
+    same = parse_campaign("# note\n" + TOML + "[run]\ngrace_period = 3.0\n")
+    assert fill(same, path).skipped == 6
+
+
+def test_uncommitted_rows_and_orphans_removed(tmp_path, campaign):
+    path = tmp_path / "s.h5"
+    fill(campaign, path)
+    os.unlink(tmp_path / "s.h5.journal")
+    with h5py.File(path, "r+") as f:  # simulate a crash after a row write, before commit
+        t = f["table"]
+        t.attrs["n_rows"] = 4
+        f.create_group("profiles/zz/" + "f" * 64)
+    s = fill(campaign, path)
+    assert s.computed == 2 and s.skipped == 4
+    df = sweep.load(path)
+    assert len(df) == 6 and df["hash"].is_unique
+    assert sweep.validate(path) == []
+    with h5py.File(path, "r") as f:
+        assert "f" * 64 not in f["profiles/zz"]
+
+
+def test_journal_replays_points_missing_from_file(tmp_path, campaign):
+    path = tmp_path / "s.h5"
+    fill(campaign, path)
+    ref = sweep.load(path).set_index("hash").sort_index()
+    with h5py.File(path, "r+") as f:  # the last two puts never reached the file
+        f["table"].attrs["n_rows"] = 4
+    s = run_campaign(campaign, str(path), compute="sweep.testing:raising_point")
+    assert s.computed == 0 and s.skipped == 6
+    df = sweep.load(path).set_index("hash").sort_index()
+    assert list(df.index) == list(ref.index)
+    assert list(df["W_c"]) == list(ref["W_c"])
+
+
+def test_unreadable_store_rebuilt_from_journal(tmp_path, campaign):
+    path = tmp_path / "s.h5"
+    fill(campaign, path)
+    ref = sweep.load(path).set_index("hash").sort_index()
+    with open(path, "r+b") as fh:  # destroy the superblock
+        fh.write(b"\0" * 4096)
+    with open(tmp_path / "s.h5.journal", "ab") as fh:  # and a torn last journal line
+        fh.write(b'{"row": {"hash": "abc"')
+    s = run_campaign(campaign, str(path), compute="sweep.testing:raising_point")
+    assert s.computed == 0
+    df = sweep.load(path).set_index("hash").sort_index()
+    assert list(df.index) == list(ref.index)
+    assert list(df["W_c"]) == list(ref["W_c"])
+    assert list(tmp_path.glob("s.h5.corrupt-*"))
+    assert sweep.validate(path) == []
+
+
+def test_unreadable_store_without_journal(tmp_path, campaign):
+    path = tmp_path / "s.h5"
+    path.write_bytes(b"not hdf5")
+    with pytest.raises(sweep.StoreError, match="no journal"):
+        fill(campaign, path)
+    assert main(["validate", str(path)]) == 3
+
+
+def test_store_in_missing_directory(tmp_path, campaign):
+    with pytest.raises(sweep.StoreError, match="does not exist"):
+        fill(campaign, tmp_path / "nope" / "s.h5")
+
+
+def test_merge_shards(tmp_path, campaign):
+    paths = []
+    for k in range(3):
+        p = tmp_path / f"shard{k}.h5"
+        fill(campaign.shard(k, 3), p, "sweep.testing:raising_point")
+        paths.append(p)
+    fill(campaign.shard(0, 3), tmp_path / "dup.h5")
+    out = tmp_path / "all.h5"
+    assert main(["merge", str(out), *map(str, paths), str(tmp_path / "dup.h5")]) == 0
+    df = sweep.load(out)
+    assert len(df) == 6 and df["hash"].is_unique
+    assert set(df["hash"]) == {p.hash for p in campaign.points()}
+    assert sweep.validate(out) == []
+    other = parse_campaign(TOML.replace("6.0", "9.0"))
+    fill(other, tmp_path / "other.h5")
+    assert main(["merge", str(tmp_path / "x.h5"), str(paths[0]),
+                 str(tmp_path / "other.h5")]) == 3
+    assert not (tmp_path / "x.h5").exists()
+
+
+def test_kill_9_torture(tmp_path, campaign):
+    """kill -9 the in-process campaign at random moments; the end equals a clean run."""
+    import random
+
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(TOML.replace("[0.2, 0.4, 0.6]", "[0.2, 0.4, 0.6, 0.8]").replace(
+        "[0.5, 1.5]", "[0.5, 1.0, 1.5, 3.0]"))
+    ref, path = tmp_path / "ref.h5", tmp_path / "s.h5"
+    args = ["--compute", "sweep.testing:fake_point", "--no-bar"]
+    subprocess.run([sys.executable, "-m", "sweep", "run", str(cfg), "--store", str(ref),
+                    *args], check=True, capture_output=True)
+    rng = random.Random(7)
+    kills = 0
+    for _ in range(10):
+        p = subprocess.Popen([sys.executable, "-m", "sweep", "run", str(cfg), "--store",
+                              str(path), *args], stdout=subprocess.DEVNULL,
+                             stderr=subprocess.DEVNULL)
+        time.sleep(rng.uniform(0.6, 1.2))
+        if p.poll() is None:
+            p.send_signal(signal.SIGKILL)
+            kills += 1
+        p.wait()
+    proc = subprocess.run([sys.executable, "-m", "sweep", "run", str(cfg), "--store",
+                           str(path), *args], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert kills >= 3
+    a = sweep.load(ref).set_index("hash").sort_index()
+    b = sweep.load(path).set_index("hash").sort_index()
+    assert b.index.is_unique and list(a.index) == list(b.index)
+    for col in ("W_c", "alpha_all", "status", "a_end"):
+        assert list(a[col]) == list(b[col])
+    assert sweep.validate(path) == []
