@@ -125,6 +125,8 @@ ROOT_ATTRS = {
                      "model_version)",
     "campaign_hash": "str: SHA-256 of campaign_json",
     "swept_fields": "str: JSON list of the swept dimensions, in grid order",
+    "writer_open": "bool: true while a writer has the store open; true on open means the "
+                   "last writer died, and the store is rebuilt from the journal",
 }
 RUN_ATTRS = ("started", "ended", "host", "mpi_size", "sweep_version", "floewave_version",
              "model_version", "git_commit", "git_dirty", "python", "numpy", "numba",

@@ -11,7 +11,8 @@ Only then is the next point accepted. On open, rows and profile groups beyond th
 commit are removed and journal records missing from the file are written again, so a
 point is either wholly present or absent after any crash; if HDF5 left the file
 unreadable (``kill -9`` during a metadata write) it is moved aside and rebuilt from the
-journal. ``<store>.lock`` is held with ``flock`` by the live writer, so a second writer
+journal; so is a file whose ``writer_open`` flag shows its writer died (HDF5 may then
+hold metadata that opens but reads wrong). ``<store>.lock`` is held with ``flock`` by the live writer, so a second writer
 is refused and the lock of a killed writer (whose flock the kernel released) is taken
 over.
 """
@@ -160,7 +161,17 @@ class Store:
         self._lock.acquire()
         try:
             self._open(campaign, extend)
-            self._repair()
+            try:
+                self._repair()
+            except OSError as exc:
+                if isinstance(exc, StoreError) or not self.journal_path.exists() or \
+                        campaign is None:
+                    raise
+                self._close_file()  # reads fail: rebuild from the journal
+                os.replace(self.path, self.path.with_name(self.path.name + ".unclean"))
+                self.repaired_from_journal = True
+                self._create(campaign)
+                self._repair()
             self.run_index = self._start_run(run_info or {})
         except BaseException:
             self._close_file()
@@ -185,6 +196,13 @@ class Store:
                 self.repaired_from_journal = True
             else:
                 self._check_version()
+                if bool(self.file.attrs.get("writer_open", False)) and \
+                        self.journal_path.exists():
+                    # the last writer died without closing: HDF5 may hold half-written
+                    # metadata that opens but reads wrong, so rebuild from the journal
+                    self._close_file()
+                    os.replace(self.path, self.path.with_name(self.path.name + ".unclean"))
+                    self.repaired_from_journal = True
         if self.file is None:
             if campaign is None:
                 raise StoreError(f"{self.path}: no store here")
@@ -307,6 +325,7 @@ class Store:
 
     def _start_run(self, info: dict[str, Any]) -> int:
         assert self.file is not None
+        self.file.attrs["writer_open"] = True
         runs = self.file.require_group("runs")
         index = len(runs)
         g = runs.create_group(str(index))
@@ -406,6 +425,7 @@ class Store:
             g = self.file["runs"][str(self.run_index)]
             g.attrs["ended"] = utc_now()
             g.attrs["outcome"] = outcome
+            self.file.attrs["writer_open"] = False
             self._durable()
             self._close_file()
         if not self._journal.closed:

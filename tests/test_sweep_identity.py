@@ -11,13 +11,31 @@ from sweep.identity import canonical_json, point_hash, short_hash
 # Pinned: these change only if the hash definition, ModelConfig's fields/defaults or
 # MODEL_VERSION change -- which must be a deliberate, documented event.
 KNOWN = {
-    "default": "16efdaaf4ab066911d46e2302b4a590a774792b0f2ecb97f16f790adf9982bca",
+    "default": "ee1b66dfdde24aaff57436ab8b7afe27ab40b8b3c13730420e605ed5c22e3afb",
 }
+
+
+UPDATE = ("ModelConfig's fields or defaults, or MODEL_VERSION, changed: every point hash"
+          " changes, so old stores no longer match; if intended, update these pins and run"
+          " python configs/generate.py")
 
 
 def test_known_hash_of_default_config():
     assert floewave.MODEL_VERSION == "1"
-    assert point_hash(ModelConfig()) == KNOWN["default"]
+    assert point_hash(ModelConfig()) == KNOWN["default"], UPDATE
+
+
+def test_known_hash_of_the_definition():
+    """The hash definition itself, independent of ModelConfig's field list."""
+    from sweep.identity import sha256_hex
+
+    data = {"model_version": "1", "config": {"T": 1.2, "L_x": 1.0, "dispersion": "ml",
+                                             "n0": 10, "confined": False}}
+    text = canonical_json(data)
+    assert text == ('{"config":{"L_x":1.0,"T":1.2,"confined":false,"dispersion":"ml",'
+                    '"n0":10},"model_version":"1"}')
+    assert sha256_hex(text) == (
+        "7e17ad28572740c9f6949d8ea919b9ffebd01c86429fbdbaedfb683bf49ee7a0")
 
 
 @pytest.mark.parametrize("changes, expected", [
@@ -25,12 +43,12 @@ def test_known_hash_of_default_config():
     ({"eps": 0.2, "C_sd": 0.2, "d_f": 0.05, "a0": 0.025}, "KNOWN_2"),
 ])
 def test_known_hashes(changes, expected):
-    assert point_hash(ModelConfig(**changes)) == PINNED[expected]
+    assert point_hash(ModelConfig(**changes)) == PINNED[expected], UPDATE
 
 
 PINNED = {
-    "KNOWN_1": "8fc6264b2ed59ecf0ec2960cbd31d307590fd94dfec88089debf2b4a1c79d4d3",
-    "KNOWN_2": "b13a07d75aa94b58b1477f68b5822e95e6b939e153257b50046ec6c95cc1c948",
+    "KNOWN_1": "ca16fafb0939e87b9356e7b68fac8a12560df8dfa5bd8e314e9401008ec8f012",
+    "KNOWN_2": "c3f03d348d083fda9b78b7d5e63ddc3b484b5e2dd5ea3fa3d210b88f4a813004",
 }
 
 

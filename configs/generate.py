@@ -1,0 +1,110 @@
+"""Regenerate the shipped campaign files from floewave.ModelConfig's defaults.
+
+Every shipped config writes out every model and numerics parameter. When floewave adds
+a field (which changes every point hash), run ``python configs/generate.py`` and commit
+the result; ``tests/test_sweep_config.py`` fails until then.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from floewave import SWEPT_FIELDS, ModelConfig
+
+HERE = Path(__file__).resolve().parent
+GROUPS = [
+    ("geometry and material (MODEL.md §1, §7: LS-WICE-like tank; documented assumptions)",
+     ["L_sheet", "h", "L_y", "h_i", "rho_i", "rho_w", "E", "nu", "k_s", "C_m"]),
+    ("contact law (§3)", ["contact", "damping", "clip_attraction"]),
+    ("numerics (§3, §4)", []),  # every field not named elsewhere
+    ("diagnostics (§6)", ["gap_threshold"]),
+]
+
+
+def _value(v: object) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, str):
+        return f'"{v}"'
+    return repr(v)
+
+
+def render(header: str, sweep: dict, run: str, over: dict | None = None) -> str:
+    """The text of one campaign file."""
+    defaults = ModelConfig(**(over or {})).to_dict()
+    named = {k for _, keys in GROUPS for k in keys} | set(SWEPT_FIELDS)
+    lines = [header.strip(), "", "[base]"]
+    for title, keys in GROUPS:
+        keys = keys or [k for k in defaults if k not in named]
+        lines.append(f"# --- {title}")
+        lines += [f"{k} = {_value(defaults[k])}" for k in keys]
+    lines += ["", "[sweep]", "# the grid is the product of these lists, in this order"]
+    lines += [f"{k} = [{', '.join(_value(x) for x in sweep[k])}]" for k in SWEPT_FIELDS]
+    lines += ["", "[run]", run.strip(), ""]
+    return "\n".join(lines)
+
+
+CONFIGS = {
+    "herman2019": dict(header="""
+# The paper's campaign (Herman, Cheng & Shen 2019, §4.1; MODEL.md §7):
+# 3 x 7 x 4 x 6 x 4 x 4 x 3 = 24,192 points. Every model and numerics parameter is written
+# out with floewave.ModelConfig's default, so this file states the whole configuration.
+# Cost: see `sweep plan configs/herman2019.toml`.
+""", sweep=dict(L_x=[0.5, 1.5, 3.0], T=[1.1, 1.2, 1.4, 1.5, 1.6, 1.8, 2.0],
+                a0=[0.0125, 0.015, 0.02, 0.025], C_sd=[0.005, 0.01, 0.05, 0.1, 0.15, 0.2],
+                eps=[0.2, 0.4, 0.6, 0.8], d_f=[0.005, 0.010, 0.020, 0.050],
+                dispersion=["ep", "ow", "ml"]),
+        run='name = "herman2019"\ndescription = "Herman, Cheng & Shen (2019) full parameter'
+            ' grid"\nprogress_interval = 300.0\ngrace_period = 240.0'),
+    "demo": dict(header="""
+# A small demonstration campaign: 16 points with reduced numerics (n0 = 2, nT = 2,
+# max_iterations = 30, n_average = 8) so it finishes in about a minute on 2 cores
+# (`mpiexec -n 2 sweep run configs/demo.toml --store demo.h5`: one master, one worker;
+# measured 28-58 s, 2-4 s per L_x = 0.5 m point). Results are noisier than with the
+# paper's numerics; use it to try the workflow, not for science.
+""", sweep=dict(L_x=[0.5, 1.5], T=[1.2, 1.6], a0=[0.0125], C_sd=[0.05], eps=[0.2, 0.6],
+                d_f=[0.005], dispersion=["ml", "ep"]),
+        run='name = "demo"\ndescription = "16-point demonstration with reduced numerics"\n'
+            'progress_interval = 10.0\ngrace_period = 30.0',
+        over=dict(n0=2, nT=2, max_iterations=30, n_average=8)),
+    "fig2": dict(header="""
+# Paper Fig. 2: a/a0 for L_x = 0.5 m, T = 1.2 s, a0 = 0.0125 m, d_f = 0.005 m, C_sd = 0.05,
+# eps = 0.2, 0.4, 0.6, 0.8, with 'ML' (a) and 'EP' (b) dispersion. 8 points.
+""", sweep=dict(L_x=[0.5], T=[1.2], a0=[0.0125], C_sd=[0.05], eps=[0.2, 0.4, 0.6, 0.8],
+                d_f=[0.005], dispersion=["ml", "ep"]),
+        run='name = "fig2"\ndescription = "Herman et al. 2019 Fig. 2: restitution'
+            ' coefficient, ML and EP"'),
+    "fig5": dict(header="""
+# Paper Fig. 5: a/a0 for floe sizes L_x = 0.5, 1.5, 3.0 m, T = 1.4 s, a0 = 0.015 m,
+# d_f = 0.005 m, C_sd = 0.05, eps = 0.6, 'EP' (continuous) and 'ML' (dashed). 6 points.
+""", sweep=dict(L_x=[0.5, 1.5, 3.0], T=[1.4], a0=[0.015], C_sd=[0.05], eps=[0.6],
+                d_f=[0.005], dispersion=["ep", "ml"]),
+        run='name = "fig5"\ndescription = "Herman et al. 2019 Fig. 5: floe size, EP and ML"'),
+    "fig6a": dict(header="""
+# Paper Fig. 6a: a/a0 for floe-floe distances d_f = 0.005, 0.01, 0.02, 0.05 m (the
+# campaign's values), L_x = 0.5 m, a0 = 0.015 m, C_sd = 0.05, eps = 0.6, two wave periods.
+# The caption does not name the periods or the dispersion relation: the text names
+# T = 1.8 s for the long waves; T = 1.2 s (Figs. 2-4) is assumed for the short ones and
+# 'ML' (Figs. 2a-4) for the dispersion. 8 points.
+""", sweep=dict(L_x=[0.5], T=[1.2, 1.8], a0=[0.015], C_sd=[0.05], eps=[0.6],
+                d_f=[0.005, 0.010, 0.020, 0.050], dispersion=["ml"]),
+        run='name = "fig6a"\ndescription = "Herman et al. 2019 Fig. 6a: floe-floe distance,'
+            ' two periods"'),
+    "fig6b": dict(header="""
+# Paper Fig. 6b: a/a0 for incident amplitudes a0 = 0.0125, 0.015, 0.02, 0.025 m (the
+# campaign's values), L_x = 0.5 m, d_f = 0.005 m, C_sd = 0.05, eps = 0.6, two wave periods.
+# As for Fig. 6a: T = 1.8 s from the text, T = 1.2 s and 'ML' dispersion assumed. 8 points.
+""", sweep=dict(L_x=[0.5], T=[1.2, 1.8], a0=[0.0125, 0.015, 0.02, 0.025], C_sd=[0.05],
+                eps=[0.6], d_f=[0.005], dispersion=["ml"]),
+        run='name = "fig6b"\ndescription = "Herman et al. 2019 Fig. 6b: incident amplitude,'
+            ' two periods"'),
+}
+
+
+def main() -> None:
+    """Write every shipped config."""
+    for name, spec in CONFIGS.items():
+        (HERE / f"{name}.toml").write_text(render(**spec), encoding="utf-8")
+
+
+if __name__ == "__main__":
+    main()
