@@ -11,9 +11,17 @@ The command line is ``sweep`` (:mod:`sweep.cli`); user docs are in ``sweep/READM
 """
 from .analysis import load, load_profile, load_xarray
 from .config import Campaign, Point, RunOptions, load_campaign, parse_campaign
-from .errors import (CampaignMismatchError, ConfigError, Interrupted, LaunchError,
-                     SchemaVersionError, StoreError, StoreLockedError, SweepError,
-                     WorkerError)
+from .errors import (
+                     CampaignMismatchError,
+                     ConfigError,
+                     Interrupted,
+                     LaunchError,
+                     SchemaVersionError,
+                     StoreError,
+                     StoreLockedError,
+                     SweepError,
+                     WorkerError,
+)
 from .executor import run_campaign
 from .identity import canonical_json, point_hash, short_hash
 from .schema import SCHEMA_VERSION, validate

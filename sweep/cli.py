@@ -10,8 +10,9 @@ import json
 import sys
 import time
 import traceback
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
 from .errors import EXIT_CONFIG, EXIT_INTERNAL, EXIT_OK, EXIT_STORE, ConfigError, SweepError
 

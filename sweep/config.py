@@ -85,7 +85,7 @@ class Campaign:
     source: str = "<string>"
     shard_of: tuple[int, int] | None = None
 
-    def shard(self, k: int, n: int) -> "Campaign":
+    def shard(self, k: int, n: int) -> Campaign:
         """The same campaign restricted to shard ``k`` of ``n``: points whose hash,
         as an integer, is ``k`` modulo ``n`` (stable under ``--extend``)."""
         return dataclasses.replace(self, shard_of=(k, n))
@@ -126,7 +126,7 @@ class Campaign:
         names = self.swept_fields
         out = []
         for index, combo in enumerate(itertools.product(*self.sweep.values())):
-            swept = dict(zip(names, combo))
+            swept = dict(zip(names, combo, strict=False))
             cfg = self.base.replace(**swept)
             try:
                 cfg.check_physics()

@@ -1,8 +1,9 @@
 """``sweep merge``: combine shard stores of one campaign into one store, by hash."""
 from __future__ import annotations
 
+from collections.abc import Iterator
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any
 
 import h5py
 
@@ -58,7 +59,7 @@ def merge(output: str | Path, inputs: list[str | Path]) -> str:
         except (OSError, KeyError) as exc:
             raise StoreError(f"{path}: not a readable sweep store: {exc}") from None
     if len(set(hashes)) != 1:
-        odd = [str(p) for p, h in zip(inputs, hashes) if h != hashes[0]]
+        odd = [str(p) for p, h in zip(inputs, hashes, strict=False) if h != hashes[0]]
         raise CampaignMismatchError(f"cannot merge stores of different campaigns: "
                                     f"{', '.join(odd)} differ from {inputs[0]}")
     campaign = parse_campaign(texts[0], f"{inputs[0]}:campaign_toml")

@@ -56,8 +56,9 @@ def environment(*, with_git: bool = True, with_mpi: bool | None = None) -> dict[
     with_mpi : include the MPI library version; default: only if mpi4py is already
         imported (so asking does not initialise MPI).
     """
-    import floewave
     import numpy
+
+    import floewave
 
     env: dict[str, Any] = {
         "sweep_version": floewave.__version__,

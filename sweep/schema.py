@@ -227,7 +227,7 @@ def validate(path: str | Path) -> list[str]:
         n_floes = table["n_floes"][:n]
         if len(set(hashes)) != len(hashes):
             problems.append("/table/hash: duplicate hashes")
-        for i, (h, s) in enumerate(zip(hashes, status)):
+        for i, (h, s) in enumerate(zip(hashes, status, strict=False)):
             if len(h) != 64 or any(c not in "0123456789abcdef" for c in h):
                 problems.append(f"/table/hash[{i}]: {h!r} is not a 64-character hex hash")
                 continue

@@ -12,9 +12,9 @@ commit are removed and journal records missing from the file are written again, 
 point is either wholly present or absent after any crash; if HDF5 left the file
 unreadable (``kill -9`` during a metadata write) it is moved aside and rebuilt from the
 journal; so is a file whose ``writer_open`` flag shows its writer died (HDF5 may then
-hold metadata that opens but reads wrong). ``<store>.lock`` is held with ``flock`` by the live writer, so a second writer
-is refused and the lock of a killed writer (whose flock the kernel released) is taken
-over.
+hold metadata that opens but reads wrong). ``<store>.lock`` is held with ``flock`` by
+the live writer, so a second writer is refused and the lock of a killed writer (whose
+flock the kernel released) is taken over.
 """
 from __future__ import annotations
 
@@ -24,14 +24,14 @@ import fcntl
 import json
 import os
 import socket
+from collections.abc import Iterator
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any
 
 import h5py
 import numpy as np
 
-from .errors import (CampaignMismatchError, SchemaVersionError, StoreError,
-                     StoreLockedError)
+from .errors import CampaignMismatchError, SchemaVersionError, StoreError, StoreLockedError
 from .schema import COLUMNS, FORMAT, HISTORY_VAR, MIGRATIONS, PROFILE_VARS, SCHEMA_VERSION
 
 __all__ = ["Store", "Record", "journal_path", "lock_path", "utc_now", "read_journal"]
@@ -46,7 +46,7 @@ _DTYPES = {"float": np.float64, "int": np.int64, "str": _STR}
 
 def utc_now() -> str:
     """The current time, ISO 8601 UTC with microseconds."""
-    return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="microseconds")
+    return _dt.datetime.now(_dt.UTC).isoformat(timespec="microseconds")
 
 
 def journal_path(path: str | Path) -> Path:
@@ -302,7 +302,7 @@ class Store:
         hashes = [_text(h) for h in table["hash"][:n]]
         self.rows: dict[str, int] = {h: i for i, h in enumerate(hashes)}
         seqs = table["seq"][:n]
-        self._seq: dict[str, int] = {h: int(s) for h, s in zip(hashes, seqs)}
+        self._seq: dict[str, int] = {h: int(s) for h, s in zip(hashes, seqs, strict=False)}
         removed = []
         for hh in list(f["profiles"]):
             for h in list(f["profiles"][hh]):
@@ -432,7 +432,7 @@ class Store:
             self._journal.close()
         self._lock.release()
 
-    def __enter__(self) -> "Store":
+    def __enter__(self) -> Store:
         return self
 
     def __exit__(self, exc_type: Any, exc: Any, tb: Any) -> None:

@@ -101,7 +101,7 @@ def test_mpiexec_raising_points_recorded(tmp_path):
     assert len(df) == 32
     failed = df[df["status"] == "failed"]
     assert len(failed) == 8 and set(failed["eps"]) == {0.4}
-    assert all(f"rank {r}" in m for r, m in zip(failed["rank"], failed["message"]))
+    assert all(f"rank {r}" in m for r, m in zip(failed["rank"], failed["message"], strict=False))
     assert set(failed["rank"]) <= {1, 2}
 
 
