@@ -57,7 +57,7 @@ def main() -> None:
     p.add_argument("--numpy-steps", type=int, default=2000)
     args = p.parse_args()
     print(f"{'mode':<22}{'L_x':>5}{'N_f':>5}{'numba Mfs/s':>13}{'numpy Mfs/s':>13}{'ratio':>8}")
-    for mode in ("quadrature",):
+    for mode in ("quadrature", "exact"):
         for L_x in (0.5, 1.5, 3.0):
             cfg = ModelConfig(L_x=L_x, T=1.2, drag_integration=mode)
             nb, npy = bench(cfg, args.steps, args.repeat, args.numpy_steps)

@@ -24,6 +24,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from ._exact import drag_force_exact, drag_sums_exact
+
 JIT = dict(cache=True, fastmath=True, nogil=True)
 
 # option codes (decided once from ModelConfig)
@@ -33,6 +35,8 @@ DAMPING_LIGGGHTS = 0
 DAMPING_EXACT = 1
 INTEG_PREDICTOR = 0
 INTEG_HALF_STEP = 1
+DRAG_QUADRATURE = 0
+DRAG_EXACT = 1
 
 # rows of the per-window statistics array ``stats`` (shape (N_STATS, N_f))
 ST_S3 = 0        # sum over steps and cells of |u_rel|^3            [m^3 s^-3]
@@ -69,6 +73,8 @@ class KernelParams(NamedTuple):
     damping: int       # DAMPING_*
     clip: int          # 1: clip contact force at 0
     integrator: int    # INTEG_*
+    drag: int          # DRAG_*: quadrature on the dx grid or the exact (dx -> 0) integrals
+    geom: tuple        # floewave._exact.exact_geometry(k L_x, n_x) (used when drag = EXACT)
 
 
 @njit(**JIT)
@@ -127,6 +133,19 @@ def drag_force_sum(A, c, s, v, cxi, sxi):
 
 
 @njit(**JIT)
+def floe_drag(A, c, s, v, accumulate, P, cxi, sxi):
+    """(s2, s3): drag sums of one floe, by quadrature or exactly; s3 = 0 unless
+    ``accumulate`` (the |u_rel|^3 sum is only needed in averaging windows)."""
+    if P.drag == DRAG_EXACT:
+        if accumulate:
+            return drag_sums_exact(A, c, s, v, P.geom)
+        return drag_force_exact(A, c, s, v, P.geom), 0.0
+    if accumulate:
+        return drag_sums(A, c, s, v, cxi, sxi)
+    return drag_force_sum(A, c, s, v, cxi, sxi), 0.0
+
+
+@njit(**JIT)
 def eval_forces(x, vs, a, x0, ck, sk, cwt, swt, P, cxi, sxi, F, in_contact, accumulate,
                 stats):
     """Total force of eq. 8 scaled to the left-hand side, (1 + C_m) F_w + F_d + F_c + F_s,
@@ -143,10 +162,7 @@ def eval_forces(x, vs, a, x0, ck, sk, cwt, swt, P, cxi, sxi, F, in_contact, accu
         c = ck[i] * cwt + sk[i] * swt
         s = sk[i] * cwt - ck[i] * swt
         Fw = P.c_wave * a[i] * s
-        if accumulate:
-            s2, s3 = drag_sums(a[i] * P.u_amp, c, s, vs[i], cxi, sxi)
-        else:
-            s2 = drag_force_sum(a[i] * P.u_amp, c, s, vs[i], cxi, sxi)
+        s2, s3 = floe_drag(a[i] * P.u_amp, c, s, vs[i], accumulate, P, cxi, sxi)
         Fd = P.c_drag * s2
         F[i] = P.one_cm * Fw + Fd
         if accumulate:
@@ -268,7 +284,7 @@ def confined_window(x0, a, nsteps, P, cxi, sxi, stats):
         for i in range(n):
             c = ck[i] * cwt + sk[i] * swt
             s = sk[i] * cwt - ck[i] * swt
-            s2, s3 = drag_sums(a[i] * P.u_amp, c, s, 0.0, cxi, sxi)
+            s2, s3 = floe_drag(a[i] * P.u_amp, c, s, 0.0, True, P, cxi, sxi)
             stats[ST_S3, i] += s3
             stats[ST_X, i] += x0[i]
             stats[ST_FW, i] += abs(P.c_wave * a[i] * s)

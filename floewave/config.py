@@ -85,7 +85,8 @@ class ModelConfig:
     -----------------
     dt : time step [s]; T/dt must be an integer
     dx : drag/dissipation quadrature spacing along the floe bottom [m]; L_x/dx integer
-    drag_integration : ``"quadrature"`` (the paper's dx grid)
+    drag_integration : ``"quadrature"`` (the paper's dx grid, default) or ``"exact"``
+        (closed-form floe-bottom integrals, the limit dx -> 0; floewave._exact)
     integrator : ``"predictor"`` (velocity Verlet, velocity-dependent forces at the
         predicted end-of-step velocity u + dt*a: second order) or ``"half_step"``
         (forces at the half-step velocity as LIGGGHTS does: first order in the damping)

@@ -10,6 +10,7 @@ import math
 import numpy as np
 
 from . import _kernels as K
+from ._exact import exact_geometry
 from .config import ModelConfig
 
 __all__ = ["froude_krylov_coefficient", "wave_force", "orbital_velocity_amplitude",
@@ -89,4 +90,6 @@ def kernel_params(cfg: ModelConfig, k: float) -> K.KernelParams:
         damping=K.DAMPING_LIGGGHTS if cfg.damping == "liggghts" else K.DAMPING_EXACT,
         clip=1 if cfg.clip_attraction else 0,
         integrator=K.INTEG_PREDICTOR if cfg.integrator == "predictor" else K.INTEG_HALF_STEP,
+        drag=K.DRAG_QUADRATURE if cfg.drag_integration == "quadrature" else K.DRAG_EXACT,
+        geom=exact_geometry(k * cfg.L_x, float(cfg.n_x)),
     )
