@@ -143,12 +143,12 @@ class ModelConfig:
     n0: int = 10
     nT: int = 5
     delta: float = 1.0e-3
-    relax: float = 0.3
+    relax: float = 0.5
     max_iterations: int = 100
-    noise_window: int = 6
-    n_average: int = 20
-    target_stderr: float = 0.0
-    n0_warm: int = 10
+    noise_window: int = 4
+    n_average: int = 5
+    target_stderr: float = 0.01
+    n0_warm: int = 1
     warm_start: bool = True
     confined: bool = False
     overwash: bool = False

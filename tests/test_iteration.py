@@ -5,7 +5,8 @@ import pytest
 from floewave import ModelConfig, run_point
 from floewave.model import march_amplitude, noise_floor_reached, residual
 
-REDUCED = dict(L_x=1.5, n0=3, n0_warm=3, nT=2, noise_window=4, max_iterations=80)
+REDUCED = dict(L_x=1.5, n0=3, n0_warm=3, nT=2, noise_window=4, max_iterations=80, relax=0.3,
+               target_stderr=0.0)
 
 
 @pytest.fixture(scope="module")
@@ -92,8 +93,9 @@ def test_residual_and_noise_floor_detection():
 
 def test_adaptive_window_meets_its_stderr_target():
     """target_stderr: averaging continues until max_i a_stderr_i <= target a0."""
-    loose = run_point(ModelConfig(eps=0.4, n_average=3, target_stderr=0.05, **REDUCED))
-    tight = run_point(ModelConfig(eps=0.4, n_average=3, target_stderr=0.002, **REDUCED))
+    opts = {**REDUCED, "eps": 0.4, "n_average": 3}
+    loose = run_point(ModelConfig(**{**opts, "target_stderr": 0.05}))
+    tight = run_point(ModelConfig(**{**opts, "target_stderr": 0.002}))
     for r, target in ((loose, 0.05), (tight, 0.002)):
         assert r.status == "converged_noisy"
         assert np.max(r.a_stderr) <= target * r.a0

@@ -8,7 +8,8 @@ import pytest
 
 from floewave import ModelConfig, run_point
 
-REDUCED = dict(L_x=1.5, n0=3, n0_warm=3, nT=2, noise_window=4, n_average=8, max_iterations=60)
+REDUCED = dict(L_x=1.5, n0=3, n0_warm=3, nT=2, noise_window=4, n_average=8, max_iterations=60,
+               relax=0.3, target_stderr=0.0)
 
 
 @pytest.fixture(scope="module")
