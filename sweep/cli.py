@@ -107,34 +107,59 @@ def cmd_run(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _calibrate(points: list[Any]) -> tuple[float, str]:
-    """Floe-steps per second of the kernel from a few-second run of a reduced point."""
+def _kernel_key(cfg: Any) -> tuple:
+    """What the kernel speed depends on: floe count, drag cells and mode, confinement."""
+    n_x = cfg.n_x if cfg.drag_integration == "quadrature" else 0
+    return (cfg.n_floes, n_x, cfg.drag_integration, cfg.confined)
+
+
+def _calibrate(points: list[Any]) -> tuple[dict[tuple, float], str]:
+    """Floe-steps per second of the kernel for every kernel shape in the grid.
+
+    For each distinct :func:`_kernel_key` the costliest point of that shape runs 2
+    iterations of 1 + 1 periods (the second starts from a developed, colliding state, like
+    most of a real run) for about 0.5 s after a compile/warm-up run.
+    """
     import floewave
 
     try:
         run_point = floewave.run_point
     except (AttributeError, ImportError) as exc:
-        return float("nan"), f"no calibration: floewave.run_point unavailable ({exc})"
-    valid = [p for p in points if not p.invalid]
-    if not valid:
-        return float("nan"), "no calibration: no valid point"
-    # the costliest point, cut to 2 iterations of 1 + 1 periods: the second iteration
-    # starts from a developed (colliding) state, like most of a real run
-    cfg = max(valid, key=lambda p: p.cost).config.replace(max_iterations=2,
-                                                          n0=min(1, valid[0].config.n0), nT=1)
-    run_point(cfg.replace(L_sheet=min(cfg.L_sheet, 4 * cfg.L_x)))  # compile / warm up
-    steps = 0
-    t0 = time.perf_counter()
-    while time.perf_counter() - t0 < 1.0 and steps < 10**9:
-        res = run_point(cfg)
-        steps += int(res.floe_steps)
-    elapsed = time.perf_counter() - t0
-    return steps / elapsed, (f"calibrated on {cfg.n_floes} floes, {steps} floe-steps in"
-                             f" {elapsed:.2f} s")
+        return {}, f"no calibration: floewave.run_point unavailable ({exc})"
+    shapes: dict[tuple, Any] = {}
+    for p in points:
+        if not p.invalid:
+            key = _kernel_key(p.config)
+            if key not in shapes or p.cost > shapes[key].cost:
+                shapes[key] = p
+    if not shapes:
+        return {}, "no calibration: no valid point"
+    rates: dict[tuple, float] = {}
+    notes = []
+    for key, p in sorted(shapes.items(), key=lambda kv: str(kv[0])):
+        cfg = p.config.replace(max_iterations=2, n0=1, n0_warm=1, nT=1)
+        run_point(cfg.replace(L_sheet=min(cfg.L_sheet, 4 * cfg.L_x)))  # compile / warm up
+        steps = 0
+        t0 = time.perf_counter()
+        while time.perf_counter() - t0 < 0.5:
+            steps += int(run_point(cfg).floe_steps)
+        rates[key] = steps / (time.perf_counter() - t0)
+        notes.append(f"{key[0]} floes/{key[2]}: {rates[key] / 1e6:.1f}M")
+    return rates, "calibrated " + ", ".join(notes) + " floe-steps/s"
+
+
+def plan_seconds(points: list[Any], rates: dict[tuple, float]) -> float:
+    """Projected core-seconds: sum over valid points of cost / rate of the point's shape."""
+    total = 0.0
+    for p in points:
+        if not p.invalid:
+            rate = rates.get(_kernel_key(p.config), float("nan"))
+            total += p.cost / rate
+    return total
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
-    from .config import load_campaign
+    from .config import DEFAULT_EXPECTED_ITERATIONS, load_campaign
 
     try:
         campaign = load_campaign(args.config)
@@ -145,23 +170,25 @@ def cmd_plan(args: argparse.Namespace) -> int:
     invalid = sum(1 for p in points if p.invalid)
     cost = sum(p.cost for p in points if not p.invalid)
     if args.rate:
-        rate, how = args.rate, "rate given with --rate"
+        rates = {_kernel_key(p.config): args.rate for p in points}
+        how = "rate given with --rate"
     else:
-        rate, how = _calibrate(points)
-    hours = cost / rate / 3600 if rate == rate and rate > 0 else float("nan")
+        rates, how = _calibrate(points)
+    hours = plan_seconds(points, rates) / 3600 if rates else float("nan")
+    mean_rate = cost / (hours * 3600) if hours == hours and hours > 0 else float("nan")
+    assumed = campaign.run.expected_iterations or (
+        f"min(max_iterations, {DEFAULT_EXPECTED_ITERATIONS})")
     out = {"config": str(args.config), "points": len(points), "invalid_points": invalid,
            "swept": {k: list(v) for k, v in campaign.sweep.items()},
-           "floe_steps": cost, "floe_steps_per_s": rate, "core_hours": hours,
-           "calibration": how,
-           "assumed_iterations": campaign.run.expected_iterations or "min(max_iterations, 30)"}
+           "floe_steps": cost, "floe_steps_per_s": mean_rate, "core_hours": hours,
+           "calibration": how, "assumed_iterations": assumed}
     if args.json:
         print(json.dumps(out, indent=2))
         return EXIT_OK
     dims = " x ".join(f"{k}[{len(v)}]" for k, v in campaign.sweep.items())
     print(f"{args.config}: {len(points)} points ({dims}), {invalid} physically invalid")
-    print(f"cost: {cost:.4g} floe-steps (iterations assumed per point:"
-          f" {out['assumed_iterations']})")
-    print(f"kernel: {rate:.4g} floe-steps/s per core ({how})")
+    print(f"cost: {cost:.4g} floe-steps (iterations assumed per point: {assumed})")
+    print(f"kernel: {mean_rate:.4g} floe-steps/s per core on average ({how})")
     print(f"projected: {hours:.4g} core-hours; nothing was written")
     return EXIT_OK
 
