@@ -32,10 +32,12 @@ __all__ = ["Campaign", "Point", "RunOptions", "load_campaign", "parse_campaign",
            "DEFAULT_EXPECTED_ITERATIONS"]
 
 #: Iterations assumed per point for cost estimates when ``[run] expected_iterations``
-#: is not given. Measured: the mean over 24 random paper-grid points with the default
-#: iteration (benchmarks/plan_check.py) was 25; points that hit the noise floor end after
+#: is not given. Measured with the default iteration: mean 11.3 over 24 random paper-grid
+#: points (``benchmarks/plan_check.py --seed 1``) and 26 over the 9-point sample of
+#: ``benchmarks/iteration_compare.py`` (one noisy point ran to max_iterations = 100);
+#: 15 is the mean of all 33. Quiet points converge in ~5, noise-floor points end after
 #: ~2 x noise_window + n_average iterations, noisy collisional points run to max_iterations.
-DEFAULT_EXPECTED_ITERATIONS = 25
+DEFAULT_EXPECTED_ITERATIONS = 15
 
 
 @dataclass(frozen=True)
