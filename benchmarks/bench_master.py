@@ -2,7 +2,9 @@
 
 Runs a campaign of N points whose compute function does no work
 (``sweep.testing:trivial_point``), so the rate is the master's: scheduling, the MPI
-round trip, the journal append + fsync, the HDF5 row/profile write + flush + fsync.
+round trip, the journal append + fsync, the HDF5 row/profile write + flush + fsync
+(one journal fsync and one HDF5 flush per group commit of all waiting results).
+Issue 5's target: >= 1,000 points/s both ways, and < 5% of a core with 0.2 s points.
 Then runs a campaign of 0.2 s points (``sleepy_point``) and reports the master's CPU
 seconds per wall second while workers "compute" (it must stay well under 5%).
 
@@ -49,7 +51,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--points", type=int, default=2000)
     ap.add_argument("--ranks", type=int, default=3)
-    ap.add_argument("--sleepy-points", type=int, default=40)
+    ap.add_argument("--sleepy-points", type=int, default=40,
+                    help="0: skip the CPU-share measurement")
     args = ap.parse_args()
     mpiexec = find_mpiexec()
     with tempfile.TemporaryDirectory() as tmp:
@@ -66,7 +69,7 @@ def main() -> None:
             n, elapsed, cpu = parse(out)
             print(f"{label}: {n} trivial points stored in {elapsed:.2f} s ="
                   f" {n / elapsed:.0f} points/s (incl. start-up)")
-        if mpiexec:
+        if mpiexec and args.sleepy_points > 0:
             cfg.write_text(campaign_text(args.sleepy_points))
             store = Path(tmp) / "sleepy.h5"
             _, out = run([mpiexec, "-n", str(args.ranks)] + base + [

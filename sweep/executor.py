@@ -1,9 +1,13 @@
 """Run a campaign: a master that schedules and stores, workers that compute.
 
 The master (:class:`Master`) is a small state machine over a pluggable transport:
-hand the costliest pending point to each idle worker, wait (blocking with backoff, never
-a hot spin) for a result, store it durably, repeat; ``None`` is the stop message. Two
-transports share it:
+keep every worker supplied with the costliest pending points, wait (blocking with
+backoff, never a hot spin) for a result, take every other result already waiting, store
+them all with one group commit (:meth:`sweep.store.Store.commit`: one journal fsync, one
+HDF5 flush), count them as stored, repeat; ``None`` is the stop message. A worker holds
+one task at a time while points are slow; when points take less than a few commits'
+time it is given a short queue of tasks (up to :data:`_MAX_DEPTH`) so that it computes
+while the master commits. Two transports share it:
 
 - :class:`InProcessTransport`: one worker, the master's own process (plain ``python``);
 - :class:`MPITransport`: mpi4py, MPI-1 point-to-point only (``send``/``Iprobe``/``recv``):
@@ -19,7 +23,9 @@ turns whatever happens into a record: ``invalid`` for
 """
 from __future__ import annotations
 
+import collections
 import contextlib
+import dataclasses
 import importlib
 import json
 import math
@@ -56,11 +62,31 @@ _POLL_MIN, _POLL_MAX = 0.0005, 0.005  # [s] backoff of the waiting loops
 #: MPICH's Iprobe makes progress on one call and sees the message on the next, so each
 #: wake-up probes a few times (measured: 1 probe per wake-up waits ~3 backoff periods).
 _PROBES_PER_WAKE = 4
+#: Group commit: at most this many results per commit, and at most this long [s] between
+#: taking the first result of a batch and committing it.
+_MAX_BATCH, _BATCH_WINDOW = 512, 0.2
+#: Tasks queued per worker at most. The depth is 1 + commit time / (share x point time):
+#: 1 for points much longer than a commit, more for quick points, so that commits cost
+#: the workers at most about ``_COMMIT_SHARE`` of their time.
+_MAX_DEPTH, _COMMIT_SHARE = 64, 0.1
 
 
 def _probe(comm: Any, source: int, tag: int, status: Any = None) -> bool:
     return any(comm.Iprobe(source=source, tag=tag, status=status)
                for _ in range(_PROBES_PER_WAKE))
+
+
+_CONFIG_FIELDS = tuple(f.name for f in dataclasses.fields(ModelConfig))
+_PLAIN = (bool, int, float, str, type(None))
+
+
+def _config_dict(cfg: ModelConfig) -> dict[str, Any]:
+    """``cfg.to_dict()``, without ``dataclasses.asdict``'s deep copy when every field is
+    a plain scalar (~20x faster; the master builds one per task)."""
+    out = {name: getattr(cfg, name) for name in _CONFIG_FIELDS}
+    if all(type(v) in _PLAIN for v in out.values()):
+        return out
+    return cfg.to_dict()
 
 
 class _GraceExpired(BaseException):
@@ -197,22 +223,21 @@ class InProcessTransport:
         self.fn = resolve_compute(compute)
         self.workers = [0]
         self.worker_env = {0: environment(with_git=False)}
-        self._task: dict[str, Any] | None = None
+        self._tasks: collections.deque[dict[str, Any]] = collections.deque()
 
     def send(self, worker: int, task: dict[str, Any]) -> None:
-        self._task = task
+        self._tasks.append(task)
 
     def poll(self, timeout: float) -> tuple[int, str, Any] | None:
-        if self._task is None:
+        if not self._tasks:
             return None
-        task, self._task = self._task, None
-        return 0, "result", compute_point(task, self.fn, 0)
+        return 0, "result", compute_point(self._tasks.popleft(), self.fn, 0)
 
     def shutdown(self) -> None:
-        self._task = None
+        self._tasks.clear()
 
     def abort(self, code: int) -> None:
-        self._task = None
+        self._tasks.clear()
 
 
 class MPITransport:
@@ -294,7 +319,7 @@ class RunSummary:
     def __str__(self) -> str:
         counts = ", ".join(f"{k} {v}" for k, v in sorted(self.counts.items())) or "none"
         return (f"{self.total} grid points: {self.skipped} already stored, {self.computed}"
-                f" stored now ({counts}) in {self.elapsed:.1f} s; master CPU"
+                f" stored now ({counts}) in {self.elapsed:.2f} s; master CPU"
                 f" {100 * self.master_cpu_share:.1f}% of a core")
 
 
@@ -355,8 +380,21 @@ class Master:
         self.transport = transport
         self.compute = compute
         self.git = git or {}
+        self._provenance: dict[tuple[int, str], str] = {}
+        self.point_time = math.nan  # [s] moving average of a point's compute time
+        self.commit_time = math.nan  # [s] moving average of a batch's store time
+        self.batches = 0
 
-    def record(self, point: Point, out: dict[str, Any]) -> dict[str, Any]:
+    @property
+    def depth(self) -> int:
+        """How many tasks each worker holds (1 until points and commits are timed)."""
+        if not (self.point_time >= 0 and self.commit_time >= 0):
+            return 1
+        ratio = self.commit_time / (_COMMIT_SHARE * max(self.point_time, 1e-6))
+        return max(1, min(_MAX_DEPTH, 1 + int(ratio)))
+
+    def record(self, point: Point, out: dict[str, Any],
+               config: dict[str, Any] | None = None) -> dict[str, Any]:
         """Turn a worker's outcome into a store record (adds swept values, config)."""
         row: dict[str, Any] = {name: getattr(point.config, name)
                                for name in floewave.SWEPT_FIELDS}
@@ -379,33 +417,51 @@ class Master:
                    host=out["host"], rank=int(out["rank"]), pid=int(out["pid"]),
                    start_time=out["start_time"], end_time=out["end_time"],
                    wall_time=float(out["wall_time"]), config_json=canonical_json(
-                       point.config.to_dict()))
-        env = dict(self.transport.worker_env.get(int(out["rank"]), {}))
-        env.update(self.git)
-        env["kernel_mode"] = str(scalars.get("kernel_mode", ""))
-        row["provenance"] = json.dumps(env, sort_keys=True)
+                       point.config.to_dict() if config is None else config))
+        key = (int(out["rank"]), str(scalars.get("kernel_mode", "")))
+        prov = self._provenance.get(key)
+        if prov is None:  # the same for every point of a rank and kernel mode
+            env = dict(self.transport.worker_env.get(key[0], {}))
+            env.update(self.git)
+            env["kernel_mode"] = key[1]
+            prov = self._provenance[key] = json.dumps(env, sort_keys=True)
+        row["provenance"] = prov
         return {"row": row, "profiles": out.get("profiles", {}),
                 "residual_history": out.get("residual_history", np.zeros(0))}
 
     def run(self, todo: list[Point], progress: Progress, signals: _StopSignals,
             summary: RunSummary) -> None:
-        """Compute and store every point of ``todo`` (or stop on a signal)."""
+        """Compute and store every point of ``todo`` (or stop on a signal).
+
+        Results are stored by group commit: the first result that arrives, plus every
+        result already waiting (at most :data:`_MAX_BATCH`, taken within
+        :data:`_BATCH_WINDOW`), are staged and committed together; only then are they
+        counted as stored and are their workers given new tasks.
+        """
         pending = sorted(todo, key=lambda p: (-p.cost, p.index))
         pending.reverse()  # pop() from the end takes the costliest
-        idle = list(self.transport.workers)
-        busy: dict[int, Point] = {}
+        # per worker, its tasks in the order sent (MPI keeps the order of one sender)
+        queues: dict[int, collections.deque[tuple[Point, dict[str, Any]]]] = {
+            w: collections.deque() for w in self.transport.workers}
+        outstanding = 0
         stop_at = math.inf
         try:
-            while pending or busy:
+            while pending or outstanding:
                 if signals.requested and stop_at == math.inf:
                     stop_at = time.monotonic() + signals.grace
                     summary.interrupted = signals.requested
-                while idle and pending and not signals.requested:
-                    worker, point = idle.pop(), pending.pop()
-                    busy[worker] = point
-                    self.transport.send(worker, {"hash": point.hash, "compute": self.compute,
-                                                 "config": point.config.to_dict()})
-                if not busy:
+                if not signals.requested:
+                    depth = self.depth
+                    for worker, queue in queues.items():
+                        while len(queue) < depth and pending:
+                            point = pending.pop()
+                            config = _config_dict(point.config)
+                            queue.append((point, config))
+                            outstanding += 1
+                            self.transport.send(worker, {"hash": point.hash,
+                                                         "compute": self.compute,
+                                                         "config": config})
+                if not outstanding:
                     break
                 if time.monotonic() > stop_at:
                     break
@@ -413,25 +469,67 @@ class Master:
                 progress.tick()
                 if msg is None:
                     continue
-                worker, kind, payload = msg
-                if kind == "error":
-                    raise WorkerError(f"worker rank {payload['rank']} on {payload['host']}:"
-                                      f" {payload['message']}\n{payload['traceback']}")
-                point = busy.pop(worker)
-                idle.append(worker)
-                self.store.put(self.record(point, payload))
-                summary.computed += 1
-                summary.counts[payload["status"]] = summary.counts.get(payload["status"], 0) + 1
-                progress.update(payload["status"])
+                batch = [msg]
+                window_end = time.monotonic() + _BATCH_WINDOW
+                while len(batch) < min(outstanding, _MAX_BATCH) and \
+                        batch[-1][1] != "error" and time.monotonic() < window_end:
+                    more = self.transport.poll(0.0)
+                    if more is None:
+                        break
+                    batch.append(more)
+                outstanding -= self._store_batch(batch, queues, progress, summary)
         except _GraceExpired:
             summary.interrupted = summary.interrupted or "signal"
         if summary.interrupted:
-            summary.abandoned = abandoned = len(busy)
+            summary.abandoned = abandoned = outstanding
             raise Interrupted(
                 f"campaign stopped by {summary.interrupted}: {summary.computed} points stored"
                 f" in this run, {abandoned} running point(s) abandoned, {len(pending)} not"
                 " started; the store is closed and consistent — the campaign is resumable:"
                 " run the same command again")
+
+    def _store_batch(self, batch: list[tuple[int, str, Any]],
+                     queues: dict[int, collections.deque[tuple[Point, dict[str, Any]]]],
+                     progress: Progress, summary: RunSummary) -> int:
+        """Stage the results of ``batch``, commit them together, count them as stored.
+
+        Returns the number of results taken. A worker's error message is raised (as
+        :class:`WorkerError`) after the results before it are committed.
+        """
+        t0 = time.perf_counter()
+        statuses: list[str] = []
+        error: dict[str, Any] | None = None
+        wall = 0.0
+        for worker, kind, payload in batch:
+            if kind == "error":
+                error = payload
+                break
+            point, config = queues[worker].popleft()
+            if payload.get("hash", point.hash) != point.hash:
+                raise WorkerError(f"worker rank {worker} returned point"
+                                  f" {str(payload.get('hash'))[:12]}, expected"
+                                  f" {point.hash[:12]} (protocol error)")
+            self.store.add(self.record(point, payload, config))
+            statuses.append(payload["status"])
+            wall += float(payload.get("wall_time", 0.0))
+        self.store.commit()  # now they are stored: count them
+        for status in statuses:
+            summary.computed += 1
+            summary.counts[status] = summary.counts.get(status, 0) + 1
+            progress.update(status)
+        if error is not None:
+            raise WorkerError(f"worker rank {error['rank']} on {error['host']}:"
+                              f" {error['message']}\n{error['traceback']}")
+        if statuses:
+            self.batches += 1
+            self.point_time = _average(self.point_time, wall / len(statuses))
+            self.commit_time = _average(self.commit_time, time.perf_counter() - t0)
+        return len(statuses)
+
+
+def _average(old: float, new: float, weight: float = 0.3) -> float:
+    """Exponential moving average (``new`` alone when there is no ``old``)."""
+    return new if math.isnan(old) else (1 - weight) * old + weight * new
 
 
 # ---------------------------------------------------------------------- entry points
@@ -522,12 +620,15 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
         with _StopSignals(campaign.run.grace_period, in_process=not mpi) as signals:
             progress = Progress(len(todo), interval=campaign.run.progress_interval,
                                 bar=progress_bar, skipped=summary.skipped)
-            for p in [p for p in todo if p.invalid]:  # known impossible: no worker needed
+            invalid = [p for p in todo if p.invalid]  # known impossible: no worker needed
+            for p in invalid:
                 now = utc_now()
                 out = {"hash": p.hash, "status": "invalid", "message": p.invalid, "host": host(),
                        "rank": 0, "pid": os.getpid(), "start_time": now, "end_time": now,
                        "wall_time": 0.0}
-                store.put(master.record(p, out))
+                store.add(master.record(p, out))
+            store.commit()  # one group commit for all of them
+            for _ in invalid:
                 summary.computed += 1
                 summary.counts["invalid"] = summary.counts.get("invalid", 0) + 1
                 progress.update("invalid")

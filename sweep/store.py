@@ -1,14 +1,19 @@
 """The result store: one HDF5 file written only by the master, plus a journal and a lock.
 
-Writing a point (:meth:`Store.put`):
+Writing points (group commit): :meth:`Store.add` stages a point (nothing is written);
+:meth:`Store.commit` makes every staged point durable at once:
 
-1. append one JSON line with the whole record to ``<store>.journal`` and ``fsync`` it;
-2. write the profile group ``/profiles/<hh>/<hash>`` (replacing a leftover), then the
-   table row, then raise ``/table.attrs["n_rows"]`` (the commit);
-3. ``flush`` the HDF5 file and ``fsync`` it.
+1. append one JSON line per point (the whole record) to ``<store>.journal`` and ``fsync``
+   it once;
+2. write each point's profile group ``/profiles/<hh>/<hash>`` (replacing a leftover), then
+   the table rows (one slice write per column; the datasets grow in chunks, so they may
+   be longer than ``n_rows``), then raise ``/table.attrs["n_rows"]`` (the commit);
+3. ``flush`` the HDF5 file and ``fsync`` it once.
 
-Only then is the next point accepted. On open, rows and profile groups beyond the last
-commit are removed and journal records missing from the file are written again, so a
+A point counts as stored (acknowledged) only when :meth:`commit` has returned;
+:meth:`Store.put` is ``add`` + ``commit`` of one point. The journal format is one line per
+point, as before, whatever the batch size. On open, rows and profile groups beyond the
+last commit are removed and journal records missing from the file are written again, so a
 point is either wholly present or absent after any crash; if HDF5 left the file
 unreadable (``kill -9`` during a metadata write) it is moved aside and rebuilt from the
 journal; so is a file whose ``writer_open`` flag shows its writer died (HDF5 may then
@@ -23,6 +28,7 @@ import datetime as _dt
 import fcntl
 import json
 import os
+import signal
 import socket
 from collections.abc import Iterator
 from pathlib import Path
@@ -30,6 +36,7 @@ from typing import Any
 
 import h5py
 import numpy as np
+from h5py import h5a, h5d, h5g, h5s, h5t
 
 from .errors import CampaignMismatchError, SchemaVersionError, StoreError, StoreLockedError
 from .schema import COLUMNS, FORMAT, HISTORY_VAR, MIGRATIONS, PROFILE_VARS, SCHEMA_VERSION
@@ -42,6 +49,25 @@ Record = dict[str, Any]
 
 _STR = h5py.string_dtype("utf-8")
 _DTYPES = {"float": np.float64, "int": np.int64, "str": _STR}
+_NP_DTYPES = {"float": np.float64, "int": np.int64, "str": object}
+#: The table datasets grow by whole chunks (rows beyond ``n_rows`` are not committed).
+_TABLE_CHUNK = 1024
+#: Signals whose Python handlers must not run in the middle of a commit (the in-process
+#: grace timer raises from its handler); they are delivered when the commit is done.
+_DEFERRED_SIGNALS = {signal.SIGINT, signal.SIGTERM, signal.SIGUSR1, signal.SIGALRM}
+
+
+@contextlib.contextmanager
+def _signals_deferred() -> Iterator[None]:
+    try:
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, _DEFERRED_SIGNALS)
+    except (AttributeError, OSError, ValueError):  # pragma: no cover - no pthread_sigmask
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
 def utc_now() -> str:
@@ -135,6 +161,37 @@ def _text(value: Any) -> str:
     return value.decode() if isinstance(value, bytes) else str(value)
 
 
+def _cell(col: Any, row: dict[str, Any]) -> Any:
+    value = row.get(col.name, col.fill)
+    if value is None:
+        return col.fill
+    if isinstance(value, bytes):
+        return value.decode()
+    return value
+
+
+_F64 = h5t.IEEE_F64LE
+_STR_TYPE = h5t.py_create(_STR, logical=True)
+_DCPL = h5py.h5p.create(h5py.h5p.DATASET_CREATE)
+_DCPL.set_obj_track_times(False)  # as h5py's create_dataset does by default
+
+
+def _write_rows(dsid: Any, mtype: Any, start: int, values: np.ndarray) -> None:
+    """Write ``values`` to rows ``start, start + 1, ...`` of a 1-D dataset (low level)."""
+    fspace = dsid.get_space()
+    fspace.select_hyperslab((start,), (len(values),))
+    dsid.write(h5s.create_simple((len(values),)), fspace, values, mtype=mtype)
+
+
+def _dataset(gid: Any, name: str, data: Any) -> None:
+    """A contiguous float64 dataset ``name`` in group ``gid`` holding ``data``."""
+    arr = np.ascontiguousarray(data, dtype=np.float64)
+    space = h5s.create_simple(arr.shape) if arr.ndim else h5s.create(h5s.SCALAR)
+    dset = h5d.create(gid, name.encode(), _F64, space, dcpl=_DCPL)
+    if arr.size:
+        dset.write(h5s.ALL, h5s.ALL, arr)
+
+
 class Store:
     """The single writer of a campaign store.
 
@@ -178,6 +235,8 @@ class Store:
             self._lock.release()
             raise
         self._journal = open(self.journal_path, "ab")
+        self._staged: list[Record] = []
+        self._lines: list[bytes] = []
 
     # ------------------------------------------------------------------ opening
     def _open(self, campaign: Any, extend: bool) -> None:
@@ -294,11 +353,18 @@ class Store:
         """Drop uncommitted rows/groups, then write journal records the file lacks."""
         f = self.file
         assert f is not None
+        self._parents: dict[str, Any] = {}  # /profiles/<hh> group ids, by hh
         table = f["table"]
         n = int(table.attrs["n_rows"])
         for col in COLUMNS:
             if table[col.name].shape[0] != n:
                 table[col.name].resize((n,))
+        # low-level ids of the table columns with their memory types (h5py's high-level
+        # indexing costs ~50 us per write; ~10 us this way)
+        self._columns = [(col, table[col.name].id, _NP_DTYPES[col.kind],
+                          h5t.py_create(np.dtype(_DTYPES[col.kind]) if col.kind != "str"
+                                        else _STR))
+                         for col in COLUMNS]
         hashes = [_text(h) for h in table["hash"][:n]]
         self.rows: dict[str, int] = {h: i for i, h in enumerate(hashes)}
         seqs = table["seq"][:n]
@@ -315,10 +381,10 @@ class Store:
         for rec in read_journal(self.journal_path):
             latest[rec["row"]["hash"]] = rec
             self.next_seq = max(self.next_seq, int(rec["row"]["seq"]) + 1)
-        for h, rec in latest.items():
-            if self._seq.get(h, -1) < int(rec["row"]["seq"]):
-                self._write(rec)
-                replayed += 1
+        missing = [rec for h, rec in latest.items()
+                   if self._seq.get(h, -1) < int(rec["row"]["seq"])]
+        self._write_many(missing)
+        replayed = len(missing)
         self.replayed = replayed
         self.orphans_removed = len(removed)
         f.flush()
@@ -355,55 +421,123 @@ class Store:
     # ------------------------------------------------------------------ writing
     def put(self, record: Record) -> None:
         """Store one point durably (journal, then HDF5, both synced to disk)."""
+        self.add(record)
+        self.commit()
+
+    def add(self, record: Record) -> None:
+        """Stage one point for the next :meth:`commit` (nothing is written yet).
+
+        A staged point is not stored: it is not in the store (``in``, ``len``) and a
+        crash or :meth:`close` before :meth:`commit` loses it (it was never
+        acknowledged).
+        """
         row = dict(record["row"])
         row["seq"] = self.next_seq
         row["run"] = self.run_index
-        record = {"row": row, "profiles": record.get("profiles", {}),
+        record = {"row": row, "profiles": record.get("profiles") or {},
                   "residual_history": record.get("residual_history", np.zeros(0))}
         line = json.dumps({"row": {k: _jsonable(v) for k, v in row.items()},
                            "profiles": {k: _jsonable(v) for k, v in
                                         record["profiles"].items()},
                            "residual_history": _jsonable(record["residual_history"])},
                           separators=(",", ":"))
-        self._journal.write(line.encode() + b"\n")
-        self._journal.flush()
-        os.fsync(self._journal.fileno())
         self.next_seq += 1
-        self._write(record)
-        self._durable()
+        self._lines.append(line.encode() + b"\n")
+        self._staged.append(record)
 
-    def _write(self, record: Record) -> None:
+    @property
+    def staged(self) -> int:
+        """Points added but not yet committed."""
+        return len(self._staged)
+
+    def commit(self) -> int:
+        """Make every staged point durable together (group commit); return how many.
+
+        One journal append + ``fsync`` for all of them, then their HDF5 profile groups
+        and table rows (one write per column), one ``n_rows`` update, one HDF5 flush +
+        ``fsync``. When this returns the points are stored: they survive ``kill -9``.
+        Stop signals arriving meanwhile are handled once the commit is done.
+        """
+        if not self._staged:
+            return 0
+        staged, lines = self._staged, self._lines
+        self._staged, self._lines = [], []
+        with _signals_deferred():
+            self._journal.write(b"".join(lines))
+            self._journal.flush()
+            os.fsync(self._journal.fileno())
+            self._write_many(staged)
+            self._durable()
+        return len(staged)
+
+    def _write_many(self, records: list[Record]) -> None:
+        """Write records to the HDF5 file (profiles, then rows, then ``n_rows``); no sync."""
+        if not records:
+            return
         f = self.file
         assert f is not None
-        row = record["row"]
-        h = row["hash"]
-        group_name = f"profiles/{h[:2]}/{h}"
-        if group_name in f:
-            del f[group_name]
-        profiles = record.get("profiles") or {}
-        if profiles:
-            g = f.create_group(group_name)
-            g.attrs["hash"] = h
-            for name in PROFILE_VARS:
-                data = np.asarray(profiles.get(name, []), dtype=np.float64)
-                g.create_dataset(name, data=data)
-            g.create_dataset(HISTORY_VAR[0], data=np.asarray(
-                record.get("residual_history", []), dtype=np.float64))
         table = f["table"]
         n = int(table.attrs["n_rows"])
-        index = self.rows.get(h, n)
-        for col in COLUMNS:
-            ds = table[col.name]
-            if ds.shape[0] <= index:
-                ds.resize((index + 1,))
-            value = row.get(col.name, col.fill)
-            if value is None:
-                value = col.fill
-            ds[index] = value
-        if index == n:
-            table.attrs["n_rows"] = n + 1
-        self.rows[h] = index
-        self._seq[h] = int(row["seq"])
+        new_rows: list[dict[str, Any]] = []  # appended at n, n + 1, ...
+        old_rows: dict[int, dict[str, Any]] = {}  # committed rows written again
+        index_of: dict[str, int] = {}
+        for rec in records:
+            row = rec["row"]
+            h = row["hash"]
+            index = index_of.get(h, self.rows.get(h))
+            self._write_profiles(rec, replace=index is not None)
+            if index is None:
+                index = n + len(new_rows)
+                new_rows.append(row)
+            elif index >= n:
+                new_rows[index - n] = row
+            else:
+                old_rows[index] = row
+            index_of[h] = index
+        k = len(new_rows)
+        for col, dsid, dtype, mtype in self._columns:
+            if k:
+                if dsid.shape[0] < n + k:
+                    dsid.set_extent((-(-(n + k) // _TABLE_CHUNK) * _TABLE_CHUNK,))
+                _write_rows(dsid, mtype, n, np.array([_cell(col, row) for row in new_rows],
+                                                     dtype=dtype))
+            for index, row in old_rows.items():
+                _write_rows(dsid, mtype, index, np.array([_cell(col, row)], dtype=dtype))
+        if k:
+            table.attrs["n_rows"] = n + k  # the commit point of the rows
+        for rec in records:
+            h = rec["row"]["hash"]
+            self.rows[h] = index_of[h]
+            self._seq[h] = int(rec["row"]["seq"])
+
+    def _write_profiles(self, record: Record, replace: bool) -> None:
+        """Write ``/profiles/<hh>/<hash>`` (low-level h5py: ~2x faster per point)."""
+        f = self.file
+        assert f is not None
+        h = record["row"]["hash"]
+        if replace:
+            name = f"profiles/{h[:2]}/{h}"
+            if name in f:
+                del f[name]
+        profiles = record.get("profiles") or {}
+        if not profiles:
+            return
+        parent = self._parents.get(h[:2])
+        if parent is None:
+            group = f["profiles"].get(h[:2])
+            if group is None:
+                group = f["profiles"].create_group(h[:2])
+            parent = self._parents[h[:2]] = group.id
+        try:
+            gid = h5g.create(parent, h.encode())
+        except ValueError:  # a leftover of a failed commit
+            parent.unlink(h.encode())
+            gid = h5g.create(parent, h.encode())
+        attr = h5a.create(gid, b"hash", _STR_TYPE, h5s.create(h5s.SCALAR))
+        attr.write(np.array(h, dtype=_STR))  # as h5py's attrs["hash"] = h writes it
+        for name in PROFILE_VARS:
+            _dataset(gid, name, profiles.get(name, ()))
+        _dataset(gid, HISTORY_VAR[0], record.get("residual_history", ()))
 
     def _durable(self) -> None:
         assert self.file is not None
@@ -420,8 +554,17 @@ class Store:
             self.file = None
 
     def close(self, outcome: str = "complete") -> None:
-        """Record the run's end and outcome, close the file, release the lock."""
+        """Record the run's end and outcome, close the file, release the lock.
+
+        Points staged but not committed are dropped (they were never acknowledged).
+        """
+        self._staged, self._lines = [], []
         if self.file is not None:
+            table = self.file["table"]
+            n = int(table.attrs["n_rows"])
+            for col in COLUMNS:  # trim the chunk-sized growth
+                if table[col.name].shape[0] != n:
+                    table[col.name].resize((n,))
             g = self.file["runs"][str(self.run_index)]
             g.attrs["ended"] = utc_now()
             g.attrs["outcome"] = outcome

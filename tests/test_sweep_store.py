@@ -8,9 +8,11 @@ import time
 from pathlib import Path
 
 import h5py
+import numpy as np
 import pytest
 
 import sweep
+import sweep.testing
 from sweep import parse_campaign, run_campaign
 from sweep.cli import main
 from sweep.schema import schema_document
@@ -200,3 +202,155 @@ def test_kill_9_torture(tmp_path, campaign):
     for col in ("W_c", "alpha_all", "status", "a_end"):
         assert list(a[col]) == list(b[col])
     assert sweep.validate(path) == []
+
+
+# ---------------------------------------------------------------- group commit durability
+_GROUP_SCRIPT = """
+import os, signal, sys
+import sweep
+from sweep.store import Store
+from sweep.testing import fake_point
+campaign = sweep.parse_campaign({toml!r})
+points = campaign.points()
+kill_at = {kill_at!r}
+
+def record(p, seq):
+    out = fake_point(p.config)
+    prof = {{k: v for k, v in out.items() if k in sweep.schema.PROFILE_VARS}}
+    return {{"row": {{"hash": p.hash, "status": "converged", "W_c": out["W_c"],
+                     "L_x": p.config.L_x, "eps": p.config.eps,
+                     "n_floes": p.config.n_floes}},
+             "profiles": prof, "residual_history": out["residual_history"]}}
+
+store = Store({path!r}, campaign)
+if kill_at == "mid_hdf5":  # die inside the second commit, after its journal fsync
+    calls = []
+    real = store._write_profiles
+    def write_profiles(rec, replace):
+        calls.append(1)
+        if len(calls) == {first} + 3:
+            os.kill(os.getpid(), signal.SIGKILL)
+        real(rec, replace)
+    store._write_profiles = write_profiles
+class DyingJournal:  # die inside the second commit, before its journal write
+    def write(self, data):
+        os.kill(os.getpid(), signal.SIGKILL)
+for p in points[:{first}]:
+    store.add(record(p, 0))
+assert len(store) == 0 and store.staged == {first}
+store.commit()
+print("acknowledged", " ".join(p.hash for p in points[:{first}]), flush=True)
+for p in points[{first}:]:
+    store.add(record(p, 0))
+if kill_at == "before_journal":
+    real_journal = store._journal  # kept referenced: no flush on garbage collection
+    store._journal = DyingJournal()
+store.commit()
+print("acknowledged", " ".join(p.hash for p in points[{first}:]), flush=True)
+os.kill(os.getpid(), signal.SIGKILL)  # never closed cleanly
+"""
+
+GROUP_TOML = ("[base]\nL_sheet = 6.0\n[sweep]\nL_x = [0.5, 1.0, 1.5]\n"
+              "eps = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6]\n")
+
+
+@pytest.mark.parametrize("kill_at", ["mid_hdf5", "before_journal", "after_commit"])
+def test_group_commit_survives_kill_9(tmp_path, kill_at):
+    """Points acknowledged by one group commit survive kill -9 (inside the next commit,
+    or after it) exactly once, with their data; the batch being committed when the
+    process died is wholly present (journal written) or wholly absent (not written)."""
+    campaign = parse_campaign(GROUP_TOML)
+    points = campaign.points()
+    first = 1  # a first batch smaller than the journal's write buffer (4 KiB here)
+    path = tmp_path / "s.h5"
+    script = _GROUP_SCRIPT.format(toml=GROUP_TOML, path=str(path), kill_at=kill_at,
+                                  first=first)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert proc.returncode == -signal.SIGKILL, proc.stderr
+    acked = [line.split()[1:] for line in proc.stdout.splitlines()
+             if line.startswith("acknowledged")]
+    assert len(acked) == (2 if kill_at == "after_commit" else 1)
+    acknowledged = [h for batch in acked for h in batch]
+    with Store(path, campaign) as store:  # recovery: rebuild from the journal
+        assert store.repaired_from_journal
+        stored = set(store.rows)
+    df = sweep.load(path)
+    assert df["hash"].is_unique
+    assert set(acknowledged) <= set(df["hash"]), "an acknowledged point was lost"
+    second = {p.hash for p in points[first:]}
+    if kill_at == "before_journal":
+        assert stored == {p.hash for p in points[:first]}
+    else:  # the second batch reached the journal: wholly present
+        assert stored == {p.hash for p in points}
+    assert sweep.validate(path) == []
+    by_hash = df.set_index("hash")
+    for p in points:
+        if p.hash in stored:
+            expected = sweep.testing.fake_point(p.config)
+            assert by_hash.loc[p.hash, "W_c"] == expected["W_c"]
+            np.testing.assert_array_equal(sweep.load_profile(path, p.hash)["a"].values,
+                                          expected["a"])
+    assert len(second & stored) in (0, len(second))
+
+
+_MASTER_SCRIPT = """
+import os, signal, sys
+import sweep
+from sweep.executor import InProcessTransport, Master, RunSummary, _StopSignals
+from sweep.store import Store
+campaign = sweep.parse_campaign({toml!r})
+todo = campaign.points()
+store = Store({path!r}, campaign)
+commits = []
+real_commit = store.commit
+def commit():
+    commits.append(store.staged)
+    return real_commit()
+store.commit = commit
+
+class Progress:  # counts acknowledged points; dies at the {kill_after}th
+    done = 0
+    def tick(self):
+        pass
+    def update(self, status):
+        Progress.done += 1
+        if Progress.done == {kill_after}:
+            print("acknowledged", Progress.done, "commits", *commits, flush=True)
+            os.kill(os.getpid(), signal.SIGKILL)
+
+master = Master(store, InProcessTransport("sweep.testing:trivial_point"))
+with _StopSignals(5.0, in_process=True) as signals:
+    master.run(todo, Progress(), signals, RunSummary())
+"""
+
+
+def test_master_acknowledges_only_committed_batches(tmp_path):
+    """kill -9 of the in-process master right after it counted point k as stored (in
+    the middle of a batch's acknowledgements): the first k points of the schedule are
+    in the store, once each; commits were grouped (fewer commits than points)."""
+    n_eps = 150
+    eps = ", ".join(repr(round(0.005 + i * 0.006, 6)) for i in range(n_eps))
+    toml = f"[base]\nL_sheet = 6.0\n[sweep]\neps = [{eps}]\n"
+    campaign = parse_campaign(toml)
+    path = tmp_path / "s.h5"
+    kill_after = 100
+    script = _MASTER_SCRIPT.format(toml=toml, path=str(path), kill_after=kill_after)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert proc.returncode == -signal.SIGKILL, proc.stderr
+    line = proc.stdout.split()
+    assert line[:2] == ["acknowledged", str(kill_after)], proc.stdout
+    commits = [int(c) for c in line[3:]]
+    assert sum(commits) >= kill_after and len(commits) < kill_after / 4, commits
+    order = sorted(campaign.points(), key=lambda p: (-p.cost, p.index))
+    acknowledged = {p.hash for p in order[:kill_after]}
+    with Store(path, campaign):
+        pass  # recovery on open
+    df = sweep.load(path)
+    assert df["hash"].is_unique
+    assert acknowledged <= set(df["hash"]), "an acknowledged point was lost"
+    assert sweep.validate(path) == []
+    # the resumed campaign completes without duplicates
+    s = run_campaign(campaign, str(path), compute="sweep.testing:trivial_point")
+    assert s.skipped + s.computed == n_eps
+    df = sweep.load(path)
+    assert len(df) == n_eps and df["hash"].is_unique
