@@ -9,6 +9,7 @@ import floewave
 from floewave import ModelConfig
 from sweep import ConfigError, load_campaign, parse_campaign
 from sweep.cli import main
+from sweep.config import DEFAULT_EXPECTED_ITERATIONS
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"
 MINIMAL = "[sweep]\neps = [0.2, 0.6]\n"
@@ -59,7 +60,8 @@ def test_grid_order_and_coercion():
                                       {"L_x": 0.5, "T": 1.0}, {"L_x": 0.5, "T": 2.0}]
     assert all(isinstance(p.config.T, float) for p in pts)
     assert pts[0].config.n0 == 2
-    assert pts[0].cost == pts[0].config.floe_steps_per_iteration() * 30
+    assert pts[0].cost == pts[0].config.floe_steps_of(DEFAULT_EXPECTED_ITERATIONS)
+    assert pts[0].cost < pts[0].config.floe_steps_per_iteration() * DEFAULT_EXPECTED_ITERATIONS
 
 
 def test_invalid_points_inside_a_valid_grid_are_kept():
