@@ -148,7 +148,7 @@ class ModelConfig:
     noise_window: int = 4
     n_average: int = 5
     target_stderr: float = 0.01
-    n0_warm: int = 1
+    n0_warm: int = 0
     warm_start: bool = True
     confined: bool = False
     overwash: bool = False

@@ -11,7 +11,7 @@ from sweep.identity import canonical_json, point_hash, short_hash
 # Pinned: these change only if the hash definition, ModelConfig's fields/defaults or
 # MODEL_VERSION change -- which must be a deliberate, documented event.
 KNOWN = {
-    "default": "a705eda4b2464d0e694c439942b2745268e06351342501ecace69ee2919e6ac1",
+    "default": "f5553312aea94c17521163bf39566dd725c3f9fd742d4ebdc8113e3e2fc88574",
 }
 
 
@@ -47,8 +47,8 @@ def test_known_hashes(changes, expected):
 
 
 PINNED = {
-    "KNOWN_1": "27069543309af4da98da3107488269ba5fdce8b50da1910b041bda06e16f8a58",
-    "KNOWN_2": "3bc305a42a4e7ad43b886fe93c173c6b0039148c16898381e7ed1ac131282dc7",
+    "KNOWN_1": "a5a7b4810d06b4e47d3906064a7b5035dd06f4031eb9878ed3819bbba7bd68ef",
+    "KNOWN_2": "3dd845a8d0a4dd287836e9774dd1976825eee61e1e35bd9065dc056cd5fef4a7",
 }
 
 
