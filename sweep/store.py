@@ -13,7 +13,9 @@ Writing points (group commit): :meth:`Store.add` stages a point (nothing is writ
 A point counts as stored (acknowledged) only when :meth:`commit` has returned;
 :meth:`Store.put` is ``add`` + ``commit`` of one point. The journal format is one line per
 point, as before, whatever the batch size. On open, rows and profile groups beyond the
-last commit are removed and journal records missing from the file are written again, so a
+last commit are removed, a torn last journal line (a writer killed inside its journal
+write; never acknowledged) is cut off so the next record starts on a line of its own, and
+journal records missing from the file are written again, so a
 point is either wholly present or absent after any crash; if HDF5 left the file
 unreadable (``kill -9`` during a metadata write) it is moved aside and rebuilt from the
 journal; so is a file whose ``writer_open`` flag shows its writer died (HDF5 may then
@@ -212,11 +214,13 @@ class Store:
                  run_info: dict[str, Any] | None = None) -> None:
         self.path = Path(path)
         self.journal_path = journal_path(self.path)
+        self.journal_trimmed = 0  # bytes of a torn last journal line cut off on open
         self._lock = _Lock(lock_path(self.path))
         if not self.path.parent.is_dir():
             raise StoreError(f"{self.path}: directory {self.path.parent} does not exist")
         self._lock.acquire()
         try:
+            self._trim_journal()
             self._open(campaign, extend)
             try:
                 self._repair()
@@ -239,6 +243,37 @@ class Store:
         self._lines: list[bytes] = []
 
     # ------------------------------------------------------------------ opening
+    def _trim_journal(self) -> None:
+        """Cut a torn last line (a writer killed inside its journal write) from the journal.
+
+        That point was never acknowledged; left in place, the next record appended would
+        be glued to it, unreadable, and lost if the store were ever rebuilt from the journal.
+        """
+        path = self.journal_path
+        if not path.exists():
+            return
+        with open(path, "rb+") as fh:
+            size = fh.seek(0, os.SEEK_END)
+            if size == 0:
+                return
+            fh.seek(size - 1)
+            if fh.read(1) == b"\n":
+                return
+            end = size  # find the last newline, reading backwards in blocks
+            while end > 0:
+                start = max(0, end - 65536)
+                fh.seek(start)
+                block = fh.read(end - start)
+                i = block.rfind(b"\n")
+                if i >= 0:
+                    end = start + i + 1
+                    break
+                end = start
+            fh.truncate(end)
+            fh.flush()
+            os.fsync(fh.fileno())
+        self.journal_trimmed = size - end
+
     def _open(self, campaign: Any, extend: bool) -> None:
         self.repaired_from_journal = False
         self.file: h5py.File | None = None
@@ -401,9 +436,10 @@ class Store:
             g.attrs[k] = v if isinstance(v, (int, float, bool)) else str(v)
         if self._lock.stale_owner:
             g.attrs["took_over_stale_lock"] = self._lock.stale_owner
-        if self.repaired_from_journal or self.replayed:
+        if self.repaired_from_journal or self.replayed or self.journal_trimmed:
             g.attrs["repaired"] = (f"rebuilt from journal: {self.repaired_from_journal};"
-                                   f" records replayed: {self.replayed}")
+                                   f" records replayed: {self.replayed}; torn journal"
+                                   f" tail cut: {self.journal_trimmed} bytes")
         self._durable()
         return index
 
