@@ -146,6 +146,19 @@ def floe_drag(A, c, s, v, accumulate, P, cxi, sxi):
 
 
 @njit(**JIT)
+def wave_drag_update(i, x, a, s, s2, s3, P, F, accumulate, stats):
+    """F_i = (1 + C_m) F_w,i + F_d,i from sin(theta_i) = ``s`` and the drag sums; stats."""
+    Fw = P.c_wave * a[i] * s
+    Fd = P.c_drag * s2
+    F[i] = P.one_cm * Fw + Fd
+    if accumulate:
+        stats[ST_S3, i] += s3
+        stats[ST_X, i] += x[i]
+        stats[ST_FW, i] += abs(Fw)
+        stats[ST_FD, i] += abs(Fd)
+
+
+@njit(**JIT)
 def eval_forces(x, vs, a, x0, ck, sk, cwt, swt, P, cxi, sxi, F, in_contact, accumulate,
                 stats):
     """Total force of eq. 8 scaled to the left-hand side, (1 + C_m) F_w + F_d + F_c + F_s,
@@ -157,19 +170,28 @@ def eval_forces(x, vs, a, x0, ck, sk, cwt, swt, P, cxi, sxi, F, in_contact, accu
     onsets against ``in_contact`` (always updated).
     """
     n = x.shape[0]
-    # wave (Froude-Krylov) + ice-water drag, per floe
-    for i in range(n):
-        c = ck[i] * cwt + sk[i] * swt
-        s = sk[i] * cwt - ck[i] * swt
-        Fw = P.c_wave * a[i] * s
-        s2, s3 = floe_drag(a[i] * P.u_amp, c, s, vs[i], accumulate, P, cxi, sxi)
-        Fd = P.c_drag * s2
-        F[i] = P.one_cm * Fw + Fd
-        if accumulate:
-            stats[ST_S3, i] += s3
-            stats[ST_X, i] += x[i]
-            stats[ST_FW, i] += abs(Fw)
-            stats[ST_FD, i] += abs(Fd)
+    # wave (Froude-Krylov) + ice-water drag, per floe; one loop per drag mode so that the
+    # quadrature loop stays free of the exact mode's code (measured: 35 % faster)
+    if P.drag == DRAG_EXACT:
+        for i in range(n):
+            c = ck[i] * cwt + sk[i] * swt
+            s = sk[i] * cwt - ck[i] * swt
+            if accumulate:
+                s2, s3 = drag_sums_exact(a[i] * P.u_amp, c, s, vs[i], P.geom)
+            else:
+                s2 = drag_force_exact(a[i] * P.u_amp, c, s, vs[i], P.geom)
+                s3 = 0.0
+            wave_drag_update(i, x, a, s, s2, s3, P, F, accumulate, stats)
+    else:
+        for i in range(n):
+            c = ck[i] * cwt + sk[i] * swt
+            s = sk[i] * cwt - ck[i] * swt
+            if accumulate:
+                s2, s3 = drag_sums(a[i] * P.u_amp, c, s, vs[i], cxi, sxi)
+            else:
+                s2 = drag_force_sum(a[i] * P.u_amp, c, s, vs[i], cxi, sxi)
+                s3 = 0.0
+            wave_drag_update(i, x, a, s, s2, s3, P, F, accumulate, stats)
     # contacts between neighbours i, i+1
     Fc_prev = 0.0   # force of pair (i-1, i) pushing floe i towards +x
     for i in range(n - 1):
