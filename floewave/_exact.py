@@ -204,6 +204,20 @@ def _combine(A, v, P0, P1, P2, P3):
 
 
 @njit(**JIT)
+def _first_roots(A, c, s, v, h):
+    """(p, q, r+, r-): p = cos alpha = v/A, q = sin alpha, and the offsets from the floe
+    centre of the first root of each family (alpha + 2 pi n, -alpha + 2 pi n) at or after
+    the start u = -h (``|v| < A``)."""
+    p = v / A
+    q = math.sqrt((1.0 - p) * (1.0 + p))
+    bp = _angle(p * c + q * s, q * c - p * s)           # alpha - theta
+    bm = _angle(p * c - q * s, -q * c - p * s)          # -alpha - theta
+    rp = max(bp + _TWO_PI * math.ceil((-h - bp) * (1.0 / _TWO_PI)), -h)
+    rm = max(bm + _TWO_PI * math.ceil((-h - bm) * (1.0 / _TWO_PI)), -h)
+    return p, q, rp, rm
+
+
+@njit(**JIT)
 def _integrals_merge(A, c, s, v, h, ch, sh):
     """Piecewise reference for :func:`drag_integrals` (any ``h``, ``|v| < A``, ``A > 0``):
     offsets of both root families, roots on the floe merged in order, each piece evaluated
@@ -212,13 +226,7 @@ def _integrals_merge(A, c, s, v, h, ch, sh):
     sa = s * ch - c * sh
     cb = c * ch - s * sh
     sb = s * ch + c * sh
-    p = v / A
-    q = math.sqrt((1.0 - p) * (1.0 + p))
-    bp = _angle(p * c + q * s, q * c - p * s)           # alpha - theta
-    bm = _angle(p * c - q * s, -q * c - p * s)          # -alpha - theta
-    # first root of each family at or after the start u = -h
-    rp = max(bp + _TWO_PI * math.ceil((-h - bp) * (1.0 / _TWO_PI)), -h)
-    rm = max(bm + _TWO_PI * math.ceil((-h - bm) * (1.0 / _TWO_PI)), -h)
+    p, q, rp, rm = _first_roots(A, c, s, v, h)
     # w > 0 before a '+' root (alpha), w < 0 before a '-' root (-alpha)
     sig = 1.0 if rp < rm else -1.0
     P0 = 0.0
@@ -279,13 +287,8 @@ def _long_floe(A, c, s, v, h, ch, sh):
     ``(J2, J3, sigma_a)`` with ``I = sigma_a (W - 2 J)``, ``J`` the integrals of ``w^2``,
     ``w^3`` over the pieces of sign ``-sigma_a``: ``n_full`` whole lobes of one kind, plus
     the piece from the last root to the end if the number of roots is odd. O(1) work."""
-    p = v / A
-    q = math.sqrt((1.0 - p) * (1.0 + p))
-    bp = _angle(p * c + q * s, q * c - p * s)           # alpha - theta
-    bm = _angle(p * c - q * s, -q * c - p * s)          # -alpha - theta
-    # first root of each family at or after the start u = -h, and their numbers on the floe
-    rp = max(bp + _TWO_PI * math.ceil((-h - bp) * (1.0 / _TWO_PI)), -h)
-    rm = max(bm + _TWO_PI * math.ceil((-h - bm) * (1.0 / _TWO_PI)), -h)
+    p, q, rp, rm = _first_roots(A, c, s, v, h)
+    # numbers of roots of each family on the floe
     n_p = math.floor((h - rp) * (1.0 / _TWO_PI)) + 1.0 if rp <= h else 0.0
     n_m = math.floor((h - rm) * (1.0 / _TWO_PI)) + 1.0 if rm <= h else 0.0
     nroots = n_p + n_m
