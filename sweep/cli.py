@@ -69,6 +69,12 @@ def build_parser() -> argparse.ArgumentParser:
     v = sub.add_parser("validate", help="check a store against results_schema")
     v.add_argument("store", type=Path)
 
+    fg = sub.add_parser("figures", help="paper-style figures (a/a0 profiles, W_c) as PNG")
+    fg.add_argument("store", type=Path)
+    fg.add_argument("--out", type=Path, required=True, help="output directory")
+    fg.add_argument("--max", type=int, default=50, metavar="N",
+                    help="at most N profile figures (default 50)")
+
     m = sub.add_parser("merge", help="combine shard stores of one campaign (dedup by hash)")
     m.add_argument("output", type=Path, help="merged store (created or extended)")
     m.add_argument("inputs", type=Path, nargs="+", help="shard stores")
@@ -284,8 +290,18 @@ def cmd_merge(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def cmd_figures(args: argparse.Namespace) -> int:
+    from .figures import make_figures
+
+    if not args.store.exists():
+        raise FileNotFoundError(f"{args.store}: no such store")
+    files = make_figures(args.store, args.out, max_figures=args.max)
+    print(f"sweep: wrote {len(files)} figures to {args.out}")
+    return EXIT_OK
+
+
 _COMMANDS = {"run": cmd_run, "plan": cmd_plan, "status": cmd_status, "export": cmd_export,
-             "validate": cmd_validate, "merge": cmd_merge}
+             "validate": cmd_validate, "merge": cmd_merge, "figures": cmd_figures}
 
 
 def main(argv: Sequence[str] | None = None) -> int:
