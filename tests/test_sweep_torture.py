@@ -212,7 +212,7 @@ def torture(config: Path, workdir: Path, *, kills: int = 10, n_ranks: int = 3, s
         except subprocess.TimeoutExpired:
             os.killpg(p.pid, signal.SIGKILL)
             p.wait()
-            raise AssertionError(f"run {i} hung (> {run_timeout} s); see run-{i:03d}.log")
+            raise AssertionError(f"run {i} hung (> {run_timeout} s); see run-{i:03d}.log") from None
         assert rc == 0, (rc, (workdir / f"run-{i:03d}.log").read_text()[-3000:])
         return time.monotonic() - t0
 
