@@ -1,8 +1,9 @@
 """Paper §4 qualitative results (MODEL.md §8) on small, reduced-numerics points.
 
-Reduced: L_x = 1.5 m (28 floes), n0 = 3, nT = 2 periods per iteration, noise-floor averaging
-over 8 iterations. Each comparison is between far-end amplitudes whose difference is many
-standard errors wide (asserted).
+Reduced: L_x = 1.5 m (28 floes; 0.5 m, 84 floes, for the floe-size and W_c checks), n0 = 3,
+nT = 2 periods per iteration, noise-floor averaging over 8 iterations. Each amplitude
+comparison is between far-end amplitudes whose difference is many standard errors wide
+(asserted).
 """
 import pytest
 
@@ -18,6 +19,8 @@ def points():
     for eps in (0.2, 0.8):
         for disp in ("ml", "ep"):
             out[eps, disp] = run_point(ModelConfig(eps=eps, dispersion=disp, **REDUCED))
+        out[eps, "ml", 0.5] = run_point(ModelConfig(
+            eps=eps, dispersion="ml", **{**REDUCED, "L_x": 0.5, "n_average": 24}))
     return out
 
 
@@ -36,3 +39,14 @@ def test_higher_restitution_attenuates_more(points, disp):
 @pytest.mark.parametrize("eps", [0.2, 0.8])
 def test_elastic_plate_attenuates_less_than_mass_loading(points, eps):
     assert _clearly_less(points[eps, "ml"], points[eps, "ep"])
+
+
+def test_higher_restitution_narrows_the_collisional_zone(points):
+    """Paper Fig. 2: the zone of energetic collisions (W_c) shrinks as eps grows."""
+    assert points[0.8, "ml", 0.5].W_c < 0.8 * points[0.2, "ml", 0.5].W_c
+
+
+@pytest.mark.parametrize("eps", [0.2, 0.8])
+def test_smaller_floes_attenuate_more(points, eps):
+    """Paper §4: 0.5 m floes attenuate more than 1.5 m floes, all else equal."""
+    assert _clearly_less(points[eps, "ml", 0.5], points[eps, "ml"])
