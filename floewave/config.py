@@ -100,6 +100,8 @@ class ModelConfig:
         ``target_stderr`` > 0)
     target_stderr : if > 0, keep averaging until max_i a_stderr_i / a0 <= target_stderr
         (adaptive window; status ``not_converged`` if max_iterations comes first)
+    reuse_floor : start the average with the samples of the ``noise_window`` iterations
+        whose residuals revealed the noise floor (instead of discarding them)
     n0_warm : spin-up periods of every iteration after the first when ``warm_start``
         (the state is already developed and a changes by at most ~relax x residual)
     warm_start : carry the DEM state over between iterations (default) instead of
@@ -149,6 +151,7 @@ class ModelConfig:
     n_average: int = 5
     target_stderr: float = 0.01
     n0_warm: int = 0
+    reuse_floor: bool = True
     warm_start: bool = True
     confined: bool = False
     overwash: bool = False

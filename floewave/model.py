@@ -203,6 +203,7 @@ def run_point(cfg: ModelConfig,
     history: list[float] = []
     samples: list[np.ndarray] = []
     win_sum: dict[str, np.ndarray] = {}
+    recent: list[tuple[np.ndarray, Window]] = []
     n_win = 0
     phase = "iterate"
     status = "not_converged"
@@ -233,6 +234,8 @@ def run_point(cfg: ModelConfig,
             n_win += 1
             for name in Window.FIELDS:
                 win_sum[name] = win_sum.get(name, 0.0) + getattr(window, name)
+        elif cfg.reuse_floor and cfg.noise_window > 0:
+            recent = (recent + [(a_new, window)])[-cfg.noise_window:]
         if progress is not None:
             progress(it, res, phase)
         a_prev = a
@@ -242,6 +245,13 @@ def run_point(cfg: ModelConfig,
         a = a + cfg.relax * (a_new - a)
         if phase == "iterate" and noise_floor_reached(history, cfg.noise_window):
             phase = "average"
+            # the last noise_window iterations were already at the noise floor: their
+            # samples start the average
+            for a_s, win in recent:
+                samples.append(a_s)
+                n_win += 1
+                for name in Window.FIELDS:
+                    win_sum[name] = win_sum.get(name, 0.0) + getattr(win, name)
         elif phase == "average" and len(samples) >= cfg.n_average:
             if cfg.target_stderr <= 0 or max_stderr(samples) <= cfg.target_stderr * cfg.a0:
                 status = "converged_noisy"

@@ -6,7 +6,7 @@ from floewave import ModelConfig, run_point
 from floewave.model import march_amplitude, noise_floor_reached, residual
 
 REDUCED = dict(L_x=1.5, n0=3, n0_warm=3, nT=2, noise_window=4, max_iterations=80, relax=0.3,
-               target_stderr=0.0)
+               target_stderr=0.0, reuse_floor=False)
 
 
 @pytest.fixture(scope="module")
@@ -100,3 +100,15 @@ def test_adaptive_window_meets_its_stderr_target():
         assert r.status == "converged_noisy"
         assert np.max(r.a_stderr) <= target * r.a0
     assert tight.iterations > loose.iterations
+
+
+def test_reuse_floor_starts_the_average_with_the_floor_window():
+    """With reuse_floor the noise_window samples that revealed the floor count towards
+    n_average: the same trajectory ends exactly noise_window iterations earlier."""
+    opts = {**REDUCED, "eps": 0.4, "n_average": 10}
+    plain = run_point(ModelConfig(**{**opts, "reuse_floor": False}))
+    reuse = run_point(ModelConfig(**{**opts, "reuse_floor": True}))
+    assert plain.status == reuse.status == "converged_noisy"
+    assert reuse.iterations == plain.iterations - REDUCED["noise_window"]
+    np.testing.assert_array_equal(reuse.residual_history,
+                                  plain.residual_history[:reuse.iterations])

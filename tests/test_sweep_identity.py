@@ -11,7 +11,7 @@ from sweep.identity import canonical_json, point_hash, short_hash
 # Pinned: these change only if the hash definition, ModelConfig's fields/defaults or
 # MODEL_VERSION change -- which must be a deliberate, documented event.
 KNOWN = {
-    "default": "f5553312aea94c17521163bf39566dd725c3f9fd742d4ebdc8113e3e2fc88574",
+    "default": "94d2968b6afcde4d2639bcce3d09ca96a49a309986f780b7364fa0772915e2b0",
 }
 
 
@@ -47,8 +47,8 @@ def test_known_hashes(changes, expected):
 
 
 PINNED = {
-    "KNOWN_1": "a5a7b4810d06b4e47d3906064a7b5035dd06f4031eb9878ed3819bbba7bd68ef",
-    "KNOWN_2": "3dd845a8d0a4dd287836e9774dd1976825eee61e1e35bd9065dc056cd5fef4a7",
+    "KNOWN_1": "0f90ff1a983cf29ddd4e153297d6a753562680400d946afe235c9fc3faaff099",
+    "KNOWN_2": "538707c5ee86e0b0ce51ec7c6da1059b91b1a0f10ab06909cf33d4a558a3e53f",
 }
 
 
