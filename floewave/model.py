@@ -166,6 +166,14 @@ def max_stderr(samples: list[np.ndarray]) -> float:
     return float(np.max(stderr(samples)))
 
 
+def _add_sample(samples: list[np.ndarray], win_sum: dict[str, np.ndarray],
+                a_new: np.ndarray, window: Window) -> None:
+    """Add one iteration to the average: its amplitudes and its window statistics."""
+    samples.append(a_new)
+    for name in Window.FIELDS:
+        win_sum[name] = win_sum.get(name, 0.0) + getattr(window, name)
+
+
 def kernel_mode(cfg: ModelConfig) -> str:
     """Which kernel ran, e.g. ``numba/quadrature/predictor`` or ``numba/confined``."""
     if cfg.confined:
@@ -204,7 +212,6 @@ def run_point(cfg: ModelConfig,
     samples: list[np.ndarray] = []
     win_sum: dict[str, np.ndarray] = {}
     recent: list[tuple[np.ndarray, Window]] = []
-    n_win = 0
     phase = "iterate"
     status = "not_converged"
     last_window: Window | None = None
@@ -230,10 +237,7 @@ def run_point(cfg: ModelConfig,
         res = residual(a, a_new)
         history.append(res)
         if phase == "average":
-            samples.append(a_new)
-            n_win += 1
-            for name in Window.FIELDS:
-                win_sum[name] = win_sum.get(name, 0.0) + getattr(window, name)
+            _add_sample(samples, win_sum, a_new, window)
         elif cfg.reuse_floor and cfg.noise_window > 0:
             recent = (recent + [(a_new, window)])[-cfg.noise_window:]
         if progress is not None:
@@ -248,10 +252,7 @@ def run_point(cfg: ModelConfig,
             # the last noise_window iterations were already at the noise floor: their
             # samples start the average
             for a_s, win in recent:
-                samples.append(a_s)
-                n_win += 1
-                for name in Window.FIELDS:
-                    win_sum[name] = win_sum.get(name, 0.0) + getattr(win, name)
+                _add_sample(samples, win_sum, a_s, win)
         elif phase == "average" and len(samples) >= cfg.n_average:
             if cfg.target_stderr <= 0 or max_stderr(samples) <= cfg.target_stderr * cfg.a0:
                 status = "converged_noisy"
@@ -261,7 +262,7 @@ def run_point(cfg: ModelConfig,
     if samples:
         a_out = np.mean(samples, axis=0)
         a_stderr = stderr(samples) if len(samples) > 1 else np.full(n, np.nan)
-        prof = {name: win_sum[name] / n_win for name in Window.FIELDS}
+        prof = {name: win_sum[name] / len(samples) for name in Window.FIELDS}
         noise = float(np.median(history[-len(samples):]))
     else:
         a_out = a_new
