@@ -38,7 +38,7 @@ def fake_point(cfg: ModelConfig) -> dict[str, Any]:
         "alpha_exp_resid": 5e-3, "alpha_c": 0.9 * alpha, "k": 4.0 / cfg.T ** 2,
         "c_g": 0.5 * cfg.T, "status": "converged" if cfg.eps < 0.7 else "converged_noisy",
         "noise": 0.0 if cfg.eps < 0.7 else 0.02, "iterations": len(hist),
-        "residual": float(hist[-1]), "floe_steps": len(hist) * cfg.floe_steps_per_iteration(),
+        "residual": float(hist[-1]), "floe_steps": cfg.floe_steps_of(len(hist)),
         "wall_time": 1e-3, "kernel_mode": "fake", "a_end": float(a[-1]), "a0": cfg.a0,
         "residual_history": hist,
     }
