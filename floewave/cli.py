@@ -1,6 +1,10 @@
 """``floewave run --set L_x=1.5 --set T=1.4 ... [--json out.json] [--plot out.png]``.
 
-Exit statuses: 0 success; 2 bad input (unknown field, bad value, physically invalid point);
+``floewave figures --out DIR`` writes the analytic figures (DIR/fig1_dispersion.png, the
+paper's Fig. 1; :mod:`floewave.figures`) and prints the paths and fitted tail exponents.
+
+Exit statuses: 0 success; 2 bad input (unknown field, bad value, physically invalid point;
+for ``figures``: matplotlib missing or the output directory cannot be created / written);
 3 the point failed numerically.
 """
 from __future__ import annotations
@@ -111,7 +115,12 @@ def main(argv: list[str] | None = None) -> int:
                      help="override a ModelConfig field (repeatable)")
     run.add_argument("--json", type=Path, help="write all results to this JSON file")
     run.add_argument("--plot", type=Path, help="save a/a0 versus x to this PNG file")
+    figs = sub.add_parser("figures", help="write the analytic figures (paper's Fig. 1)")
+    figs.add_argument("--out", type=Path, required=True, metavar="DIR",
+                      help="output directory (created if missing)")
     args = parser.parse_args(argv)
+    if args.cmd == "figures":
+        return figures_main(args.out)
     from .model import run_point
 
     try:
@@ -139,6 +148,41 @@ def main(argv: list[str] | None = None) -> int:
         args.json.write_text(json.dumps(out, indent=1))
     if args.plot:
         plot(cfg, r, args.plot)
+    return EXIT_OK
+
+
+def figures_main(out: Path) -> int:
+    """``floewave figures --out DIR``: write DIR/fig1_dispersion.png, print path and fits."""
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        print("floewave: error: 'floewave figures' needs matplotlib (pip install matplotlib)",
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
+    from .figures import FIG1_NAME, figure1
+
+    if out.exists() and not out.is_dir():
+        print(f"floewave: error: cannot create output directory {str(out)!r}: it exists and"
+              " is not a directory", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        print(f"floewave: error: cannot create output directory {str(out)!r}:"
+              f" {exc.strerror or exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    path = out / FIG1_NAME
+    try:
+        fits = figure1(path)
+    except OSError as exc:
+        print(f"floewave: error: cannot write {str(path)!r}: {exc.strerror or exc}",
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
+    print(path)
+    print("high-frequency tail exponents m of omega^3/(c_g tanh^3 kh) = c omega^m"
+          " (paper: ep lab 1.994, field 2.397):")
+    for (case, disp), (m, _c, fmin, fmax) in fits.items():
+        print(f"  {case:5s} {disp}: m = {m:.3f}  (fit {fmin:.4g}-{fmax:.4g} Hz)")
     return EXIT_OK
 
 

@@ -69,11 +69,15 @@ def build_parser() -> argparse.ArgumentParser:
     v = sub.add_parser("validate", help="check a store against results_schema")
     v.add_argument("store", type=Path)
 
-    fg = sub.add_parser("figures", help="paper-style figures (a/a0 profiles, W_c) as PNG")
+    fg = sub.add_parser("figures", help="the paper's figures (Figs. 2, 3, 5, 6, W_c, "
+                        "alpha(omega)) as PNG")
     fg.add_argument("store", type=Path)
     fg.add_argument("--out", type=Path, required=True, help="output directory")
-    fg.add_argument("--max", type=int, default=50, metavar="N",
-                    help="at most N profile figures (default 50)")
+    fg.add_argument("--max", type=int, default=20, metavar="N",
+                    help="at most N figures per kind (default 20; groups closest to the "
+                         "paper's setup first)")
+    fg.add_argument("--only", nargs="+", metavar="KIND", default=None,
+                    help="only these kinds: fig2 fig3 fig5 fig6 summary (default all)")
 
     m = sub.add_parser("merge", help="combine shard stores of one campaign (dedup by hash)")
     m.add_argument("output", type=Path, help="merged store (created or extended)")
@@ -291,11 +295,16 @@ def cmd_merge(args: argparse.Namespace) -> int:
 
 
 def cmd_figures(args: argparse.Namespace) -> int:
-    from .figures import make_figures
+    from .figures import KINDS, make_figures
 
     if not args.store.exists():
         raise FileNotFoundError(f"{args.store}: no such store")
-    files = make_figures(args.store, args.out, max_figures=args.max)
+    if args.max < 1:
+        raise ConfigError(f"--max {args.max}: must be at least 1")
+    files = make_figures(args.store, args.out, max_figures=args.max,
+                         kinds=args.only or KINDS)
+    for f in files:
+        print(f)
     print(f"sweep: wrote {len(files)} figures to {args.out}")
     return EXIT_OK
 

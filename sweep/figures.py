@@ -1,93 +1,397 @@
-"""Paper-style figures from a store (``sweep figures STORE --out DIR``).
+"""The paper's figures from a store: ``sweep figures STORE --out DIR [--only KIND ...]``.
 
-- One figure per combination of the swept values other than ``eps`` (the paper's Fig. 2
-  layout): a/a0 versus the floe position for every eps, with standard errors, the
-  confined-ice curve of eq. 25 with alpha_c from eq. 24, and a dot where the
-  collisional zone ends (x = W_c, the paper's dots).
-- ``collision_zone.png``: W_c versus eps, one line per such combination (up to 12).
+Each kind is drawn for every group of points that varies the figure's parameter with
+everything else fixed, so a store of any campaign gives whatever figures its grid allows
+(the analytic Fig. 1 needs no store: ``floewave figures --out DIR``):
 
-Needs matplotlib (the ``plot`` extra).
+``fig2``  a/a0 versus x for each eps, one panel per dispersion relation (``ml``, ``ep``,
+          ``ow``), with the standard error of a(x) as a band, the confined-ice curve of
+          eq. 25 (alpha_c from eq. 24, solid black), a dot where the phase-averaged gap drops
+          below ``gap_threshold`` (x = W_c) and the compact-ice solution started from that dot
+          (dashed black: 1/a = 1/a(W_c) + alpha_c (x - W_c)). Groups: (L_x, T, a0, C_sd, d_f).
+``fig3``  mean gap (dashed: the initial d_f; dots at W_c), mean |F_w|, |F_c|, |F_d| versus x for
+          each eps. Groups: (L_x, T, a0, C_sd, d_f, dispersion).
+``fig5``  a/a0 for each floe size L_x (colours), ``ep`` solid, ``ml`` dashed, ``ow`` dotted.
+          Groups: (T, a0, C_sd, eps, d_f).
+``fig6``  a/a0 for each d_f (``fig6_df_*``) and for each a0 (``fig6_a0_*``), one panel per wave
+          period. Groups: (L_x, a0 or d_f, C_sd, eps, dispersion).
+``summary``  ``collision_zone.png`` (W_c versus eps) and ``alpha_omega.png`` (alpha_inner, or
+          alpha_all where no point has an inner zone, and alpha_c versus omega with the fitted
+          exponents m, :func:`sweep.alpha_omega`; groups with >= 3 periods).
+
+The number of figures per kind is capped (``--max``); groups closest to the paper's
+reference setup (L_x = 0.5 m, T = 1.2 s, a0 = 0.0125 m, C_sd = 0.05, eps = 0.6,
+d_f = 0.005 m, ``ml``) come first. Needs matplotlib (the ``plot`` extra).
 """
 from __future__ import annotations
 
 import re
+from collections.abc import Iterable, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+import pandas as pd
 
 from .analysis import load, load_profile
 from .errors import ConfigError
+from .stats import RESULT_STATUSES, SWEPT, alpha_omega, derived
 
-__all__ = ["make_figures"]
+__all__ = ["make_figures", "KINDS", "PAPER_SETUP"]
 
-GROUP = ("L_x", "T", "a0", "C_sd", "d_f", "dispersion")
-STORED_RESULTS = ("converged", "converged_noisy", "not_converged")
+KINDS = ("fig2", "fig3", "fig5", "fig6", "summary")
+#: The paper's reference setup: groups closest to it are drawn first.
+PAPER_SETUP = {"L_x": 0.5, "T": 1.2, "a0": 0.0125, "C_sd": 0.05, "eps": 0.6, "d_f": 0.005,
+               "dispersion": "ml"}
+DISP_ORDER = ("ml", "ep", "ow")
+DISP_STYLE = {"ep": "-", "ml": "--", "ow": ":"}
+UNITS = {"L_x": "m", "T": "s", "a0": "m", "C_sd": "", "eps": "", "d_f": "m",
+         "dispersion": ""}
+SYMBOL = {"L_x": "L_x", "T": "T", "a0": "a_0", "C_sd": "C_sd", "eps": "ε", "d_f": "d_f",
+          "dispersion": ""}
 
 
-def _name(key: tuple) -> str:
-    text = "_".join(f"{k}{v}" for k, v in zip(GROUP, key, strict=True))
-    return "profile_" + re.sub(r"[^A-Za-z0-9_.-]", "", text) + ".png"
+def _fmt(name: str, value: Any) -> str:
+    if name == "dispersion":
+        return str(value).upper()
+    unit = f" {UNITS[name]}" if UNITS[name] else ""
+    return f"{SYMBOL[name]} = {value:g}{unit}"
 
 
-def make_figures(path: str | Path, outdir: str | Path, max_figures: int = 50) -> list[Path]:
+def _title(keys: Sequence[str], values: Sequence[Any]) -> str:
+    return ", ".join(_fmt(k, v) for k, v in zip(keys, values, strict=True))
+
+
+def _file(prefix: str, keys: Sequence[str], values: Sequence[Any]) -> str:
+    text = "_".join(f"{k}{v}" for k, v in zip(keys, values, strict=True))
+    return f"{prefix}_" + re.sub(r"[^A-Za-z0-9_.-]", "", text) + ".png"
+
+
+def _closeness(keys: Sequence[str], values: Sequence[Any]) -> tuple:
+    """Sort key: number of values differing from the paper's setup, then the values."""
+    diff = sum(PAPER_SETUP[k] != v for k, v in zip(keys, values, strict=True))
+    return (diff, tuple(str(v) for v in values))
+
+
+def _groups(df: pd.DataFrame, keys: Sequence[str], varying: str,
+            min_values: int = 2) -> list[tuple[tuple, pd.DataFrame]]:
+    """Groups of ``df`` by ``keys`` in which ``varying`` takes >= min_values values."""
+    out = []
+    for key, sub in df.groupby(list(keys), sort=False):
+        key = key if isinstance(key, tuple) else (key,)
+        if sub[varying].nunique() >= min_values:
+            out.append((key, sub))
+    return sorted(out, key=lambda kv: _closeness(keys, kv[0]))
+
+
+class _Profiles:
+    """Per-point profiles read once per figure run (each point's group only)."""
+
+    def __init__(self, path: str | Path):
+        self.path = path
+        self.cache: dict[str, dict[str, np.ndarray]] = {}
+
+    def __call__(self, h: str) -> dict[str, np.ndarray]:
+        if h not in self.cache:
+            ds = load_profile(self.path, h)
+            self.cache[h] = {k: ds[k].values for k in ("x", "a", "a_stderr", "gap_mean",
+                                                        "F_w_mean", "F_c_mean", "F_d_mean")}
+        return self.cache[h]
+
+
+def _colours(n: int) -> list:
+    import matplotlib.pyplot as plt
+
+    cmap = plt.get_cmap("tab10" if n <= 10 else "viridis")
+    return [cmap(i if n <= 10 else i / max(n - 1, 1)) for i in range(n)]
+
+
+def _amplitude(ax, row: pd.Series, prof: dict[str, np.ndarray], colour, style: str = "-",
+               label: str | None = None, band: bool = True, zone: bool = False) -> None:
+    """a/a0 versus x (with SE band); with ``zone``: the W_c dot and compact-ice line."""
+    a0 = float(row["a0"])
+    x, a, se = prof["x"], prof["a"], prof["a_stderr"]
+    ax.plot(x, a / a0, style, color=colour, lw=1.3, label=label)
+    if band and np.isfinite(se).any():
+        ax.fill_between(x, (a - se) / a0, (a + se) / a0, color=colour, alpha=0.25, lw=0)
+    if not zone:
+        return
+    W_c, alpha_c = float(row["W_c"]), float(row["alpha_c"])
+    if np.isfinite(W_c) and W_c < x[-1]:
+        a_w = float(np.interp(W_c, x, a))
+        ax.plot([W_c], [a_w / a0], "o", color=colour, ms=6, mec="k", mew=0.6, zorder=5)
+        if np.isfinite(alpha_c) and a_w > 0:
+            xx = np.linspace(W_c, x[-1], 100)
+            ax.plot(xx, 1.0 / (1.0 / a_w + alpha_c * (xx - W_c)) / a0, "k--", lw=0.9)
+
+
+def _confined(ax, row: pd.Series, x_end: float, label: bool = True) -> None:
+    """The confined-ice solution of eq. 25 from the ice edge."""
+    a0, alpha_c = float(row["a0"]), float(row["alpha_c"])
+    if not np.isfinite(alpha_c):
+        return
+    xx = np.linspace(0.0, x_end, 200)
+    ax.plot(xx, 1.0 / (1.0 + a0 * alpha_c * xx), "k-", lw=1.4,
+            label="eq. 25 (confined ice)" if label else None)
+
+
+def _save(fig, target: Path, written: list[Path]) -> None:
+    import matplotlib.pyplot as plt
+
+    fig.savefig(target, dpi=120)
+    plt.close(fig)
+    written.append(target)
+
+
+def fig2(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> list[Path]:
+    """a/a0 per eps, one panel per dispersion relation (the paper's Fig. 2)."""
+    import matplotlib.pyplot as plt
+
+    keys = ("L_x", "T", "a0", "C_sd", "d_f")
+    written: list[Path] = []
+    for key, sub in _groups(df, keys, "eps")[:limit]:
+        disps = [d for d in DISP_ORDER if d in set(sub["dispersion"])]
+        eps_values = sorted(sub["eps"].unique())
+        colours = dict(zip(eps_values, _colours(len(eps_values)), strict=True))
+        fig, axes = plt.subplots(1, len(disps), figsize=(4.6 * len(disps) + 2.2, 4.0),
+                                 sharey=True, squeeze=False, constrained_layout=True)
+        for panel, (ax, disp) in enumerate(zip(axes[0], disps, strict=True)):
+            rows = sub[sub["dispersion"] == disp].sort_values("eps")
+            x_end = 0.0
+            for _, row in rows.iterrows():
+                prof = profiles(row["hash"])
+                x_end = max(x_end, float(prof["x"][-1]))
+                _amplitude(ax, row, prof, colours[row["eps"]],
+                           label=f"ε = {row['eps']:g}", zone=True)
+            _confined(ax, rows.iloc[0], x_end)
+            ax.plot([], [], "k--", lw=0.9, label="compact ice from x = W_c")
+            ax.plot([], [], "o", color="0.6", mec="k", mew=0.6,
+                    label="gap < threshold (x = W_c)")
+            ax.set_title(f"({chr(97 + panel)}) {disp.upper()}", loc="left")
+            ax.set_xlabel("distance from the ice edge x [m]")
+            ax.grid(alpha=0.3)
+            ax.set_xlim(0, x_end)
+        axes[0][0].set_ylabel("relative wave amplitude a / a₀ [–]")
+        handles, labels = axes[0][0].get_legend_handles_labels()
+        fig.legend(handles, labels, fontsize=8, loc="outside right upper")
+        fig.suptitle(_title(keys, key) + "  (band: ±1 standard error)", fontsize=9)
+        _save(fig, out / _file("fig2", keys, key), written)
+    return written
+
+
+def fig3(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> list[Path]:
+    """Mean gap, |F_w|, |F_c|, |F_d| versus x per eps (the paper's Fig. 3)."""
+    import matplotlib.pyplot as plt
+
+    keys = ("L_x", "T", "a0", "C_sd", "d_f", "dispersion")
+    panels = (("gap_mean", "mean floe–floe distance [m]"), ("F_w_mean", "mean |F_w| [N]"),
+              ("F_c_mean", "mean |F_c| [N]"), ("F_d_mean", "mean |F_d| [N]"))
+    written: list[Path] = []
+    for key, sub in _groups(df, keys, "eps")[:limit]:
+        eps_values = sorted(sub["eps"].unique())
+        colours = dict(zip(eps_values, _colours(len(eps_values)), strict=True))
+        fig, axes = plt.subplots(2, 2, figsize=(10.0, 6.6), sharex=True,
+                                 constrained_layout=True)
+        L_x = float(sub["L_x"].iloc[0])
+        x_end = 0.0
+        for _, row in sub.sort_values("eps").iterrows():
+            prof = profiles(row["hash"])
+            colour = colours[row["eps"]]
+            x = prof["x"]
+            x_end = max(x_end, float(x[-1]))
+            for ax, (name, _) in zip(axes.flat, panels, strict=True):
+                if name == "gap_mean":
+                    xp, gap = x[:-1] + 0.5 * L_x, prof["gap_mean"][:-1]
+                    ax.plot(xp, gap, "-", color=colour, lw=1.2, label=f"ε = {row['eps']:g}")
+                    W_c = float(row["W_c"])
+                    if np.isfinite(W_c) and W_c < x[-1]:
+                        ax.plot([W_c], [np.interp(W_c, xp, gap)], "o", color=colour, ms=6,
+                                mec="k", mew=0.6, zorder=5)
+                else:
+                    ax.plot(x, prof[name], "-", color=colour, lw=1.2)
+        d_f = float(sub["d_f"].iloc[0])
+        axes[0][0].axhline(d_f, color="k", ls="--", lw=1, label=f"domain-average d_f = {d_f:g} m")
+        for i, (ax, (_, label)) in enumerate(zip(axes.flat, panels, strict=True)):
+            ax.set_ylabel(label)
+            ax.set_title(f"({chr(97 + i)})", loc="left")
+            ax.grid(alpha=0.3)
+            ax.set_xlim(0, x_end)
+        for ax in axes[1]:
+            ax.set_xlabel("distance from the ice edge x [m]")
+        axes[0][0].legend(fontsize=8)
+        fig.suptitle(_title(keys, key) + "  (dots: x = W_c)", fontsize=9)
+        _save(fig, out / _file("fig3", keys, key), written)
+    return written
+
+
+def fig5(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> list[Path]:
+    """a/a0 per floe size, ep solid and ml dashed (the paper's Fig. 5)."""
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+
+    keys = ("T", "a0", "C_sd", "eps", "d_f")
+    written: list[Path] = []
+    for key, sub in _groups(df, keys, "L_x")[:limit]:
+        sizes = sorted(sub["L_x"].unique())
+        colours = dict(zip(sizes, _colours(len(sizes)), strict=True))
+        fig, ax = plt.subplots(figsize=(7.0, 4.2), constrained_layout=True)
+        x_end = 0.0
+        for _, row in sub.sort_values(["dispersion", "L_x"]).iterrows():
+            prof = profiles(row["hash"])
+            x_end = max(x_end, float(prof["x"][-1]))
+            _amplitude(ax, row, prof, colours[row["L_x"]], DISP_STYLE[row["dispersion"]])
+        handles = [Line2D([], [], color=colours[s], lw=2, label=f"L_x = {s:g} m")
+                   for s in sizes]
+        handles += [Line2D([], [], color="k", ls=DISP_STYLE[d], label=d.upper())
+                    for d in DISP_ORDER if d in set(sub["dispersion"])]
+        ax.legend(handles=handles, fontsize=8)
+        ax.set_xlim(0, x_end)
+        ax.set_xlabel("distance from the ice edge x [m]")
+        ax.set_ylabel("relative wave amplitude a / a₀ [–]")
+        ax.grid(alpha=0.3)
+        ax.set_title(_title(keys, key) + "  (band: ±1 standard error)", fontsize=9)
+        _save(fig, out / _file("fig5", keys, key), written)
+    return written
+
+
+def _fig6(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int,
+          varying: str) -> list[Path]:
+    import matplotlib.pyplot as plt
+
+    keys = tuple(k for k in ("L_x", "a0", "d_f", "C_sd", "eps", "dispersion")
+                 if k != varying)
+    written: list[Path] = []
+    for key, sub in _groups(df, keys, varying)[:limit]:
+        values = sorted(sub[varying].unique())
+        colours = dict(zip(values, _colours(len(values)), strict=True))
+        periods = sorted(sub["T"].unique())
+        fig, axes = plt.subplots(1, len(periods), figsize=(4.6 * len(periods) + 0.6, 4.0),
+                                 sharey=True, squeeze=False, constrained_layout=True)
+        for panel, (ax, T) in enumerate(zip(axes[0], periods, strict=True)):
+            x_end = 0.0
+            for _, row in sub[sub["T"] == T].sort_values(varying).iterrows():
+                prof = profiles(row["hash"])
+                x_end = max(x_end, float(prof["x"][-1]))
+                _amplitude(ax, row, prof, colours[row[varying]],
+                           label=_fmt(varying, row[varying]))
+            ax.set_xlim(0, x_end)
+            ax.set_title(f"({chr(97 + panel)}) T = {T:g} s", loc="left")
+            ax.set_xlabel("distance from the ice edge x [m]")
+            ax.grid(alpha=0.3)
+        axes[0][0].set_ylabel("relative wave amplitude a / a₀ [–]")
+        axes[0][-1].legend(fontsize=8)
+        fig.suptitle(_title(keys, key) + "  (band: ±1 standard error)", fontsize=9)
+        _save(fig, out / _file(f"fig6_{varying.replace('_', '')}", keys, key), written)
+    return written
+
+
+def fig6(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> list[Path]:
+    """a/a0 per d_f and per a0, one panel per wave period (the paper's Fig. 6)."""
+    return (_fig6(df, profiles, out, limit, "d_f")
+            + _fig6(df, profiles, out, limit, "a0"))
+
+
+def summary(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> list[Path]:
+    """W_c versus eps, and alpha_inner(omega) with the fitted exponents."""
+    import matplotlib.pyplot as plt
+
+    written: list[Path] = []
+    keys = ("L_x", "T", "a0", "C_sd", "d_f", "dispersion")
+    groups = _groups(df, keys, "eps")
+    if groups:
+        fig, ax = plt.subplots(figsize=(7.0, 4.2), constrained_layout=True)
+        shown = groups[:12]
+        vary = [i for i, k in enumerate(keys) if len({kv[0][i] for kv in shown}) > 1]
+        same = [i for i in range(len(keys)) if i not in vary]
+        for key, sub in shown:
+            sub = sub.sort_values("eps")
+            label = _title([keys[i] for i in vary], [key[i] for i in vary]) or None
+            ax.plot(sub["eps"], sub["W_c"], "o-", ms=4, lw=1, label=label)
+        ax.set_title(_title([keys[i] for i in same], [shown[0][0][i] for i in same]),
+                     fontsize=8)
+        ax.set_xlabel("restitution coefficient ε [–]")
+        ax.set_ylabel("collision-zone width W_c [m]")
+        sheet = derived(df)["L_sheet"].max()
+        if np.isfinite(sheet) and (df["W_c"] >= sheet).any():
+            ax.axhline(sheet, color="k", ls=":", lw=1,
+                       label=f"sheet length {sheet:g} m (zone spans the sheet)")
+            vary = vary or [-1]
+        ax.grid(alpha=0.3)
+        if vary:
+            ax.legend(fontsize=7)
+        _save(fig, out / "collision_zone.png", written)
+    rate = "alpha_inner"
+    fits = alpha_omega(df, rate)
+    if not np.isfinite(fits["m"]).any():     # no inner zone anywhere: fit all floes
+        rate = "alpha_all"
+        fits = alpha_omega(df, rate)
+    fits = fits[np.isfinite(fits["m"])]
+    if not fits.empty:
+        by = [k for k in SWEPT if k in fits.columns]
+        fits = fits.assign(_order=[_closeness(by, tuple(r[k] for k in by))
+                                   for _, r in fits.iterrows()]).sort_values("_order")
+        fig, ax = plt.subplots(figsize=(7.0, 4.6), constrained_layout=True)
+        for colour, (_, fit) in zip(_colours(min(len(fits), 8)), fits.head(8).iterrows(),
+                                    strict=False):
+            sel = np.ones(len(df), dtype=bool)
+            for k in by:
+                sel &= (df[k] == fit[k]).to_numpy()
+            pts = df[sel].sort_values("T")
+            om = 2 * np.pi / pts["T"].to_numpy(float)
+            label = ", ".join(_fmt(k, fit[k]) for k in by if df[k].nunique() > 1) or "all"
+            ax.loglog(om, pts[rate], "o", color=colour,
+                      label=f"{label}: m = {fit['m']:.2f} ± {fit['m_stderr']:.2f}")
+            ax.loglog(om, fit["c"] * om ** fit["m"], "-", color=colour, lw=1)
+            ax.loglog(om, pts["alpha_c"], "x--", color=colour, lw=0.8, ms=4,
+                      label=f"  α_c (eq. 24): m = {fit['m_c']:.2f}")
+        from matplotlib.ticker import ScalarFormatter
+
+        for axis in (ax.xaxis, ax.yaxis):
+            axis.set_major_formatter(ScalarFormatter())
+            axis.set_minor_formatter(ScalarFormatter())
+        ax.tick_params(which="minor", labelsize=7)
+        same = [k for k in by if df[k].nunique() == 1]
+        ax.set_title(_title(same, [df[k].iloc[0] for k in same]), fontsize=8)
+        ax.set_xlabel("angular frequency ω [rad s⁻¹]")
+        ax.set_ylabel(f"{RATE_LABEL[rate]} (dots; fit: line) and α_c [m⁻²]")
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=6)
+        _save(fig, out / "alpha_omega.png", written)
+    return written
+
+
+RATE_LABEL = {"alpha_inner": "α_inner (x ≥ W_c)", "alpha_all": "α_all (all floes)"}
+
+_DRAW = {"fig2": fig2, "fig3": fig3, "fig5": fig5, "fig6": fig6, "summary": summary}
+
+
+def make_figures(path: str | Path, outdir: str | Path, max_figures: int = 20,
+                 kinds: Iterable[str] = KINDS) -> list[Path]:
     """Write the figures for the store ``path`` into ``outdir``; return the files written.
 
-    At most ``max_figures`` profile figures (the first groups in sorted order).
-    Raises :class:`ConfigError` if matplotlib is missing or the store has no results.
+    At most ``max_figures`` figures per kind (per varying parameter for ``fig6``). Raises
+    :class:`ConfigError` if matplotlib is missing, a kind is unknown or the store has no
+    results; nothing is written then.
     """
+    kinds = list(kinds)
+    unknown = [k for k in kinds if k not in KINDS]
+    if unknown:
+        raise ConfigError(f"unknown figure kind {unknown[0]!r}; choose from {', '.join(KINDS)}")
     try:
         import matplotlib
 
         matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
     except ImportError:
         raise ConfigError("sweep figures needs matplotlib: pip install 'floewave[plot]'") \
             from None
     df = load(path)
-    df = df[df["status"].isin(STORED_RESULTS)]
+    df = df[df["status"].isin(RESULT_STATUSES)]
     if df.empty:
         raise ConfigError(f"{path}: no stored results to plot")
     out = Path(outdir)
     out.mkdir(parents=True, exist_ok=True)
+    profiles = _Profiles(path)
     written: list[Path] = []
-    groups = sorted(df.groupby(list(GROUP)), key=lambda kv: tuple(map(str, kv[0])))
-    for key, sub in groups[:max_figures]:
-        fig, ax = plt.subplots(figsize=(6.5, 3.8))
-        a0 = float(sub["a0"].iloc[0])
-        for _, row in sub.sort_values("eps").iterrows():
-            prof = load_profile(path, row["hash"])
-            x = prof["x"].values
-            line = ax.errorbar(x, prof["a"].values / a0, yerr=prof["a_stderr"].values / a0,
-                               lw=1, ms=2, fmt=".-", label=f"eps = {row['eps']:g}")
-            if row["W_c"] < x[-1]:
-                i = int(np.searchsorted(x, row["W_c"]))
-                i = min(i, len(x) - 1)
-                ax.plot([row["W_c"]], [prof["a"].values[i] / a0], "o",
-                        color=line[0].get_color(), ms=6)
-        alpha_c = float(sub["alpha_c"].iloc[0])
-        xx = np.linspace(0.0, float(sub["n_floes"].iloc[0] * sub["L_x"].iloc[0]), 200)
-        ax.plot(xx, 1.0 / (a0 * alpha_c * xx + 1.0), "k-", lw=1.2, label="eq. 25")
-        ax.set_xlabel("x [m]")
-        ax.set_ylabel("a / a0")
-        ax.set_title(", ".join(f"{k}={v}" for k, v in zip(GROUP, key, strict=True)),
-                     fontsize=8)
-        ax.legend(fontsize=7)
-        fig.tight_layout()
-        target = out / _name(key)
-        fig.savefig(target, dpi=110)
-        plt.close(fig)
-        written.append(target)
-    fig, ax = plt.subplots(figsize=(6.5, 3.8))
-    for key, sub in groups[:12]:
-        sub = sub.sort_values("eps")
-        ax.plot(sub["eps"], sub["W_c"], "o-", ms=3, lw=1,
-                label=" ".join(f"{v}" for v in key))
-    ax.set_xlabel("eps")
-    ax.set_ylabel("collision-zone width W_c [m]")
-    ax.legend(fontsize=6, title=" ".join(GROUP), title_fontsize=6)
-    fig.tight_layout()
-    target = out / "collision_zone.png"
-    fig.savefig(target, dpi=110)
-    plt.close(fig)
-    written.append(target)
+    for kind in kinds:
+        written += _DRAW[kind](df, profiles, out, max_figures)
     return written

@@ -5,7 +5,8 @@ They take a :class:`floewave.ModelConfig` and return a dict shaped like
 campaigns can be tested without the DEM kernel: :func:`fake_point` (a smooth 1/a
 profile), :func:`raising_point` (raises for eps = 0.4), :func:`nan_point` (NaN
 amplitudes for d_f = 0.01), :func:`trivial_point` (no work: the master benchmark) and
-:func:`sleepy_point` (sleeps 0.2 s: signal and CPU-share tests).
+:func:`sleepy_point` (sleeps 0.2 s: signal and CPU-share tests) and :func:`power_point`
+(known alpha(omega) exponents and collision-zone ratios: the analysis tests).
 """
 from __future__ import annotations
 
@@ -16,7 +17,8 @@ import numpy as np
 
 from floewave import ModelConfig
 
-__all__ = ["fake_point", "raising_point", "nan_point", "trivial_point", "sleepy_point"]
+__all__ = ["fake_point", "raising_point", "nan_point", "trivial_point", "sleepy_point",
+           "power_point", "POWER_M"]
 
 
 def fake_point(cfg: ModelConfig) -> dict[str, Any]:
@@ -74,6 +76,30 @@ def sleepy_point(cfg: ModelConfig) -> dict[str, Any]:
     """:func:`fake_point` after sleeping 0.2 s."""
     time.sleep(0.2)
     return fake_point(cfg)
+
+
+#: Exponent m of alpha_inner = C_sd omega^m in :func:`power_point`, per dispersion relation.
+POWER_M = {"ep": 2.0, "ow": 4.0, "ml": 6.0}
+
+
+def power_point(cfg: ModelConfig) -> dict[str, Any]:
+    """:func:`fake_point` with hand-set rates whose analysis results are known exactly.
+
+    alpha_inner = C_sd omega^m (m = :data:`POWER_M` of the dispersion relation),
+    alpha_c = alpha_inner / (1 + eps) (so alpha_inner / alpha_c = 1 + eps),
+    alpha_edge = (2 + d_f * 100) alpha_inner, W_c = 10 eps L_x (capped at the sheet:
+    eps = 0.8, L_x = 6 spans it), alpha_all_resid = 1e-3 and alpha_exp_resid = 1e-3 (1 + eps)
+    for eps < 0.5, else 5e-4 (the exponential fits better).
+    """
+    out = fake_point(cfg)
+    omega = 2.0 * np.pi / cfg.T
+    inner = cfg.C_sd * omega ** POWER_M[cfg.dispersion]
+    out.update(alpha_inner=inner, alpha_c=inner / (1.0 + cfg.eps),
+               alpha_edge=(2.0 + 100.0 * cfg.d_f) * inner,
+               W_c=min(10.0 * cfg.eps * cfg.L_x, cfg.L_sheet), alpha_all_resid=1e-3,
+               alpha_exp_resid=1e-3 * (1.0 + cfg.eps) if cfg.eps < 0.5 else 5e-4,
+               status="converged" if cfg.eps < 0.7 else "not_converged")
+    return out
 
 
 #: A tiny real campaign: 8 points of a 6-floe sheet, well under a second each.

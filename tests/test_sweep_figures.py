@@ -1,10 +1,15 @@
-"""``sweep figures``: one PNG per non-eps group plus the W_c summary, from a real store."""
+"""``sweep figures``: the paper's figure kinds from a hand-built and from a real store."""
+import numpy as np
 import pytest
 
 from sweep import parse_campaign, run_campaign
 from sweep.cli import main
 
-TOML = """\
+pytest.importorskip("matplotlib")
+
+PNG = b"\x89PNG\r\n\x1a\n"
+
+REAL = """\
 [base]
 L_sheet = 9.0
 n0 = 1
@@ -16,20 +21,108 @@ eps = [0.2, 0.8]
 dispersion = ["ml"]
 """
 
+FAKE = """\
+[base]
+L_sheet = 6.0
+[sweep]
+L_x = [0.5, 1.0]
+T = [1.0, 1.5, 2.0]
+a0 = [0.0125, 0.02]
+eps = [0.2, 0.8]
+d_f = [0.005, 0.02]
+dispersion = ["ep", "ml"]
+"""
 
-def test_figures_from_a_store(tmp_path, capsys):
-    pytest.importorskip("matplotlib")
+
+def _pngs(out):
+    files = sorted(out.iterdir())
+    for f in files:
+        data = f.read_bytes()
+        assert data[:8] == PNG and len(data) > 10_000, f
+    return [f.name for f in files]
+
+
+@pytest.fixture(scope="module")
+def fake_store(tmp_path_factory):
+    store = tmp_path_factory.mktemp("fig") / "fake.h5"
+    run_campaign(parse_campaign(FAKE, "f.toml"), str(store),
+                 compute="sweep.testing:power_point")
+    return store
+
+
+def test_every_kind_from_a_hand_built_store(fake_store, tmp_path, capsys):
+    out = tmp_path / "figs"
+    assert main(["figures", str(fake_store), "--out", str(out), "--max", "1"]) == 0
+    names = _pngs(out)
+    # one per kind (fig6: one per d_f and one per a0) + the two summary figures
+    assert len(names) == 7, names
+    # groups closest to the paper's setup come first (only T differs: 1.0 sorts first)
+    assert "fig2_L_x0.5_T1.0_a00.0125_C_sd0.05_d_f0.005.png" in names
+    assert "fig3_L_x0.5_T1.0_a00.0125_C_sd0.05_d_f0.005_dispersionml.png" in names
+    assert sum(n.startswith("fig5_") for n in names) == 1
+    assert sum(n.startswith("fig6_df_") for n in names) == 1
+    assert sum(n.startswith("fig6_a0_") for n in names) == 1
+    assert {"collision_zone.png", "alpha_omega.png"} <= set(names)
+    assert f"wrote 7 figures to {out}" in capsys.readouterr().out
+
+
+def test_only_and_max(fake_store, tmp_path):
+    out = tmp_path / "f"
+    assert main(["figures", str(fake_store), "--out", str(out), "--only", "fig5",
+                 "--max", "3"]) == 0
+    names = _pngs(out)
+    assert len(names) == 3 and all(n.startswith("fig5_") for n in names)
+
+
+def test_bad_figure_arguments_write_nothing(fake_store, tmp_path, capsys):
+    out = tmp_path / "o"
+    assert main(["figures", str(fake_store), "--out", str(out), "--only", "fig4"]) == 2
+    assert "unknown figure kind 'fig4'" in capsys.readouterr().err
+    assert main(["figures", str(fake_store), "--out", str(out), "--max", "0"]) == 2
+    assert "--max 0" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_compact_ice_line_and_zone_dot_follow_eq_25():
+    """The dashed line starts at the W_c dot, a(W_c), and follows 1/a = 1/a_W + alpha_c dx."""
+    import matplotlib.pyplot as plt
+    import pandas as pd
+
+    from sweep.figures import _amplitude, _confined
+
+    x = np.linspace(0.25, 9.75, 20)
+    a = 0.01 / (1 + 3.0 * x)
+    row = pd.Series({"a0": 0.01, "W_c": 4.0, "alpha_c": 50.0})
+    fig, ax = plt.subplots()
+    _amplitude(ax, row, {"x": x, "a": a, "a_stderr": 0.01 * a}, "C0", zone=True)
+    _confined(ax, row, 10.0)
+    lines = ax.get_lines()
+    dot = [ln for ln in lines if ln.get_marker() == "o"][0]
+    dashed = [ln for ln in lines if ln.get_linestyle() == "--"][0]
+    solid = lines[-1]
+    a_w = np.interp(4.0, x, a)
+    assert dot.get_xdata()[0] == 4.0 and dot.get_ydata()[0] == pytest.approx(a_w / 0.01)
+    xd, yd = dashed.get_xdata(), dashed.get_ydata()
+    assert xd[0] == 4.0 and yd[0] == pytest.approx(a_w / 0.01)
+    np.testing.assert_allclose(1 / (yd * 0.01), 1 / a_w + 50.0 * (xd - 4.0), rtol=1e-12)
+    xs, ys = solid.get_xdata(), solid.get_ydata()
+    np.testing.assert_allclose(1 / (ys * 0.01), 1 / 0.01 + 50.0 * xs, rtol=1e-12)  # eq. 25
+    plt.close(fig)
+
+
+def test_figures_from_a_real_store(tmp_path, capsys):
     store = tmp_path / "s.h5"
-    run_campaign(parse_campaign(TOML, "t.toml"), str(store))
+    run_campaign(parse_campaign(REAL, "t.toml"), str(store))
     out = tmp_path / "figs"
     assert main(["figures", str(store), "--out", str(out)]) == 0
-    files = sorted(p.name for p in out.iterdir())
-    # two groups (L_x 1.5 and 3.0, both eps in each) + the collision-zone summary
-    assert len(files) == 3 and "collision_zone.png" in files
-    assert all((out / f).stat().st_size > 5000 for f in files)
-    assert sum(f.startswith("profile_L_x1.5") for f in files) == 1
-    assert main(["figures", str(store), "--out", str(tmp_path / "f1"), "--max", "1"]) == 0
-    assert len(list((tmp_path / "f1").iterdir())) == 2
+    names = _pngs(out)
+    # fig2 and fig3: one per L_x; fig5: one per eps; no fig6 (d_f, a0 fixed); W_c summary;
+    # no alpha_omega (a single T)
+    assert sum(n.startswith("fig2_") for n in names) == 2
+    assert sum(n.startswith("fig3_") for n in names) == 2
+    assert sum(n.startswith("fig5_") for n in names) == 2
+    assert "collision_zone.png" in names and "alpha_omega.png" not in names
+    assert len(names) == 7
 
 
 def test_figures_of_a_missing_store_is_an_error(tmp_path, capsys):

@@ -1,0 +1,236 @@
+"""Collision-zone statistics and alpha(omega) power laws across a campaign (pandas).
+
+Everything here takes the per-point table of :func:`sweep.load` (or any DataFrame with
+the same columns) and returns a new DataFrame; nothing reads profiles.
+
+- :func:`derived` — per point: W_c / L_sheet, alpha_inner / alpha_c,
+  alpha_edge / alpha_inner, the n = 1 (exponential) versus n = 2 (1/a, eq. 25) fit quality.
+- :func:`collision_stats` — the same quantities summarised per group of any swept
+  parameters (``by="eps"``, ``by=["L_x", "dispersion"]``, ...).
+- :func:`alpha_omega` — least-squares power laws ``alpha = c omega^m`` across the wave
+  periods T for every combination of the other swept parameters (the paper's m, §3 and
+  Fig. 1), for the fitted rates and, as the analytic reference, for alpha_c (eq. 24).
+
+Only points with a result (``converged``, ``converged_noisy``, ``not_converged``) enter;
+``failed`` and ``invalid`` rows have no numbers. Ratios whose denominator is zero or NaN
+are NaN and are left out of the group statistics (pandas' skip-NaN aggregation); the
+``n_*`` columns say how many points each statistic rests on.
+"""
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Sequence
+
+import numpy as np
+import pandas as pd
+
+__all__ = ["SWEPT", "RESULT_STATUSES", "derived", "collision_stats", "alpha_omega"]
+
+#: The seven swept parameters of a campaign, in grid order.
+SWEPT = ("L_x", "T", "a0", "C_sd", "eps", "d_f", "dispersion")
+#: Statuses of points that have results.
+RESULT_STATUSES = ("converged", "converged_noisy", "not_converged")
+
+#: Derived per-point quantities and their meaning (the ``derived`` columns).
+DERIVED = {
+    "omega": ("rad s-1", "wave angular frequency 2 pi / T"),
+    "L_sheet": ("m", "length of the ice sheet"),
+    "W_c_rel": ("1", "collision-zone width over sheet length W_c / L_sheet"),
+    "zone_spans_sheet": ("bool", "no pair compacts: the collisional zone is the whole sheet"),
+    "inner_over_c": ("1", "alpha_inner / alpha_c: 1 = confined-ice attenuation (eq. 25)"),
+    "edge_over_inner": ("1", "alpha_edge / alpha_inner: how much faster the edge zone"
+                             " attenuates"),
+    "fit_ratio": ("1", "alpha_exp_resid / alpha_all_resid: > 1 means the 1/a law (n = 2)"
+                       " fits better than the exponential (n = 1)"),
+    "prefers_n2": ("bool", "alpha_all_resid < alpha_exp_resid"),
+}
+
+
+def _ratio(num: pd.Series, den: pd.Series) -> pd.Series:
+    num = num.astype(float)
+    den = den.astype(float)
+    out = num / den.where(den != 0.0)
+    return out.where(np.isfinite(out))
+
+
+def _sheet_lengths(df: pd.DataFrame, L_sheet: float | None) -> pd.Series:
+    if L_sheet is not None:
+        return pd.Series(float(L_sheet), index=df.index)
+    if "L_sheet" in df.columns:
+        return df["L_sheet"].astype(float)
+    if "config_json" not in df.columns:
+        raise ValueError("collision statistics need L_sheet: pass L_sheet=... or a table"
+                         " with the config_json column (sweep.load gives it)")
+    cache: dict[str, float] = {}
+
+    def one(text: str) -> float:
+        if text not in cache:
+            try:
+                cache[text] = float(json.loads(text)["L_sheet"])
+            except (ValueError, KeyError, TypeError):
+                cache[text] = math.nan
+        return cache[text]
+
+    return df["config_json"].map(one).astype(float)
+
+
+def derived(df: pd.DataFrame, *, L_sheet: float | None = None,
+            statuses: Sequence[str] = RESULT_STATUSES) -> pd.DataFrame:
+    """The points of ``df`` with results, plus the columns of :data:`DERIVED`.
+
+    ``L_sheet`` [m] overrides the sheet length read from each row's ``config_json``.
+    """
+    out = df[df["status"].isin(statuses)].copy() if "status" in df.columns else df.copy()
+    out["omega"] = 2.0 * math.pi / out["T"].astype(float)
+    out["L_sheet"] = _sheet_lengths(out, L_sheet)
+    W_c = out["W_c"].astype(float)
+    out["W_c_rel"] = W_c / out["L_sheet"]
+    out["zone_spans_sheet"] = W_c >= out["L_sheet"]
+    out["inner_over_c"] = _ratio(out["alpha_inner"], out["alpha_c"])
+    out["edge_over_inner"] = _ratio(out["alpha_edge"], out["alpha_inner"])
+    out["fit_ratio"] = _ratio(out["alpha_exp_resid"], out["alpha_all_resid"])
+    both = out["alpha_all_resid"].notna() & out["alpha_exp_resid"].notna()
+    out["prefers_n2"] = both & (out["alpha_all_resid"] < out["alpha_exp_resid"])
+    return out
+
+
+def _as_list(by: str | Sequence[str] | None) -> list[str]:
+    if by is None:
+        return []
+    return [by] if isinstance(by, str) else list(by)
+
+
+def collision_stats(df: pd.DataFrame, by: str | Sequence[str] | None = None, *,
+                    L_sheet: float | None = None,
+                    statuses: Sequence[str] = RESULT_STATUSES) -> pd.DataFrame:
+    """Collision-zone statistics of a campaign, one row per group of ``by``.
+
+    Parameters
+    ----------
+    df : the table of :func:`sweep.load` (one row per point).
+    by : swept parameter(s) to group by; ``None`` summarises all points in one row.
+    L_sheet : sheet length [m]; default: from each row's ``config_json``.
+    statuses : which points enter (default: all with results).
+
+    Returns
+    -------
+    DataFrame with the ``by`` columns and
+
+    - ``n_points``, ``n_not_converged``: points in the group, and how many of them hit
+      ``max_iterations`` without converging;
+    - ``W_c_mean``, ``W_c_std``, ``W_c_min``, ``W_c_max`` [m];
+    - ``W_c_rel_mean`` (W_c / L_sheet), ``frac_zone_spans_sheet``;
+    - ``inner_over_c_mean``, ``inner_over_c_median``, ``n_inner_over_c`` (alpha_inner /
+      alpha_c; NaN where the inner zone has < 3 floes);
+    - ``edge_over_inner_mean``, ``edge_over_inner_median``, ``n_edge_over_inner``;
+    - ``frac_prefers_n2`` (share of points where 1/a fits better than the exponential),
+      ``fit_ratio_median`` (alpha_exp_resid / alpha_all_resid), ``alpha_all_resid_median``,
+      ``alpha_exp_resid_median``.
+    """
+    keys = _as_list(by)
+    unknown = [k for k in keys if k not in df.columns]
+    if unknown:
+        raise KeyError(f"collision_stats: no column {unknown[0]!r} to group by")
+    d = derived(df, L_sheet=L_sheet, statuses=statuses)
+    d = d.assign(_nc=(d["status"] == "not_converged") if "status" in d.columns else False,
+                 _all=0)
+    grouped = d.groupby(keys or ["_all"], sort=True, dropna=False)
+    agg = grouped.agg(
+        n_points=("W_c", "size"),
+        n_not_converged=("_nc", "sum"),
+        W_c_mean=("W_c", "mean"), W_c_std=("W_c", "std"),
+        W_c_min=("W_c", "min"), W_c_max=("W_c", "max"),
+        W_c_rel_mean=("W_c_rel", "mean"),
+        frac_zone_spans_sheet=("zone_spans_sheet", "mean"),
+        inner_over_c_mean=("inner_over_c", "mean"),
+        inner_over_c_median=("inner_over_c", "median"),
+        n_inner_over_c=("inner_over_c", "count"),
+        edge_over_inner_mean=("edge_over_inner", "mean"),
+        edge_over_inner_median=("edge_over_inner", "median"),
+        n_edge_over_inner=("edge_over_inner", "count"),
+        frac_prefers_n2=("prefers_n2", "mean"),
+        fit_ratio_median=("fit_ratio", "median"),
+        alpha_all_resid_median=("alpha_all_resid", "median"),
+        alpha_exp_resid_median=("alpha_exp_resid", "median"),
+    ).reset_index()
+    if not keys:
+        agg = agg.drop(columns="_all")
+    agg["n_not_converged"] = agg["n_not_converged"].astype(int)
+    return agg
+
+
+def _power_fit(omega: np.ndarray, alpha: np.ndarray) -> tuple[float, float, float, float]:
+    """(m, c, stderr of m, RMS log residual) of ln alpha = ln c + m ln omega."""
+    lx, ly = np.log(omega), np.log(alpha)
+    A = np.vstack([lx, np.ones_like(lx)]).T
+    (m, lc), *_ = np.linalg.lstsq(A, ly, rcond=None)
+    resid = ly - (m * lx + lc)
+    n = len(lx)
+    rms = float(np.sqrt(np.mean(resid**2)))
+    if n > 2:
+        s2 = float(resid @ resid) / (n - 2)
+        sxx = float(((lx - lx.mean()) ** 2).sum())
+        m_se = math.sqrt(s2 / sxx) if sxx > 0 else math.nan
+    else:
+        m_se = math.nan
+    return float(m), float(math.exp(lc)), m_se, rms
+
+
+def alpha_omega(df: pd.DataFrame, alpha: str = "alpha_inner",
+                by: str | Sequence[str] | None = None, *, min_periods: int = 3,
+                statuses: Sequence[str] = RESULT_STATUSES) -> pd.DataFrame:
+    """Power laws ``alpha = c omega^m`` across wave periods, one row per group.
+
+    Parameters
+    ----------
+    df : the table of :func:`sweep.load`.
+    alpha : the rate to fit: ``alpha_inner`` (default; the compact zone, the paper's
+        comparison with eq. 24), ``alpha_all``, ``alpha_edge``, ``alpha_exp`` or
+        ``alpha_c``.
+    by : the parameters that define a group; default every swept parameter except T
+        that is a column of ``df`` (so each group is one curve alpha(T)). Points of a group
+        that share a T (when ``by`` is coarser) all enter the fit.
+    min_periods : fewer distinct T with a positive, finite alpha give NaN m.
+
+    Returns
+    -------
+    DataFrame with the ``by`` columns and ``m`` (exponent), ``c`` (prefactor, units of
+    alpha times s^m), ``m_stderr`` (least-squares standard error of m; NaN with 2 periods),
+    ``rms_log_resid`` (RMS of ln alpha - fit), ``n_periods`` (distinct T fitted),
+    ``n_points`` (points fitted), ``n_dropped`` (points with alpha <= 0 or NaN, left out:
+    no logarithm), ``omega_min``, ``omega_max`` [rad s-1], and ``m_c``: the same fit of
+    ``alpha_c`` over the same points (the confined-ice exponent, eq. 24-28), for
+    comparison.
+    """
+    if alpha not in df.columns:
+        raise KeyError(f"alpha_omega: no column {alpha!r}")
+    keys = _as_list(by) if by is not None else [k for k in SWEPT if k in df.columns
+                                                and k != "T"]
+    if "T" in keys:
+        raise ValueError("alpha_omega: T is the fitted variable, it cannot be a group key")
+    d = df[df["status"].isin(statuses)] if "status" in df.columns else df
+    rows = []
+    for key, g in (d.groupby(keys, sort=True, dropna=False) if keys else [((), d)]):
+        key = key if isinstance(key, tuple) else (key,)
+        om = 2.0 * math.pi / g["T"].to_numpy(float)
+        al = g[alpha].to_numpy(float)
+        ok = np.isfinite(al) & (al > 0)
+        row = dict(zip(keys, key, strict=True))
+        n_per = int(len(np.unique(om[ok])))
+        if n_per >= min_periods:
+            m, c, m_se, rms = _power_fit(om[ok], al[ok])
+        else:
+            m = c = m_se = rms = math.nan
+        ac = g["alpha_c"].to_numpy(float) if "alpha_c" in g.columns else np.full(len(g), np.nan)
+        okc = ok & np.isfinite(ac) & (ac > 0)
+        m_c = (_power_fit(om[okc], ac[okc])[0]
+               if len(np.unique(om[okc])) >= min_periods else math.nan)
+        row.update(m=m, c=c, m_stderr=m_se, rms_log_resid=rms, n_periods=n_per,
+                   n_points=int(ok.sum()), n_dropped=int((~ok).sum()),
+                   omega_min=float(om[ok].min()) if ok.any() else math.nan,
+                   omega_max=float(om[ok].max()) if ok.any() else math.nan, m_c=m_c)
+        rows.append(row)
+    cols = keys + ["m", "c", "m_stderr", "rms_log_resid", "n_periods", "n_points",
+                   "n_dropped", "omega_min", "omega_max", "m_c"]
+    return pd.DataFrame(rows, columns=cols)

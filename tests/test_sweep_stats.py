@@ -1,0 +1,132 @@
+"""sweep.collision_stats / alpha_omega on a hand-built store whose answers are known.
+
+The store is computed by ``sweep.testing:power_point`` (rates set by formula, see its
+docstring), so every statistic below has an exact expected value.
+"""
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from sweep import alpha_omega, collision_stats, derived, load, parse_campaign, run_campaign
+from sweep.testing import POWER_M
+
+TOML = """\
+[base]
+L_sheet = 6.0
+[sweep]
+L_x = [0.5, 1.0]
+T = [1.0, 1.5, 2.0]
+eps = [0.2, 0.8]
+d_f = [0.005, 0.02]
+dispersion = ["ep", "ml"]
+"""
+
+
+@pytest.fixture(scope="module")
+def table(tmp_path_factory):
+    store = tmp_path_factory.mktemp("stats") / "s.h5"
+    run_campaign(parse_campaign(TOML, "t.toml"), str(store), compute="sweep.testing:power_point")
+    return load(store)
+
+
+def test_derived_columns_per_point(table):
+    d = derived(table)
+    assert len(d) == 48
+    np.testing.assert_allclose(d["L_sheet"], 6.0)
+    np.testing.assert_allclose(d["omega"], 2 * np.pi / d["T"])
+    np.testing.assert_allclose(d["W_c_rel"], np.minimum(10 * d["eps"] * d["L_x"], 6.0) / 6.0)
+    np.testing.assert_allclose(d["inner_over_c"], 1 + d["eps"], rtol=1e-12)
+    np.testing.assert_allclose(d["edge_over_inner"], 2 + 100 * d["d_f"], rtol=1e-12)
+    assert (d["prefers_n2"] == (d["eps"] < 0.5)).all()
+    assert (d["zone_spans_sheet"] == ((d["eps"] == 0.8) & (d["L_x"] == 1.0))).all()
+    # an explicit sheet length overrides config_json
+    np.testing.assert_allclose(derived(table, L_sheet=12.0)["W_c_rel"], d["W_c_rel"] / 2)
+
+
+def test_collision_stats_by_eps(table):
+    s = collision_stats(table, by="eps").set_index("eps")
+    assert list(s.index) == [0.2, 0.8]
+    for col in ("n_points", "n_not_converged", "W_c_mean", "W_c_std", "W_c_rel_mean",
+                "frac_zone_spans_sheet", "inner_over_c_mean", "inner_over_c_median",
+                "edge_over_inner_mean", "frac_prefers_n2", "fit_ratio_median"):
+        assert col in s.columns, col
+    assert s.loc[0.2, "n_points"] == 24 and s.loc[0.8, "n_points"] == 24
+    assert s.loc[0.2, "n_not_converged"] == 0 and s.loc[0.8, "n_not_converged"] == 24
+    assert s.loc[0.2, "W_c_mean"] == pytest.approx(1.5)       # mean of 2 * 0.5, 2 * 1.0
+    assert s.loc[0.8, "W_c_mean"] == pytest.approx(5.0)       # 4 and 8 capped at 6
+    assert s.loc[0.8, "W_c_rel_mean"] == pytest.approx(5.0 / 6.0)
+    assert s.loc[0.8, "frac_zone_spans_sheet"] == pytest.approx(0.5)
+    assert s.loc[0.2, "inner_over_c_mean"] == pytest.approx(1.2)
+    assert s.loc[0.8, "inner_over_c_median"] == pytest.approx(1.8)
+    assert s.loc[0.2, "edge_over_inner_mean"] == pytest.approx(3.25)   # (2.5 + 4) / 2
+    assert s.loc[0.2, "frac_prefers_n2"] == 1.0 and s.loc[0.8, "frac_prefers_n2"] == 0.0
+    assert s.loc[0.2, "fit_ratio_median"] == pytest.approx(1.2)
+    assert s.loc[0.8, "fit_ratio_median"] == pytest.approx(0.5)
+
+
+def test_collision_stats_grouped_by_two_and_by_none(table):
+    s = collision_stats(table, by=["L_x", "dispersion"])
+    assert len(s) == 4 and set(s["n_points"]) == {12}
+    one = s[(s["L_x"] == 1.0) & (s["dispersion"] == "ml")].iloc[0]
+    assert one["W_c_mean"] == pytest.approx((2.0 + 6.0) / 2)
+    total = collision_stats(table)
+    assert len(total) == 1 and total["n_points"].iloc[0] == 48
+    assert "eps" not in total.columns
+    with pytest.raises(KeyError, match="nope"):
+        collision_stats(table, by="nope")
+
+
+def test_failed_and_invalid_points_are_left_out(table):
+    bad = table.iloc[:2].copy()
+    bad["status"] = ["failed", "invalid"]
+    bad[["W_c", "alpha_inner", "alpha_c"]] = np.nan
+    mixed = pd.concat([table, bad], ignore_index=True)
+    assert collision_stats(mixed)["n_points"].iloc[0] == 48
+    assert len(derived(mixed)) == 48
+
+
+def test_alpha_omega_recovers_the_exponents(table):
+    r = alpha_omega(table)
+    assert list(r.columns[:5]) == ["L_x", "a0", "C_sd", "eps", "d_f"]
+    assert len(r) == 2 * 2 * 2 * 2                      # L_x x eps x d_f x dispersion
+    for disp, m in POWER_M.items():
+        sub = r[r["dispersion"] == disp]
+        if sub.empty:
+            continue
+        np.testing.assert_allclose(sub["m"], m, atol=1e-10)
+        np.testing.assert_allclose(sub["m_c"], m, atol=1e-10)    # alpha_c = alpha / (1+eps)
+        assert (sub["rms_log_resid"] < 1e-10).all()
+        assert (sub["n_periods"] == 3).all() and (sub["n_dropped"] == 0).all()
+        np.testing.assert_allclose(sub["c"], 0.05, rtol=1e-9)     # C_sd default 0.05
+    assert r["omega_min"].iloc[0] == pytest.approx(math.pi)
+    assert r["omega_max"].iloc[0] == pytest.approx(2 * math.pi)
+
+
+def test_alpha_omega_coarser_groups_pool_points(table):
+    r = alpha_omega(table, by="dispersion").set_index("dispersion")
+    assert r.loc["ep", "n_points"] == 24 and r.loc["ep", "m"] == pytest.approx(2.0)
+    assert r.loc["ml", "m"] == pytest.approx(6.0)
+    # alpha_edge = (2 + 100 d_f) alpha_inner: pooled over d_f the exponent stays, the
+    # scatter shows in the residual and the standard error
+    e = alpha_omega(table, alpha="alpha_edge", by="dispersion").set_index("dispersion")
+    assert e.loc["ep", "m"] == pytest.approx(2.0)
+    assert e.loc["ep", "rms_log_resid"] > 0.1 and e.loc["ep", "m_stderr"] > 0
+
+
+def test_alpha_omega_drops_nonpositive_rates_and_needs_enough_periods(table):
+    t = table.copy()
+    first_ep = t.index[t["dispersion"] == "ep"]
+    t.loc[first_ep, "alpha_inner"] = np.where(t.loc[first_ep, "T"] == 2.0, -1.0,
+                                              t.loc[first_ep, "alpha_inner"])
+    r = alpha_omega(t, by="dispersion").set_index("dispersion")
+    assert r.loc["ep", "n_dropped"] == 8 and r.loc["ep", "n_periods"] == 2
+    assert math.isnan(r.loc["ep", "m"])                          # 2 periods < 3
+    assert math.isnan(r.loc["ep", "m_c"])                        # same points as m
+    assert alpha_omega(t, by="dispersion", min_periods=2).set_index(
+        "dispersion").loc["ep", "m"] == pytest.approx(2.0)
+    with pytest.raises(ValueError, match="T is the fitted variable"):
+        alpha_omega(t, by=["T"])
+    with pytest.raises(KeyError, match="alpha_x"):
+        alpha_omega(t, alpha="alpha_x")
