@@ -97,6 +97,15 @@ CONFIGS = {
                 eps=[0.6], d_f=[0.005], dispersion=["ml"]),
         run='name = "fig6b"\ndescription = "Herman et al. 2019 Fig. 6b: incident amplitude,'
             ' two periods"'),
+    "periods": dict(header="""
+# alpha(omega): every campaign period T = 1.1 ... 2.0 s for the three dispersion relations at
+# the Fig. 2 setup (L_x = 0.5 m, a0 = 0.0125 m, d_f = 0.005 m, C_sd = 0.05) with eps = 0.6.
+# 21 points. `sweep figures` draws alpha(omega) with the fitted exponents m
+# (alpha_omega.png); `sweep.alpha_omega(sweep.load(store))` gives them as a table.
+""", sweep=dict(L_x=[0.5], T=[1.1, 1.2, 1.4, 1.5, 1.6, 1.8, 2.0], a0=[0.0125], C_sd=[0.05],
+                eps=[0.6], d_f=[0.005], dispersion=["ep", "ow", "ml"]),
+        run='name = "periods"\ndescription = "alpha(omega) across the campaign periods, EP,'
+            ' OW and ML"'),
 }
 
 

@@ -341,7 +341,8 @@ def summary(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> lis
             label = ", ".join(_fmt(k, fit[k]) for k in by if df[k].nunique() > 1) or "all"
             ax.loglog(om, pts[rate], "o", color=colour,
                       label=f"{label}: m = {fit['m']:.2f} ± {fit['m_stderr']:.2f}")
-            ax.loglog(om, fit["c"] * om ** fit["m"], "-", color=colour, lw=1)
+            ok = (om >= fit["omega_min"]) & (om <= fit["omega_max"])
+            ax.loglog(om[ok], fit["c"] * om[ok] ** fit["m"], "-", color=colour, lw=1)
             ax.loglog(om, pts["alpha_c"], "x--", color=colour, lw=0.8, ms=4,
                       label=f"  α_c (eq. 24): m = {fit['m_c']:.2f}")
         from matplotlib.ticker import ScalarFormatter
@@ -349,7 +350,7 @@ def summary(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> lis
         for axis in (ax.xaxis, ax.yaxis):
             axis.set_major_formatter(ScalarFormatter())
             axis.set_minor_formatter(ScalarFormatter())
-        ax.tick_params(which="minor", labelsize=7)
+        ax.tick_params(which="both", labelsize=7)
         same = [k for k in by if df[k].nunique() == 1]
         ax.set_title(_title(same, [df[k].iloc[0] for k in same]), fontsize=8)
         ax.set_xlabel("angular frequency ω [rad s⁻¹]")
