@@ -24,7 +24,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ._exact import drag_force_exact, drag_sums_exact
+from ._exact import drag_force_exact, drag_pass_exact, drag_sums_exact
 
 JIT = dict(cache=True, fastmath=True, nogil=True)
 
@@ -48,6 +48,10 @@ ST_FW = 5        # sum over steps of |F_w,i|                        [N]
 ST_FC = 6        # sum over steps of |net contact force on i|       [N]
 ST_FD = 7        # sum over steps of |F_d,i|                        [N]
 N_STATS = 8
+
+# steps of the plain per-floe drag loop after a two-pass step that found >3/4 of the floes
+# needing the general evaluation (see advance)
+TWO_PASS_RETRY = 64
 
 
 class KernelParams(NamedTuple):
@@ -132,6 +136,150 @@ def drag_force_sum(A, c, s, v, cxi, sxi):
     return s2
 
 
+# entries of the cell-table moments of :func:`drag_tables`
+M_N = 0          # number of cells n_x
+M_CB = 1         # mean of cxi
+M_SB = 2         # mean of sxi
+M_VCC = 3        # sum (cxi - M_CB)^2
+M_VCS = 4        # sum (cxi - M_CB)(sxi - M_SB)
+M_VSS = 5        # sum (sxi - M_SB)^2
+M_TCCC = 6       # third central moments: sum dc^3, dc^2 ds, dc ds^2, ds^3
+M_TCCS = 7
+M_TCSS = 8
+M_TSSS = 9
+M_CMAX = 10      # cos h (h: offset of the outer cell midpoints), -2 if h >= pi
+M_CH = 11        # cos h
+M_SH = 12        # sin h
+M_FAST = 13      # 1: closed form for one-sign floes usable (tables as built by FloeChain)
+N_MOM = 14
+
+
+@njit(**JIT)
+def drag_tables(cxi, sxi, P):
+    """Moments of the cell tables for the closed-form sums of one-sign floes
+    (:func:`drag_pass`); built once per :func:`advance` call."""
+    n = cxi.shape[0]
+    mom = np.zeros(N_MOM)
+    cb = 0.0
+    sb = 0.0
+    for j in range(n):
+        cb += cxi[j]
+        sb += sxi[j]
+    cb /= n
+    sb /= n
+    for j in range(n):
+        dc = cxi[j] - cb
+        ds = sxi[j] - sb
+        mom[M_VCC] += dc * dc
+        mom[M_VCS] += dc * ds
+        mom[M_VSS] += ds * ds
+        mom[M_TCCC] += dc * dc * dc
+        mom[M_TCCS] += dc * dc * ds
+        mom[M_TCSS] += dc * ds * ds
+        mom[M_TSSS] += ds * ds * ds
+    mom[M_N] = n
+    mom[M_CB] = cb
+    mom[M_SB] = sb
+    # the cells are at offsets k xi_j in [-h, h], h = k (L_x - dx) / 2 (tables of
+    # FloeChain: cxi = cos(k xi), sxi = sin(k xi), symmetric; anything else: no fast path)
+    h = 0.5 * P.k * P.L_x * (n - 1) / n
+    ch = cxi[n - 1]
+    sh = sxi[n - 1]
+    fast = 1.0
+    if (abs(math.cos(h) - ch) > 1e-9 or abs(math.sin(h) - sh) > 1e-9
+            or abs(cxi[0] - ch) > 1e-9 or abs(sxi[0] + sh) > 1e-9):
+        fast = 0.0
+    mom[M_CH] = ch
+    mom[M_SH] = sh
+    mom[M_CMAX] = ch if h < math.pi - 1e-6 else -2.0
+    mom[M_FAST] = fast
+    return mom
+
+
+@njit(**JIT)
+def drag_pass(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc, idx):
+    """Quadrature drag sums of every floe (:func:`drag_sums` / :func:`drag_force_sum`);
+    returns the number of floes that needed the cell loop.
+
+    ``theta_i`` from ``ck, sk = cos, sin(k x_i)`` and ``cwt, swt = cos, sin(omega t)``;
+    fills ``sc[0], sc[1] = cos, sin theta_i``, ``sc[2] = s2``, ``sc[3] = s3`` (only if
+    ``accumulate``); ``sc[4]``, ``idx``: scratch; ``mom`` from :func:`drag_tables`.
+
+    Two passes: a branch-free (vectorised) loop over all floes bounds u_rel on the floe
+    (the cosine over the span [theta - h, theta + h] lies between its end values, or
+    reaches +-1 inside) and evaluates the sums of the floes where u_rel has one sign in
+    closed form from the table moments: with mu the mean of u_j and d_j = u_j - mu,
+    ``sum u^2 = n mu^2 + sum d^2``, ``sum u^3 = n mu^3 + 3 mu sum d^2 + sum d^3``
+    (sums of non-negative terms up to the small third moment: no cancellation; equal to
+    the cell loop to rounding). Only the other floes run the cell loop.
+    """
+    n = ck.shape[0]
+    nn = mom[M_N]
+    cb = mom[M_CB]
+    sbb = mom[M_SB]
+    vcc = mom[M_VCC]
+    vcs = mom[M_VCS]
+    vss = mom[M_VSS]
+    tccc = mom[M_TCCC]
+    tccs = mom[M_TCCS]
+    tcss = mom[M_TCSS]
+    tsss = mom[M_TSSS]
+    ch = mom[M_CH]
+    sh = mom[M_SH]
+    cmax = mom[M_CMAX]
+    ua = P.u_amp
+    for i in range(n):
+        c = ck[i] * cwt + sk[i] * swt
+        s = sk[i] * cwt - ck[i] * swt
+        sc[0, i] = c
+        sc[1, i] = s
+        A = a[i] * ua
+        v = vs[i]
+        X = A * c
+        Y = A * s
+        # range of A cos over the span: the ends, and A (-A) if cos = 1 (-1) inside it
+        e1 = X * ch + Y * sh
+        e2 = X * ch - Y * sh
+        hi = max(e1, e2)
+        lo = min(e1, e2)
+        if c >= cmax:
+            hi = max(hi, A)
+            lo = min(lo, A)
+        if -c >= cmax:
+            hi = max(hi, -A)
+            lo = min(lo, -A)
+        w1 = hi - v
+        w2 = lo - v
+        sig = 1.0 if w1 > 0.0 else -1.0
+        mu = X * cb - Y * sbb - v
+        d2 = X * X * vcc - 2.0 * X * Y * vcs + Y * Y * vss
+        sc[2, i] = sig * (nn * mu * mu + d2)
+        if accumulate:
+            d3 = (X * X * X * tccc - 3.0 * X * X * Y * tccs
+                  + 3.0 * X * Y * Y * tcss - Y * Y * Y * tsss)
+            sc[3, i] = sig * (nn * mu * mu * mu + 3.0 * mu * d2 + d3)
+        sc[4, i] = 1.0 if w1 * w2 > 0.0 else 0.0
+    m = 0
+    if mom[M_FAST] > 0.5:
+        for i in range(n):      # branch-free compaction of the floes for the cell loop
+            idx[m] = i
+            m += 0 if sc[4, i] > 0.5 else 1
+    else:
+        for i in range(n):
+            idx[i] = i
+        m = n
+    for t in range(m):
+        i = idx[t]
+        A = a[i] * ua
+        if accumulate:
+            s2, s3 = drag_sums(A, sc[0, i], sc[1, i], vs[i], cxi, sxi)
+            sc[2, i] = s2
+            sc[3, i] = s3
+        else:
+            sc[2, i] = drag_force_sum(A, sc[0, i], sc[1, i], vs[i], cxi, sxi)
+    return m
+
+
 @njit(**JIT)
 def floe_drag(A, c, s, v, accumulate, P, cxi, sxi):
     """(s2, s3): drag sums of one floe, by quadrature or exactly; s3 = 0 unless
@@ -160,7 +308,7 @@ def wave_drag_update(i, x, a, s, s2, s3, P, F, accumulate, stats):
 
 @njit(**JIT)
 def eval_forces(x, vs, a, x0, ck, sk, cwt, swt, P, cxi, sxi, F, in_contact, accumulate,
-                stats):
+                stats, mom, sc, idx, two_pass):
     """Total force of eq. 8 scaled to the left-hand side, (1 + C_m) F_w + F_d + F_c + F_s,
     on every floe at positions ``x`` and velocities ``vs``.
 
@@ -168,11 +316,25 @@ def eval_forces(x, vs, a, x0, ck, sk, cwt, swt, P, cxi, sxi, F, in_contact, accu
     cwt, swt = cos, sin(omega t): cos theta = ck cwt + sk swt, sin theta = sk cwt - ck swt.
     Fills ``F`` [N]; when ``accumulate``, adds this step to ``stats`` and counts contact
     onsets against ``in_contact`` (always updated).
+
+    ``two_pass``: drag by :func:`drag_pass` / :func:`~floewave._exact.drag_pass_exact`
+    (``mom``, scratch ``sc``, ``idx``); returns the number of floes that needed the general
+    evaluation (-1 without ``two_pass``: one loop over the floes).
     """
     n = x.shape[0]
+    m = -1
     # wave (Froude-Krylov) + ice-water drag, per floe; one loop per drag mode so that the
     # quadrature loop stays free of the exact mode's code (measured: 35 % faster)
-    if P.drag == DRAG_EXACT:
+    if two_pass:
+        if P.drag == DRAG_EXACT:
+            m = drag_pass_exact(ck, sk, cwt, swt, a, P.u_amp, vs, P.geom, accumulate, sc,
+                                idx)
+        else:
+            m = drag_pass(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc, idx)
+        for i in range(n):
+            wave_drag_update(i, x, a, sc[1, i], sc[2, i], sc[3, i], P, F, accumulate,
+                             stats)
+    elif P.drag == DRAG_EXACT:
         for i in range(n):
             c = ck[i] * cwt + sk[i] * swt
             s = sk[i] * cwt - ck[i] * swt
@@ -215,6 +377,7 @@ def eval_forces(x, vs, a, x0, ck, sk, cwt, swt, P, cxi, sxi, F, in_contact, accu
     # edge springs (boom and beach) on the first and last floe
     F[0] -= P.k_s * (x[0] - x0[0])
     F[n - 1] -= P.k_s * (x[n - 1] - x0[n - 1])
+    return m
 
 
 @njit(**JIT)
@@ -226,7 +389,7 @@ def initial_acceleration(x, u, a, x0, istep, P, cxi, sxi, acc, in_contact):
     ck = np.cos(P.k * x)
     sk = np.sin(P.k * x)
     eval_forces(x, u, a, x0, ck, sk, math.cos(wt), math.sin(wt), P, cxi, sxi, F, in_contact,
-                False, dummy)
+                False, dummy, np.zeros(N_MOM), dummy, np.zeros(0, np.int64), False)
     for i in range(x.shape[0]):
         acc[i] = F[i] * P.inv_mass
 
@@ -251,6 +414,13 @@ def advance(x, u, acc, a, x0, in_contact, istep, nsteps, accumulate, P, cxi, sxi
 
     cos, sin(k x_i) are computed once per call and then rotated by k dx_i each step
     (Taylor series of the rotation to O((k dx)^4), k dx ~ 1e-5: exact to rounding).
+
+    The drag is evaluated in two passes (:func:`drag_pass`, :func:`~floewave._exact.
+    drag_pass_exact`: closed forms for the floes where they apply, vectorised over floes,
+    the general evaluation only for the others) unless a step finds more than 3/4 of the
+    floes needing the general one (long floes: one-sign floes are rare there); then the
+    plain per-floe loop is used for TWO_PASS_RETRY steps before the next two-pass trial.
+    Same results to rounding either way.
     """
     n = x.shape[0]
     dt = P.dt
@@ -263,6 +433,13 @@ def advance(x, u, acc, a, x0, in_contact, istep, nsteps, accumulate, P, cxi, sxi
         ck[i] = math.cos(P.k * x[i])
         sk[i] = math.sin(P.k * x[i])
     two_pi_nt = 2.0 * math.pi / P.n_t
+    # drag in two passes (closed form where it applies, the general evaluation for the
+    # rest) unless most floes need the general one (long floes): then the plain per-floe
+    # loop, and a new two-pass trial every TWO_PASS_RETRY steps
+    mom = drag_tables(cxi, sxi, P)
+    sc = np.zeros((5, n))
+    idx = np.zeros(n, np.int64)
+    wait = 0
     for _ in range(nsteps):
         istep += 1
         for i in range(n):
@@ -281,8 +458,12 @@ def advance(x, u, acc, a, x0, in_contact, istep, nsteps, accumulate, P, cxi, sxi
             sk[i] = sk[i] * ce + ck[i] * se
             ck[i] = c_new
         wt = two_pi_nt * (istep % P.n_t)
-        eval_forces(x, vs, a, x0, ck, sk, math.cos(wt), math.sin(wt), P, cxi, sxi, F,
-                    in_contact, accumulate, stats)
+        m = eval_forces(x, vs, a, x0, ck, sk, math.cos(wt), math.sin(wt), P, cxi, sxi, F,
+                        in_contact, accumulate, stats, mom, sc, idx, wait == 0)
+        if m < 0:
+            wait -= 1
+        elif 4 * m > 3 * n:
+            wait = TWO_PASS_RETRY
         for i in range(n):
             acc[i] = F[i] * P.inv_mass
             u[i] = uh[i] + 0.5 * dt * acc[i]
