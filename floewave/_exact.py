@@ -67,7 +67,9 @@ import math
 
 from numba import njit
 
-JIT = dict(cache=True, fastmath=True, nogil=True)
+# no allocation anywhere here: compiled without numba's reference counting (see JITN in
+# floewave._kernels: the NRT incref/decref of array arguments cost ~15 % of a time step)
+JIT = dict(cache=True, fastmath=True, nogil=True, _nrt=False)
 
 __all__ = ["exact_geometry", "drag_integrals", "drag_sums_exact", "drag_force_exact",
            "drag_sums_exact_phase", "drag_pass_exact"]

@@ -27,6 +27,12 @@ from numba import njit
 from ._exact import drag_force_exact, drag_pass_exact, drag_sums_exact
 
 JIT = dict(cache=True, fastmath=True, nogil=True)
+# Functions called every step that never allocate: compiled without numba's reference
+# counting (``_nrt=False``). With it, every call of eval_forces paid ~40 atomic NRT
+# incref/decref operations on its array arguments: measured ~110 ns per step, 15 % of a step
+# of 84 floes (benchmarks/bench_kernel.py, 2026-11-22). Such a function must not create or
+# return arrays (numba refuses to compile one that does).
+JITN = dict(JIT, _nrt=False)
 
 # option codes (decided once from ModelConfig)
 CONTACT_HERTZ_DISK = 0
@@ -81,7 +87,7 @@ class KernelParams(NamedTuple):
     geom: tuple        # floewave._exact.exact_geometry(k L_x, n_x) (used when drag = EXACT)
 
 
-@njit(**JIT)
+@njit(**JITN)
 def contact_stiffness(delta, P):
     """k_n for overlap ``delta`` [N m^-1] (MODEL.md §3: hertz_disk f(s) or linear)."""
     if P.contact == CONTACT_LINEAR:
@@ -91,7 +97,7 @@ def contact_stiffness(delta, P):
     return P.kn_disk * f
 
 
-@njit(**JIT)
+@njit(**JITN)
 def contact_force(delta, v_n, P):
     """Normal contact force [N] pushing a pair apart: F = k_n delta - gamma_n v_n.
 
@@ -109,7 +115,7 @@ def contact_force(delta, v_n, P):
     return F
 
 
-@njit(**JIT)
+@njit(**JITN)
 def drag_sums(A, c, s, v, cxi, sxi):
     """Sums over the floe-bottom cells of |u_rel| u_rel and |u_rel|^3 (eqs. 15, 19).
 
@@ -126,7 +132,7 @@ def drag_sums(A, c, s, v, cxi, sxi):
     return s2, s3
 
 
-@njit(**JIT)
+@njit(**JITN)
 def drag_force_sum(A, c, s, v, cxi, sxi):
     """Sum over the floe-bottom cells of |u_rel| u_rel only (see :func:`drag_sums`)."""
     s2 = 0.0
@@ -196,7 +202,7 @@ def drag_tables(cxi, sxi, P):
     return mom
 
 
-@njit(**JIT)
+@njit(**JITN)
 def drag_pass(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc, idx):
     """Quadrature drag sums of every floe (:func:`drag_sums` / :func:`drag_force_sum`);
     returns the number of floes that needed the cell loop.
@@ -280,7 +286,7 @@ def drag_pass(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc, idx):
     return m
 
 
-@njit(**JIT)
+@njit(**JITN)
 def floe_drag(A, c, s, v, accumulate, P, cxi, sxi):
     """(s2, s3): drag sums of one floe, by quadrature or exactly; s3 = 0 unless
     ``accumulate`` (the |u_rel|^3 sum is only needed in averaging windows)."""
@@ -293,7 +299,7 @@ def floe_drag(A, c, s, v, accumulate, P, cxi, sxi):
     return drag_force_sum(A, c, s, v, cxi, sxi), 0.0
 
 
-@njit(**JIT)
+@njit(**JITN)
 def wave_drag_update(i, x, a, s, s2, s3, P, F, accumulate, stats):
     """F_i = (1 + C_m) F_w,i + F_d,i from sin(theta_i) = ``s`` and the drag sums; stats."""
     Fw = P.c_wave * a[i] * s
@@ -306,7 +312,7 @@ def wave_drag_update(i, x, a, s, s2, s3, P, F, accumulate, stats):
         stats[ST_FD, i] += abs(Fd)
 
 
-@njit(**JIT)
+@njit(**JITN)
 def eval_forces(x, vs, a, x0, ck, sk, cwt, swt, P, cxi, sxi, F, in_contact, accumulate,
                 stats, mom, sc, idx, two_pass):
     """Total force of eq. 8 scaled to the left-hand side, (1 + C_m) F_w + F_d + F_c + F_s,
