@@ -15,9 +15,12 @@ everything else fixed, so a store of any campaign gives whatever figures its gri
           Groups: (T, a0, C_sd, eps, d_f).
 ``fig6``  a/a0 for each d_f (``fig6_df_*``) and for each a0 (``fig6_a0_*``), one panel per wave
           period. Groups: (L_x, a0 or d_f, C_sd, eps, dispersion).
-``summary``  ``collision_zone.png`` (W_c versus eps) and ``alpha_omega.png`` (alpha_inner, or
-          alpha_all where no point has an inner zone, and alpha_c versus omega with the fitted
-          exponents m, :func:`sweep.alpha_omega`; groups with >= 3 periods).
+``summary``  ``collision_zone.png`` (W_c versus eps), ``collision_stats.png`` (W_c / L_sheet and
+          alpha_inner / alpha_c versus eps per floe size and dispersion relation, pooled over
+          the other parameters, :func:`sweep.collision_stats`) and ``alpha_omega.png``
+          (alpha_inner, or alpha_all where no point has an inner zone, and alpha_c versus
+          omega with the fitted exponents m, :func:`sweep.alpha_omega`; groups with >= 3
+          periods).
 
 The number of figures per kind is capped (``--max``); groups closest to the paper's
 reference setup (L_x = 0.5 m, T = 1.2 s, a0 = 0.0125 m, C_sd = 0.05, eps = 0.6,
@@ -35,7 +38,7 @@ import pandas as pd
 
 from .analysis import load, load_profile
 from .errors import ConfigError
-from .stats import RESULT_STATUSES, SWEPT, alpha_omega, derived
+from .stats import RESULT_STATUSES, SWEPT, alpha_omega, collision_stats, derived
 
 __all__ = ["make_figures", "KINDS", "PAPER_SETUP"]
 
@@ -320,6 +323,8 @@ def summary(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> lis
         if vary:
             ax.legend(fontsize=7)
         _save(fig, out / "collision_zone.png", written)
+    if df["eps"].nunique() > 1:
+        written += _collision_stats_figure(df, out)
     rate = "alpha_inner"
     fits = alpha_omega(df, rate)
     if not np.isfinite(fits["m"]).any():     # no inner zone anywhere: fit all floes
@@ -358,6 +363,46 @@ def summary(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> lis
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=6)
         _save(fig, out / "alpha_omega.png", written)
+    return written
+
+
+def _collision_stats_figure(df: pd.DataFrame, out: Path) -> list[Path]:
+    """``collision_stats.png``: W_c / L_sheet and alpha_inner / alpha_c versus eps per floe
+    size and dispersion relation, pooled over every other swept parameter
+    (:func:`sweep.collision_stats`; bars: +-1 standard deviation over the pooled points)."""
+    import matplotlib.pyplot as plt
+
+    st = collision_stats(df, by=["L_x", "dispersion", "eps"])
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11.5, 4.0), constrained_layout=True)
+    curves = sorted({(r.L_x, r.dispersion) for r in st.itertuples()},
+                    key=lambda c: (c[0], DISP_ORDER.index(c[1]) if c[1] in DISP_ORDER else 9))
+    sizes = sorted({c[0] for c in curves})
+    colours = dict(zip(sizes, _colours(len(sizes)), strict=True))
+    d = derived(df)
+    for L_x, disp in curves:
+        sub = st[(st["L_x"] == L_x) & (st["dispersion"] == disp)].sort_values("eps")
+        pts = d[(d["L_x"] == L_x) & (d["dispersion"] == disp)]
+        spread = pts.groupby("eps")["W_c_rel"].std().reindex(sub["eps"]).fillna(0.0)
+        label = f"L_x = {L_x:g} m, {str(disp).upper()}"
+        ax1.errorbar(sub["eps"], sub["W_c_rel_mean"], yerr=spread.to_numpy(), fmt="o",
+                     ls=DISP_STYLE.get(disp, "-"), color=colours[L_x], ms=4, lw=1.2,
+                     capsize=2, label=label)
+        ax2.plot(sub["eps"], sub["inner_over_c_median"], "o", ls=DISP_STYLE.get(disp, "-"),
+                 color=colours[L_x], ms=4, lw=1.2, label=label)
+    n = int(st["n_points"].sum())
+    ax1.set_ylabel("collision-zone width / sheet length W_c / L_sheet [–]")
+    ax1.set_title(f"(a) mean ± std over the other parameters ({n} points)", loc="left",
+                  fontsize=9)
+    ax2.axhline(1.0, color="k", lw=0.8, ls=":")
+    ax2.set_ylabel("α_inner / α_c (median) [–]")
+    ax2.set_title("(b) inner zone versus confined ice (1 = eq. 25)", loc="left", fontsize=9)
+    for ax in (ax1, ax2):
+        ax.set_xlabel("restitution coefficient ε [–]")
+        ax.grid(alpha=0.3)
+    handles, labels = ax1.get_legend_handles_labels()
+    fig.legend(handles, labels, fontsize=7, loc="outside right upper")
+    written: list[Path] = []
+    _save(fig, out / "collision_stats.png", written)
     return written
 
 

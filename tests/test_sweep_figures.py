@@ -54,16 +54,16 @@ def test_every_kind_from_a_hand_built_store(fake_store, tmp_path, capsys):
     out = tmp_path / "figs"
     assert main(["figures", str(fake_store), "--out", str(out), "--max", "1"]) == 0
     names = _pngs(out)
-    # one per kind (fig6: one per d_f and one per a0) + the two summary figures
-    assert len(names) == 7, names
+    # one per kind (fig6: one per d_f and one per a0) + the three summary figures
+    assert len(names) == 8, names
     # groups closest to the paper's setup come first (only T differs: 1.0 sorts first)
     assert "fig2_L_x0.5_T1.0_a00.0125_C_sd0.05_d_f0.005.png" in names
     assert "fig3_L_x0.5_T1.0_a00.0125_C_sd0.05_d_f0.005_dispersionml.png" in names
     assert sum(n.startswith("fig5_") for n in names) == 1
     assert sum(n.startswith("fig6_df_") for n in names) == 1
     assert sum(n.startswith("fig6_a0_") for n in names) == 1
-    assert {"collision_zone.png", "alpha_omega.png"} <= set(names)
-    assert f"wrote 7 figures to {out}" in capsys.readouterr().out
+    assert {"collision_zone.png", "collision_stats.png", "alpha_omega.png"} <= set(names)
+    assert f"wrote 8 figures to {out}" in capsys.readouterr().out
 
 
 def test_only_and_max(fake_store, tmp_path):
@@ -116,13 +116,14 @@ def test_figures_from_a_real_store(tmp_path, capsys):
     out = tmp_path / "figs"
     assert main(["figures", str(store), "--out", str(out)]) == 0
     names = _pngs(out)
-    # fig2 and fig3: one per L_x; fig5: one per eps; no fig6 (d_f, a0 fixed); W_c summary;
-    # no alpha_omega (a single T)
+    # fig2 and fig3: one per L_x; fig5: one per eps; no fig6 (d_f, a0 fixed); W_c and
+    # collision-statistics summaries; no alpha_omega (a single T)
     assert sum(n.startswith("fig2_") for n in names) == 2
     assert sum(n.startswith("fig3_") for n in names) == 2
     assert sum(n.startswith("fig5_") for n in names) == 2
     assert "collision_zone.png" in names and "alpha_omega.png" not in names
-    assert len(names) == 7
+    assert "collision_stats.png" in names
+    assert len(names) == 8
 
 
 def test_figures_of_a_missing_store_is_an_error(tmp_path, capsys):
