@@ -72,7 +72,7 @@ from numba import njit
 JIT = dict(cache=True, fastmath=True, nogil=True, _nrt=False)
 
 __all__ = ["exact_geometry", "drag_integrals", "drag_sums_exact", "drag_force_exact",
-           "drag_sums_exact_phase", "drag_pass_exact"]
+           "drag_sums_exact_phase", "drag_pass_exact", "general_floes"]
 
 _TWO_PI = 2.0 * math.pi
 # half-width below which s = n_x f(theta) exactly: the floe average differs from the centre
@@ -423,6 +423,23 @@ def drag_sums_exact_phase(A, theta, v, kL, n_x):
 
 
 @njit(**JIT)
+def general_floes(flags, idx, everyone):
+    """Write the indices of the floes with ``flags[i] == 1`` (all floes if ``everyone``)
+    to the front of ``idx``; return their count. The second pass of :func:`drag_pass_exact`
+    and :func:`floewave._kernels.drag_pass` runs the general evaluation on those only."""
+    n = flags.shape[0]
+    if everyone:
+        for i in range(n):
+            idx[i] = i
+        return n
+    m = 0
+    for i in range(n):      # branch-free compaction
+        idx[m] = i
+        m += 1 if flags[i] > 0.5 else 0
+    return m
+
+
+@njit(**JIT)
 def drag_pass_exact(ck, sk, cwt, swt, a, u_amp, vs, geom, accumulate, sc, idx):
     """:func:`drag_sums_exact` of every floe of a chain; returns the number of floes that
     needed the general (root-finding) evaluation.
@@ -472,15 +489,7 @@ def drag_pass_exact(ck, sk, cwt, swt, a, u_amp, vs, geom, accumulate, sc, idx):
                 - 2.0 * h * v2 * v
             sc[3, i] = scale * max(sig * W3, 0.0)
         sc[4, i] = 1.0 if root else 0.0
-    m = 0
-    if h <= _H_POINT:
-        for i in range(n):
-            idx[i] = i
-        m = n
-    else:
-        for i in range(n):      # branch-free compaction of the flagged floes
-            idx[m] = i
-            m += 1 if sc[4, i] > 0.5 else 0
+    m = general_floes(sc[4], idx, h <= _H_POINT)
     for t in range(m):
         i = idx[t]
         s2, s3 = drag_sums_exact(a[i] * u_amp, sc[0, i], sc[1, i], vs[i], geom)

@@ -24,7 +24,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ._exact import drag_force_exact, drag_pass_exact, drag_sums_exact
+from ._exact import drag_force_exact, drag_pass_exact, drag_sums_exact, general_floes
 
 JIT = dict(cache=True, fastmath=True, nogil=True)
 # Functions called every step that never allocate: compiled without numba's reference
@@ -163,7 +163,7 @@ N_MOM = 14
 @njit(**JIT)
 def drag_tables(cxi, sxi, P):
     """Moments of the cell tables for the closed-form sums of one-sign floes
-    (:func:`drag_pass`); built once per :func:`advance` call."""
+    (:func:`drag_pass`); built once per chain (``FloeChain.mom``)."""
     n = cxi.shape[0]
     mom = np.zeros(N_MOM)
     cb = 0.0
@@ -209,7 +209,8 @@ def drag_pass(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc, idx):
 
     ``theta_i`` from ``ck, sk = cos, sin(k x_i)`` and ``cwt, swt = cos, sin(omega t)``;
     fills ``sc[0], sc[1] = cos, sin theta_i``, ``sc[2] = s2``, ``sc[3] = s3`` (only if
-    ``accumulate``); ``sc[4]``, ``idx``: scratch; ``mom`` from :func:`drag_tables`.
+    ``accumulate``); ``sc[4]`` (1: the floe needs the cell loop), ``idx``: scratch;
+    ``mom`` from :func:`drag_tables`.
 
     Two passes: a branch-free (vectorised) loop over all floes bounds u_rel on the floe
     (the cosine over the span [theta - h, theta + h] lies between its end values, or
@@ -264,16 +265,8 @@ def drag_pass(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc, idx):
             d3 = (X * X * X * tccc - 3.0 * X * X * Y * tccs
                   + 3.0 * X * Y * Y * tcss - Y * Y * Y * tsss)
             sc[3, i] = sig * (nn * mu * mu * mu + 3.0 * mu * d2 + d3)
-        sc[4, i] = 1.0 if w1 * w2 > 0.0 else 0.0
-    m = 0
-    if mom[M_FAST] > 0.5:
-        for i in range(n):      # branch-free compaction of the floes for the cell loop
-            idx[m] = i
-            m += 0 if sc[4, i] > 0.5 else 1
-    else:
-        for i in range(n):
-            idx[i] = i
-        m = n
+        sc[4, i] = 0.0 if w1 * w2 > 0.0 else 1.0
+    m = general_floes(sc[4], idx, mom[M_FAST] < 0.5)
     for t in range(m):
         i = idx[t]
         A = a[i] * ua
@@ -402,7 +395,7 @@ def initial_acceleration(x, u, a, x0, istep, P, cxi, sxi, acc, in_contact):
 
 @njit(**JIT)
 def advance(x, u, acc, a, x0, in_contact, istep, nsteps, accumulate, P, cxi, sxi, stats,
-            work):
+            work, mom, idx):
     """Advance the floe chain ``nsteps`` time steps in place; return the new step index.
 
     Parameters
@@ -416,7 +409,9 @@ def advance(x, u, acc, a, x0, in_contact, istep, nsteps, accumulate, P, cxi, sxi
     accumulate : bool, add this window to ``stats`` (rows ST_*).
     cxi, sxi : (n_x,) cos(k xi_j), sin(k xi_j) at the cell midpoints xi_j relative to the
         floe centre.
-    work : (5, N_f) scratch: half-step velocity, v*, force, cos(k x), sin(k x).
+    work : (10, N_f) scratch: half-step velocity, v*, force, cos(k x), sin(k x), and rows
+        5-9 for the two-pass drag (``sc`` of :func:`drag_pass`).
+    mom : :func:`drag_tables` of ``cxi, sxi``; idx : (N_f,) int64 scratch.
 
     cos, sin(k x_i) are computed once per call and then rotated by k dx_i each step
     (Taylor series of the rotation to O((k dx)^4), k dx ~ 1e-5: exact to rounding).
@@ -435,6 +430,7 @@ def advance(x, u, acc, a, x0, in_contact, istep, nsteps, accumulate, P, cxi, sxi
     F = work[2]
     ck = work[3]
     sk = work[4]
+    sc = work[5:]
     for i in range(n):
         ck[i] = math.cos(P.k * x[i])
         sk[i] = math.sin(P.k * x[i])
@@ -442,9 +438,6 @@ def advance(x, u, acc, a, x0, in_contact, istep, nsteps, accumulate, P, cxi, sxi
     # drag in two passes (closed form where it applies, the general evaluation for the
     # rest) unless most floes need the general one (long floes): then the plain per-floe
     # loop, and a new two-pass trial every TWO_PASS_RETRY steps
-    mom = drag_tables(cxi, sxi, P)
-    sc = np.zeros((5, n))
-    idx = np.zeros(n, np.int64)
     wait = 0
     for _ in range(nsteps):
         istep += 1
@@ -486,6 +479,7 @@ def confined_window(x0, a, nsteps, P, cxi, sxi, stats):
     two_pi_nt = 2.0 * math.pi / P.n_t
     ck = np.cos(P.k * x0)
     sk = np.sin(P.k * x0)
+    F = np.empty(n)
     for istep in range(nsteps):
         wt = two_pi_nt * (istep % P.n_t)
         cwt = math.cos(wt)
@@ -494,10 +488,7 @@ def confined_window(x0, a, nsteps, P, cxi, sxi, stats):
             c = ck[i] * cwt + sk[i] * swt
             s = sk[i] * cwt - ck[i] * swt
             s2, s3 = floe_drag(a[i] * P.u_amp, c, s, 0.0, True, P, cxi, sxi)
-            stats[ST_S3, i] += s3
-            stats[ST_X, i] += x0[i]
-            stats[ST_FW, i] += abs(P.c_wave * a[i] * s)
-            stats[ST_FD, i] += abs(P.c_drag * s2)
+            wave_drag_update(i, x0, a, s, s2, s3, P, F, True, stats)
 
 
 def new_stats(n: int) -> np.ndarray:

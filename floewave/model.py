@@ -34,7 +34,9 @@ class FloeChain:
         n = cfg.n_floes
         # x_1 = L_x / 2, x_{i+1} = x_i + L_x + d_f: the ice edge is x = 0
         self.x0 = cfg.L_x / 2.0 + np.arange(n) * (cfg.L_x + cfg.d_f)
-        self.work = np.zeros((5, n))
+        self.work = np.zeros((10, n))
+        self.mom = K.drag_tables(self.cxi, self.sxi, self.P)
+        self.idx = np.zeros(n, np.int64)
         self.reset()
 
     def reset(self) -> None:
@@ -58,7 +60,7 @@ class FloeChain:
             stats = np.zeros((K.N_STATS, 0))
         self.istep = K.advance(self.x, self.u, self.acc, a, self.x0, self.in_contact,
                                self.istep, nsteps, acc_on, self.P, self.cxi, self.sxi, stats,
-                               self.work)
+                               self.work, self.mom, self.idx)
 
     def check(self) -> None:
         """Raise :class:`NumericalError` on a non-finite state or floes out of order."""
