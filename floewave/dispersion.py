@@ -3,12 +3,13 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from scipy.optimize import brentq
 
 from .config import G, InvalidPointError, ModelConfig
 
 __all__ = ["coefficients", "dispersion_residual", "omega_of_k", "group_velocity",
-           "solve_dispersion", "alpha_confined", "DispersionError"]
+           "solve_dispersion", "alpha_confined", "confined_rate_factor", "DispersionError"]
 
 
 class DispersionError(InvalidPointError):
@@ -90,8 +91,14 @@ def solve_dispersion(cfg: ModelConfig) -> tuple[float, float]:
     return _solve(cfg.omega, cfg.h, b1, b2, what)
 
 
+def confined_rate_factor(omega, k, c_g, h):
+    """omega^3 / (c_g tanh^3 kh) [m^-1 s^-2], the dispersion-dependent factor of eq. 24
+    (eq. 26; the paper's Fig. 1b). Floats or numpy arrays."""
+    return omega**3 / (c_g * np.tanh(k * h) ** 3)
+
+
 def alpha_confined(cfg: ModelConfig) -> float:
     """Eq. 24: alpha_c = 4 C_sd omega^3 / (3 pi g c_g tanh^3 kh)  [m^-2]."""
     k, cg = solve_dispersion(cfg)
-    w = cfg.omega
-    return 4.0 * cfg.C_sd * w**3 / (3.0 * math.pi * G * cg * math.tanh(k * cfg.h) ** 3)
+    return float(4.0 * cfg.C_sd / (3.0 * math.pi * G)
+                 * confined_rate_factor(cfg.omega, k, cg, cfg.h))

@@ -49,7 +49,8 @@ from typing import Any
 import numpy as np
 
 from .config import G, ModelConfig
-from .dispersion import DispersionError, solve_dispersion
+from .dispersion import DispersionError, confined_rate_factor, solve_dispersion
+from .results import power_law
 
 __all__ = ["LAB", "FIELD", "F_RANGE", "LSWICE_F", "TAIL_OCTAVES", "ML_CUTOFF_FRACTION",
            "DISPERSIONS", "Curve", "dispersion_curves", "mass_loading_cutoff", "tail_range",
@@ -122,7 +123,7 @@ def dispersion_curves(params: ModelConfig | Mapping[str, Any], f: Iterable[float
             except DispersionError:
                 pass
         with np.errstate(invalid="ignore"):
-            R = omega**3 / (cg * np.tanh(k * cfg.h) ** 3)
+            R = confined_rate_factor(omega, k, cg, cfg.h)
         out[disp] = Curve(disp, f, omega, k, cg, R)
     return out
 
@@ -160,8 +161,8 @@ def fit_power_law(omega: np.ndarray, R: np.ndarray, fmin: float,
     sel = (f >= fmin - eps) & (f <= fmax + eps) & np.isfinite(R) & (R > 0)
     if np.count_nonzero(sel) < 3:
         raise ValueError(f"fit_power_law: fewer than 3 usable points in [{fmin}, {fmax}] Hz")
-    m, logc = np.polyfit(np.log(omega[sel]), np.log(R[sel]), 1)
-    return float(m), float(math.exp(logc))
+    m, c, _, _ = power_law(omega[sel], R[sel])
+    return m, c
 
 
 def tail_exponent(params: ModelConfig | Mapping[str, Any], dispersion: str,

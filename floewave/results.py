@@ -2,13 +2,14 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 __all__ = ["PointResult", "PROFILE_FIELDS", "SCALAR_FIELDS", "collision_zone_width",
-           "fit_inverse", "fit_exponential"]
+           "fit_inverse", "fit_exponential", "power_law"]
 
 #: Per-floe (length N_f) or per-pair (length N_f - 1, padded to N_f with NaN) profiles.
 PROFILE_FIELDS = ("x_mean", "a", "a_stderr", "S_sd", "gap_mean", "contact_fraction",
@@ -103,6 +104,19 @@ def _linfit(x: np.ndarray, y: np.ndarray) -> tuple[float, float, np.ndarray]:
     A = np.vstack([x, np.ones_like(x)]).T
     (slope, intercept), *_ = np.linalg.lstsq(A, y, rcond=None)
     return float(slope), float(intercept), slope * x + intercept
+
+
+def power_law(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float, float]:
+    """Least-squares power law y = c x^m in log-log: (m, c, standard error of m, RMS of
+    ln y - fit). The standard error is NaN with fewer than 3 points. Used for alpha(omega)
+    (the paper's m): :func:`floewave.figures.fit_power_law`, :func:`sweep.alpha_omega`."""
+    lx, ly = np.log(np.asarray(x, dtype=float)), np.log(np.asarray(y, dtype=float))
+    m, lc, fit = _linfit(lx, ly)
+    resid = ly - fit
+    n = len(lx)
+    sxx = float(((lx - lx.mean()) ** 2).sum())
+    m_se = math.sqrt(float(resid @ resid) / (n - 2) / sxx) if n > 2 and sxx > 0 else math.nan
+    return m, math.exp(lc), m_se, float(np.sqrt(np.mean(resid**2)))
 
 
 def fit_inverse(x: np.ndarray, a: np.ndarray, a0: float) -> tuple[float, float]:

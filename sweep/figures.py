@@ -378,13 +378,11 @@ def _collision_stats_figure(df: pd.DataFrame, out: Path) -> list[Path]:
                     key=lambda c: (c[0], DISP_ORDER.index(c[1]) if c[1] in DISP_ORDER else 9))
     sizes = sorted({c[0] for c in curves})
     colours = dict(zip(sizes, _colours(len(sizes)), strict=True))
-    d = derived(df)
     for L_x, disp in curves:
         sub = st[(st["L_x"] == L_x) & (st["dispersion"] == disp)].sort_values("eps")
-        pts = d[(d["L_x"] == L_x) & (d["dispersion"] == disp)]
-        spread = pts.groupby("eps")["W_c_rel"].std().reindex(sub["eps"]).fillna(0.0)
         label = f"L_x = {L_x:g} m, {str(disp).upper()}"
-        ax1.errorbar(sub["eps"], sub["W_c_rel_mean"], yerr=spread.to_numpy(), fmt="o",
+        ax1.errorbar(sub["eps"], sub["W_c_rel_mean"], yerr=sub["W_c_rel_std"].fillna(0.0),
+                     fmt="o",
                      ls=DISP_STYLE.get(disp, "-"), color=colours[L_x], ms=4, lw=1.2,
                      capsize=2, label=label)
         ax2.plot(sub["eps"], sub["inner_over_c_median"], "o", ls=DISP_STYLE.get(disp, "-"),

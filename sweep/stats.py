@@ -25,6 +25,8 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
+from floewave.results import power_law
+
 __all__ = ["SWEPT", "RESULT_STATUSES", "derived", "collision_stats", "alpha_omega"]
 
 #: The seven swept parameters of a campaign, in grid order.
@@ -120,7 +122,7 @@ def collision_stats(df: pd.DataFrame, by: str | Sequence[str] | None = None, *,
     - ``n_points``, ``n_not_converged``: points in the group, and how many of them hit
       ``max_iterations`` without converging;
     - ``W_c_mean``, ``W_c_std``, ``W_c_min``, ``W_c_max`` [m];
-    - ``W_c_rel_mean`` (W_c / L_sheet), ``frac_zone_spans_sheet``;
+    - ``W_c_rel_mean``, ``W_c_rel_std`` (W_c / L_sheet), ``frac_zone_spans_sheet``;
     - ``inner_over_c_mean``, ``inner_over_c_median``, ``n_inner_over_c`` (alpha_inner /
       alpha_c; NaN where the inner zone has < 3 floes);
     - ``edge_over_inner_mean``, ``edge_over_inner_median``, ``n_edge_over_inner``;
@@ -141,7 +143,7 @@ def collision_stats(df: pd.DataFrame, by: str | Sequence[str] | None = None, *,
         n_not_converged=("_nc", "sum"),
         W_c_mean=("W_c", "mean"), W_c_std=("W_c", "std"),
         W_c_min=("W_c", "min"), W_c_max=("W_c", "max"),
-        W_c_rel_mean=("W_c_rel", "mean"),
+        W_c_rel_mean=("W_c_rel", "mean"), W_c_rel_std=("W_c_rel", "std"),
         frac_zone_spans_sheet=("zone_spans_sheet", "mean"),
         inner_over_c_mean=("inner_over_c", "mean"),
         inner_over_c_median=("inner_over_c", "median"),
@@ -158,23 +160,6 @@ def collision_stats(df: pd.DataFrame, by: str | Sequence[str] | None = None, *,
         agg = agg.drop(columns="_all")
     agg["n_not_converged"] = agg["n_not_converged"].astype(int)
     return agg
-
-
-def _power_fit(omega: np.ndarray, alpha: np.ndarray) -> tuple[float, float, float, float]:
-    """(m, c, stderr of m, RMS log residual) of ln alpha = ln c + m ln omega."""
-    lx, ly = np.log(omega), np.log(alpha)
-    A = np.vstack([lx, np.ones_like(lx)]).T
-    (m, lc), *_ = np.linalg.lstsq(A, ly, rcond=None)
-    resid = ly - (m * lx + lc)
-    n = len(lx)
-    rms = float(np.sqrt(np.mean(resid**2)))
-    if n > 2:
-        s2 = float(resid @ resid) / (n - 2)
-        sxx = float(((lx - lx.mean()) ** 2).sum())
-        m_se = math.sqrt(s2 / sxx) if sxx > 0 else math.nan
-    else:
-        m_se = math.nan
-    return float(m), float(math.exp(lc)), m_se, rms
 
 
 def alpha_omega(df: pd.DataFrame, alpha: str = "alpha_inner",
@@ -219,12 +204,12 @@ def alpha_omega(df: pd.DataFrame, alpha: str = "alpha_inner",
         row = dict(zip(keys, key, strict=True))
         n_per = int(len(np.unique(om[ok])))
         if n_per >= min_periods:
-            m, c, m_se, rms = _power_fit(om[ok], al[ok])
+            m, c, m_se, rms = power_law(om[ok], al[ok])
         else:
             m = c = m_se = rms = math.nan
         ac = g["alpha_c"].to_numpy(float) if "alpha_c" in g.columns else np.full(len(g), np.nan)
         okc = ok & np.isfinite(ac) & (ac > 0)
-        m_c = (_power_fit(om[okc], ac[okc])[0]
+        m_c = (power_law(om[okc], ac[okc])[0]
                if len(np.unique(om[okc])) >= min_periods else math.nan)
         row.update(m=m, c=c, m_stderr=m_se, rms_log_resid=rms, n_periods=n_per,
                    n_points=int(ok.sum()), n_dropped=int((~ok).sum()),
