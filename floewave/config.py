@@ -221,18 +221,17 @@ class ModelConfig:
         return self.h_i * self.rho_i / self.rho_w
 
     def floe_steps_per_iteration(self) -> int:
-        """(n0 + nT) n_t N_f: the cost unit of MODEL.md §4 for one iteration."""
-        periods = self.nT if self.confined else self.n0 + self.nT
-        return periods * self.n_t * self.n_floes
+        """(n0 + nT) n_t N_f: the cost unit of MODEL.md §4 for the first iteration."""
+        return self.floe_steps_of(1)
 
     def floe_steps_of(self, iterations: int) -> int:
-        """Floe-steps of ``iterations`` iterations (n0 in the first, n0_warm after it)."""
+        """Floe-steps of ``iterations`` iterations (n0 in the first, n0_warm after it;
+        confined: nT only)."""
         if iterations <= 0:
             return 0
-        if self.confined:
-            return iterations * self.floe_steps_per_iteration()
-        n0_later = self.n0_warm if self.warm_start else self.n0
-        periods = (self.n0 + self.nT) + (iterations - 1) * (n0_later + self.nT)
+        n0_first = 0 if self.confined else self.n0
+        n0_later = 0 if self.confined else (self.n0_warm if self.warm_start else self.n0)
+        periods = (n0_first + self.nT) + (iterations - 1) * (n0_later + self.nT)
         return periods * self.n_t * self.n_floes
 
     def check_physics(self) -> None:
