@@ -15,6 +15,9 @@ from .store import Store
 
 __all__ = ["merge", "iter_records"]
 
+#: Points per group commit (one journal fsync and one HDF5 flush for all of them).
+_BATCH = 256
+
 
 def _text(v: Any) -> Any:
     return v.decode() if isinstance(v, bytes) else v
@@ -71,17 +74,23 @@ def merge(output: str | Path, inputs: list[str | Path]) -> str:
     info["command"] = f"sweep merge {output} " + " ".join(map(str, inputs))
     with Store(output, campaign, run_info=info) as store:
         for path in inputs:
+            # group commits of _BATCH points within an input (a store holds each hash
+            # once, so no staged record can shadow another) and at its end (the next
+            # input sees this one's points)
             for rec in iter_records(path):
+                if store.staged >= _BATCH:
+                    store.commit()
                 h = rec["row"]["hash"]
                 if h in store:
                     if store.status_of(h) == "failed" and rec["row"]["status"] != "failed":
-                        store.put(rec)
+                        store.add(rec)
                         replaced += 1
                     else:
                         duplicates += 1
                     continue
-                store.put(rec)
+                store.add(rec)
                 added += 1
+            store.commit()
         total = len(store)
     return (f"merged {len(inputs)} store(s) into {output}: {added} points added,"
             f" {replaced} failed points replaced, {duplicates} duplicates skipped;"
