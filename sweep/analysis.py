@@ -15,7 +15,7 @@ import pandas as pd
 import xarray as xr
 
 from .errors import StoreError
-from .schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, column
+from .schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, column, profile_path
 
 __all__ = ["load", "load_xarray", "load_profile", "store_attrs", "resolve_hash"]
 
@@ -117,7 +117,7 @@ def load_profile(path: str | Path, hash: str) -> xr.Dataset:
     """
     h = hash if len(hash) == 64 else resolve_hash(path, hash)
     with _open(path) as f:
-        name = f"profiles/{h[:2]}/{h}"
+        name = profile_path(h)
         if name not in f:
             raise KeyError(f"{path}: no profiles stored for point {h[:12]} (missing, failed"
                            " or invalid)")

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from .errors import EXIT_CONFIG, EXIT_INTERNAL, EXIT_OK, EXIT_STORE, ConfigError, SweepError
+from .executor import DEFAULT_COMPUTE
 
 __all__ = ["main", "build_parser"]
 
@@ -44,7 +45,7 @@ def build_parser() -> argparse.ArgumentParser:
                    " with fewer grid values (the new values are added)")
     r.add_argument("--shard", type=_shard, metavar="K/N", help="compute only shard K of N"
                    " (points whose hash mod N is K), for Slurm job arrays")
-    r.add_argument("--compute", default="floewave:run_point", metavar="MODULE:FUNC",
+    r.add_argument("--compute", default=DEFAULT_COMPUTE, metavar="MODULE:FUNC",
                    help="compute function (tests/benchmarks; default floewave:run_point)")
     r.add_argument("--no-bar", action="store_true", help="log lines even on a terminal")
     r.add_argument("--ignore-slurm-ntasks", action="store_true",
@@ -173,11 +174,7 @@ def plan_seconds(points: list[Any], rates: dict[tuple, float]) -> float:
 def cmd_plan(args: argparse.Namespace) -> int:
     from .config import DEFAULT_EXPECTED_ITERATIONS, load_campaign
 
-    try:
-        campaign = load_campaign(args.config)
-    except SweepError as exc:
-        _err(str(exc))
-        return exc.exit_status
+    campaign = load_campaign(args.config)  # a SweepError is reported by main
     points = campaign.points()
     invalid = sum(1 for p in points if p.invalid)
     cost = sum(p.cost for p in points if not p.invalid)
@@ -285,11 +282,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
 def cmd_merge(args: argparse.Namespace) -> int:
     from .merge import merge
 
-    try:
-        report = merge(args.output, args.inputs)
-    except SweepError as exc:
-        _err(str(exc))
-        return exc.exit_status
+    report = merge(args.output, args.inputs)  # a SweepError is reported by main
     print(f"sweep: {report}")
     return EXIT_OK
 
@@ -318,10 +311,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return _COMMANDS[args.command](args)
-    except ConfigError as exc:
-        _err(str(exc))
-        return exc.exit_status
-    except SweepError as exc:
+    except SweepError as exc:  # ConfigError, StoreError, ...: each carries its exit status
         _err(str(exc))
         return exc.exit_status
     except (KeyError, FileNotFoundError) as exc:

@@ -48,14 +48,14 @@ from .identity import canonical_json
 from .progress import Progress
 from .provenance import environment, host
 from .schema import PROFILE_VARS, column
-from .store import Store, utc_now
+from .store import Store, _jsonable, utc_now
 
 __all__ = ["run_campaign", "compute_point", "worker_loop", "Master", "InProcessTransport",
            "MPITransport", "RunSummary", "resolve_compute", "mpi_world", "check_launch",
            "DEFAULT_COMPUTE"]
 
 DEFAULT_COMPUTE = "floewave:run_point"
-MODEL_STATUSES = ("converged", "converged_noisy", "not_converged")
+MODEL_STATUSES = floewave.results.STATUSES
 _TAG_TASK, _TAG_RESULT = 1, 2
 _POLL_MIN, _POLL_MAX = 0.0005, 0.005  # [s] backoff of the waiting loops
 #: MPICH's Iprobe makes progress on one call and sees the message on the next, so each
@@ -93,12 +93,6 @@ def resolve_compute(spec: str) -> Callable[[ModelConfig], Any]:
     return fn  # type: ignore[return-value]
 
 
-def _scalar(value: Any) -> Any:
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
-
-
 def compute_point(task: dict[str, Any], fn: Callable[[ModelConfig], Any],
                   rank: int = 0) -> dict[str, Any]:
     """Compute one point and describe the outcome; never raises for a point's fault.
@@ -120,7 +114,7 @@ def compute_point(task: dict[str, Any], fn: Callable[[ModelConfig], Any],
         out["profiles"] = profiles
         out["residual_history"] = np.asarray(data.get("residual_history", []),
                                              dtype=np.float64)
-        out["scalars"] = {k: _scalar(v) for k, v in data.items()
+        out["scalars"] = {k: _jsonable(v) for k, v in data.items()
                           if k not in PROFILE_VARS and k != "residual_history"
                           and np.ndim(v) == 0}
         status = str(data.get("status", ""))
@@ -369,7 +363,6 @@ class Master:
         self._provenance: dict[tuple[int, str], str] = {}
         self.point_time = math.nan  # [s] moving average of a point's compute time
         self.commit_time = math.nan  # [s] moving average of a batch's store time
-        self.batches = 0
 
     @property
     def depth(self) -> int:
@@ -507,7 +500,6 @@ class Master:
             raise WorkerError(f"worker rank {error['rank']} on {error['host']}:"
                               f" {error['message']}\n{error['traceback']}")
         if statuses:
-            self.batches += 1
             self.point_time = _average(self.point_time, wall / len(statuses))
             self.commit_time = _average(self.commit_time, time.perf_counter() - t0)
         return len(statuses)

@@ -38,6 +38,7 @@ import pandas as pd
 
 from .analysis import load, load_profile
 from .errors import ConfigError
+from .schema import column
 from .stats import RESULT_STATUSES, SWEPT, alpha_omega, collision_stats, derived
 
 __all__ = ["make_figures", "KINDS", "PAPER_SETUP"]
@@ -48,8 +49,6 @@ PAPER_SETUP = {"L_x": 0.5, "T": 1.2, "a0": 0.0125, "C_sd": 0.05, "eps": 0.6, "d_
                "dispersion": "ml"}
 DISP_ORDER = ("ml", "ep", "ow")
 DISP_STYLE = {"ep": "-", "ml": "--", "ow": ":"}
-UNITS = {"L_x": "m", "T": "s", "a0": "m", "C_sd": "", "eps": "", "d_f": "m",
-         "dispersion": ""}
 SYMBOL = {"L_x": "L_x", "T": "T", "a0": "a_0", "C_sd": "C_sd", "eps": "ε", "d_f": "d_f",
           "dispersion": ""}
 
@@ -57,7 +56,8 @@ SYMBOL = {"L_x": "L_x", "T": "T", "a0": "a_0", "C_sd": "C_sd", "eps": "ε", "d_f
 def _fmt(name: str, value: Any) -> str:
     if name == "dispersion":
         return str(value).upper()
-    unit = f" {UNITS[name]}" if UNITS[name] else ""
+    units = column(name).units
+    unit = f" {units}" if units not in ("", "1") else ""
     return f"{SYMBOL[name]} = {value:g}{unit}"
 
 

@@ -10,7 +10,7 @@ import h5py
 from .config import parse_campaign
 from .errors import CampaignMismatchError, StoreError
 from .provenance import environment
-from .schema import COLUMNS, HISTORY_VAR, PROFILE_VARS
+from .schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, profile_path
 from .store import Store
 
 __all__ = ["merge", "iter_records"]
@@ -33,7 +33,7 @@ def iter_records(path: str | Path) -> Iterator[dict[str, Any]]:
             row = {name: _text(values[i]) for name, values in cols.items()}
             row = {k: (v.item() if hasattr(v, "item") else v) for k, v in row.items()}
             h = row["hash"]
-            name = f"profiles/{h[:2]}/{h}"
+            name = profile_path(h)
             profiles, history = {}, []
             if name in f:
                 profiles = {k: f[name][k][()] for k in PROFILE_VARS}

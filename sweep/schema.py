@@ -26,8 +26,10 @@ from typing import Any
 
 import numpy as np
 
+from .identity import HASH_LENGTH
+
 __all__ = ["SCHEMA_VERSION", "FORMAT", "Column", "COLUMNS", "PROFILE_VARS", "MIGRATIONS",
-           "STATUSES", "schema_document", "validate", "column"]
+           "STATUSES", "schema_document", "validate", "column", "profile_path"]
 
 SCHEMA_VERSION = 1
 FORMAT = "sweep-store"
@@ -111,6 +113,11 @@ PROFILE_VARS: dict[str, tuple[str, str]] = {
     "F_d_mean": ("N", "time-mean |drag force|"),
 }
 HISTORY_VAR = ("residual_history", "1", "residual max |a_new - a| / a per iteration")
+
+def profile_path(h: str) -> str:
+    """The HDF5 group of point ``h``'s profiles: ``profiles/<first two hash chars>/<h>``."""
+    return f"profiles/{h[:2]}/{h}"
+
 
 #: Migrations: from-version -> (to-version, description, function(h5py.File)). A store
 #: older than SCHEMA_VERSION is migrated step by step on open; none exist yet.
@@ -228,14 +235,15 @@ def validate(path: str | Path) -> list[str]:
         if len(set(hashes)) != len(hashes):
             problems.append("/table/hash: duplicate hashes")
         for i, (h, s) in enumerate(zip(hashes, status, strict=False)):
-            if len(h) != 64 or any(c not in "0123456789abcdef" for c in h):
-                problems.append(f"/table/hash[{i}]: {h!r} is not a 64-character hex hash")
+            if len(h) != HASH_LENGTH or any(c not in "0123456789abcdef" for c in h):
+                problems.append(f"/table/hash[{i}]: {h!r} is not a {HASH_LENGTH}-character"
+                                " hex hash")
                 continue
             if s not in STATUSES:
                 problems.append(f"/table/status[{i}]: unknown status {s!r}")
             if s in ("failed", "invalid"):
                 continue
-            name = f"profiles/{h[:2]}/{h}"
+            name = profile_path(h)
             if name not in f:
                 problems.append(f"/{name}: missing profile group of a {s} point")
                 continue

@@ -25,28 +25,15 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
-from floewave.results import power_law
+from floewave import SWEPT_FIELDS
+from floewave.results import STATUSES, power_law
 
 __all__ = ["SWEPT", "RESULT_STATUSES", "derived", "collision_stats", "alpha_omega"]
 
-#: The seven swept parameters of a campaign, in grid order.
-SWEPT = ("L_x", "T", "a0", "C_sd", "eps", "d_f", "dispersion")
-#: Statuses of points that have results.
-RESULT_STATUSES = ("converged", "converged_noisy", "not_converged")
-
-#: Derived per-point quantities and their meaning (the ``derived`` columns).
-DERIVED = {
-    "omega": ("rad s-1", "wave angular frequency 2 pi / T"),
-    "L_sheet": ("m", "length of the ice sheet"),
-    "W_c_rel": ("1", "collision-zone width over sheet length W_c / L_sheet"),
-    "zone_spans_sheet": ("bool", "no pair compacts: the collisional zone is the whole sheet"),
-    "inner_over_c": ("1", "alpha_inner / alpha_c: 1 = confined-ice attenuation (eq. 25)"),
-    "edge_over_inner": ("1", "alpha_edge / alpha_inner: how much faster the edge zone"
-                             " attenuates"),
-    "fit_ratio": ("1", "alpha_exp_resid / alpha_all_resid: > 1 means the 1/a law (n = 2)"
-                       " fits better than the exponential (n = 1)"),
-    "prefers_n2": ("bool", "alpha_all_resid < alpha_exp_resid"),
-}
+#: The seven swept parameters, in grid order (floewave's).
+SWEPT = SWEPT_FIELDS
+#: Statuses of points that have results (the model's own statuses).
+RESULT_STATUSES = STATUSES
 
 
 def _ratio(num: pd.Series, den: pd.Series) -> pd.Series:
@@ -79,9 +66,17 @@ def _sheet_lengths(df: pd.DataFrame, L_sheet: float | None) -> pd.Series:
 
 def derived(df: pd.DataFrame, *, L_sheet: float | None = None,
             statuses: Sequence[str] = RESULT_STATUSES) -> pd.DataFrame:
-    """The points of ``df`` with results, plus the columns of :data:`DERIVED`.
+    """The points of ``df`` with results, plus derived columns:
 
-    ``L_sheet`` [m] overrides the sheet length read from each row's ``config_json``.
+    - ``omega`` [rad s-1] 2 pi / T; ``L_sheet`` [m] the sheet length (from each row's
+      ``config_json``, or the ``L_sheet`` argument, which overrides it);
+    - ``W_c_rel`` W_c / L_sheet; ``zone_spans_sheet`` (bool) no pair compacts, the
+      collisional zone is the whole sheet;
+    - ``inner_over_c`` alpha_inner / alpha_c (1: confined-ice attenuation, eq. 25);
+      ``edge_over_inner`` alpha_edge / alpha_inner;
+    - ``fit_ratio`` alpha_exp_resid / alpha_all_resid (> 1: the 1/a law, n = 2, fits better
+      than the exponential, n = 1); ``prefers_n2`` (bool) alpha_all_resid <
+      alpha_exp_resid.
     """
     out = df[df["status"].isin(statuses)].copy() if "status" in df.columns else df.copy()
     out["omega"] = 2.0 * math.pi / out["T"].astype(float)

@@ -41,7 +41,15 @@ import numpy as np
 from h5py import h5a, h5d, h5g, h5s, h5t
 
 from .errors import CampaignMismatchError, SchemaVersionError, StoreError, StoreLockedError
-from .schema import COLUMNS, FORMAT, HISTORY_VAR, MIGRATIONS, PROFILE_VARS, SCHEMA_VERSION
+from .schema import (
+    COLUMNS,
+    FORMAT,
+    HISTORY_VAR,
+    MIGRATIONS,
+    PROFILE_VARS,
+    SCHEMA_VERSION,
+    profile_path,
+)
 
 __all__ = ["Store", "Record", "journal_path", "lock_path", "utc_now", "read_journal"]
 
@@ -331,7 +339,7 @@ class Store:
         table = f.create_group("table")
         table.attrs["n_rows"] = 0
         for col in COLUMNS:
-            table.create_dataset(col.name, shape=(0,), maxshape=(None,), chunks=(1024,),
+            table.create_dataset(col.name, shape=(0,), maxshape=(None,), chunks=(_TABLE_CHUNK,),
                                  dtype=_DTYPES[col.kind])
         f.create_group("profiles")
         f.create_group("runs")
@@ -403,24 +411,22 @@ class Store:
         hashes = [_text(h) for h in table["hash"][:n]]
         self.rows: dict[str, int] = {h: i for i, h in enumerate(hashes)}
         seqs = table["seq"][:n]
-        self._seq: dict[str, int] = {h: int(s) for h, s in zip(hashes, seqs, strict=False)}
+        seq_of = {h: int(s) for h, s in zip(hashes, seqs, strict=False)}
         removed = []
         for hh in list(f["profiles"]):
             for h in list(f["profiles"][hh]):
                 if h not in self.rows:
                     del f["profiles"][hh][h]
                     removed.append(h)
-        self.next_seq = max(self._seq.values(), default=-1) + 1
-        replayed = 0
+        self.next_seq = max(seq_of.values(), default=-1) + 1
         latest: dict[str, Record] = {}
         for rec in read_journal(self.journal_path):
             latest[rec["row"]["hash"]] = rec
             self.next_seq = max(self.next_seq, int(rec["row"]["seq"]) + 1)
         missing = [rec for h, rec in latest.items()
-                   if self._seq.get(h, -1) < int(rec["row"]["seq"])]
+                   if seq_of.get(h, -1) < int(rec["row"]["seq"])]
         self._write_many(missing)
-        replayed = len(missing)
-        self.replayed = replayed
+        self.replayed = len(missing)
         self.orphans_removed = len(removed)
         f.flush()
 
@@ -544,7 +550,6 @@ class Store:
         for rec in records:
             h = rec["row"]["hash"]
             self.rows[h] = index_of[h]
-            self._seq[h] = int(rec["row"]["seq"])
 
     def _write_profiles(self, record: Record, replace: bool) -> None:
         """Write ``/profiles/<hh>/<hash>`` (low-level h5py: ~2x faster per point)."""
@@ -552,7 +557,7 @@ class Store:
         assert f is not None
         h = record["row"]["hash"]
         if replace:
-            name = f"profiles/{h[:2]}/{h}"
+            name = profile_path(h)
             if name in f:
                 del f[name]
         profiles = record.get("profiles") or {}
