@@ -139,9 +139,8 @@ class _Lock:
             self.fd = None
 
 
-def read_journal(path: str | Path) -> Iterator[Record]:
-    """Yield the complete records of a journal (a torn last line is skipped)."""
-    path = Path(path)
+def _journal_lines(path: Path) -> Iterator[dict[str, Any]]:
+    """The complete records of a journal as parsed JSON (a torn last line is skipped)."""
     if not path.exists():
         return
     with open(path, "rb") as fh:
@@ -149,14 +148,23 @@ def read_journal(path: str | Path) -> Iterator[Record]:
             if not line.endswith(b"\n"):
                 break  # torn write of a killed master: that point was never acknowledged
             try:
-                rec = json.loads(line)
+                yield json.loads(line)
             except ValueError:
                 continue
-            rec["profiles"] = {k: np.asarray(v, dtype=np.float64)
-                               for k, v in rec.get("profiles", {}).items()}
-            rec["residual_history"] = np.asarray(rec.get("residual_history", []),
-                                                 dtype=np.float64)
-            yield rec
+
+
+def _with_arrays(rec: dict[str, Any]) -> Record:
+    """A parsed journal record with its profiles and history as float64 arrays."""
+    rec["profiles"] = {k: np.asarray(v, dtype=np.float64)
+                       for k, v in rec.get("profiles", {}).items()}
+    rec["residual_history"] = np.asarray(rec.get("residual_history", []), dtype=np.float64)
+    return rec
+
+
+def read_journal(path: str | Path) -> Iterator[Record]:
+    """Yield the complete records of a journal (a torn last line is skipped)."""
+    for rec in _journal_lines(Path(path)):
+        yield _with_arrays(rec)
 
 
 def _jsonable(value: Any) -> Any:
@@ -419,12 +427,17 @@ class Store:
                     del f["profiles"][hh][h]
                     removed.append(h)
         self.next_seq = max(seq_of.values(), default=-1) + 1
-        latest: dict[str, Record] = {}
-        for rec in read_journal(self.journal_path):
-            latest[rec["row"]["hash"]] = rec
-            self.next_seq = max(self.next_seq, int(rec["row"]["seq"]) + 1)
-        missing = [rec for h, rec in latest.items()
-                   if seq_of.get(h, -1) < int(rec["row"]["seq"])]
+        # the last journal record of each hash, kept only while it is newer than the
+        # table's row (streamed: the already committed records are not held in memory)
+        latest: dict[str, dict[str, Any]] = {}
+        for rec in _journal_lines(self.journal_path):
+            h, seq = rec["row"]["hash"], int(rec["row"]["seq"])
+            self.next_seq = max(self.next_seq, seq + 1)
+            if seq > seq_of.get(h, -1):
+                latest[h] = rec
+            else:
+                latest.pop(h, None)
+        missing = [_with_arrays(rec) for rec in latest.values()]
         self._write_many(missing)
         self.replayed = len(missing)
         self.orphans_removed = len(removed)
