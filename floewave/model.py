@@ -34,7 +34,7 @@ class FloeChain:
         n = cfg.n_floes
         # x_1 = L_x / 2, x_{i+1} = x_i + L_x + d_f: the ice edge is x = 0
         self.x0 = cfg.L_x / 2.0 + np.arange(n) * (cfg.L_x + cfg.d_f)
-        self.work = np.zeros((10, n))
+        self.work = K.new_work(n)
         self.mom = K.drag_tables(self.cxi, self.sxi, self.P)
         self.idx = np.zeros(n, np.int64)
         self.reset()

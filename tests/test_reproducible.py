@@ -1,0 +1,80 @@
+"""One configuration, one result, bit for bit, whatever the numba cache holds (issue *trust*).
+
+The kernels used to be compiled with fast-math, and a process that compiled them ran other
+machine code than a process that loaded them from the on-disk cache (see
+:mod:`floewave._jit`): the Fig. 2 ``ml`` eps 0.6 point gave W_c 18.42 m cold and 15.92 m
+warm. Here short DEM points (every kernel path: two-pass and plain quadrature drag, exact
+drag, the amplitude iteration) run in fresh interpreters:
+
+- A: an empty cache directory, the quadrature point first, then the exact-drag point;
+- B: the cache A left (everything loaded, nothing compiled);
+- C: another empty cache directory, compiled in the other order (exact first).
+
+Every array and scalar of every point must be equal bit for bit across A, B and C. The
+points are chaotic: a last-bit difference in any force moves the trajectory (and so the
+digests) within a few steps.
+"""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+SCRIPT = textwrap.dedent("""
+    import hashlib, json, sys
+    import numpy as np
+    from floewave import ModelConfig, run_point
+
+    POINTS = {
+        # 84 floes of 0.5 m: closed-form and cell-loop floes in the two-pass drag
+        "quadrature": dict(L_x=0.5, T=1.2, a0=0.015, eps=0.6, d_f=0.005, dispersion="ml"),
+        # 28 floes of 1.5 m: the plain (every floe by the cell loop) drag path
+        "long": dict(L_x=1.5, T=1.2, a0=0.02, eps=0.8, d_f=0.005, dispersion="ep"),
+        "exact": dict(L_x=0.5, T=1.2, a0=0.015, eps=0.6, d_f=0.005, dispersion="ml",
+                      drag_integration="exact"),
+    }
+    SHORT = dict(n0=2, nT=1, max_iterations=4, noise_window=2, n_average=2, n0_warm=0)
+
+    out = {}
+    for name in sys.argv[1:]:
+        r = run_point(ModelConfig(**POINTS[name], **SHORT))
+        d = {}
+        for key, val in r.to_dict().items():
+            if key == "wall_time":
+                continue
+            if isinstance(val, np.ndarray):
+                d[key] = hashlib.sha256(np.ascontiguousarray(val).tobytes()).hexdigest()
+            elif isinstance(val, float):
+                d[key] = val.hex()
+            else:
+                d[key] = val
+        out[name] = d
+    print(json.dumps(out))
+""")
+
+
+def _run(cache_dir, order):
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache_dir))
+    env.pop("NUMBA_DISABLE_JIT", None)
+    proc = subprocess.run([sys.executable, "-c", SCRIPT, *order], env=env,
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    return json.loads(proc.stdout)
+
+
+@pytest.mark.skipif(os.environ.get("NUMBA_DISABLE_JIT") == "1", reason="needs the JIT")
+def test_point_bits_do_not_depend_on_the_jit_cache(tmp_path):
+    names = ["quadrature", "long", "exact"]
+    cold = _run(tmp_path / "cache-a", names)
+    assert any((tmp_path / "cache-a").rglob("*.nbc")), "nothing was cached"
+    warm = _run(tmp_path / "cache-a", names)
+    other_order = _run(tmp_path / "cache-c", names[::-1])
+    for name in names:
+        assert cold[name]["iterations"] >= 2
+        # the points are chaotic: contacts happen (a last-bit change would move them)
+        assert warm[name] == cold[name], f"{name}: warm cache differs from the cold compile"
+        assert other_order[name] == cold[name], f"{name}: compile order changes the bits"
