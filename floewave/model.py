@@ -48,12 +48,21 @@ class FloeChain:
         self.in_contact = np.zeros(n, dtype=np.int8)
         self.istep = 0
         self._acc_ready = False
+        self._acc_a = np.zeros(0)
 
     def run(self, a: np.ndarray, nsteps: int, stats: np.ndarray | None = None) -> None:
-        """Advance ``nsteps`` steps with amplitudes ``a``; accumulate into ``stats`` if given."""
-        if not self._acc_ready:
+        """Advance ``nsteps`` steps with amplitudes ``a``; accumulate into ``stats`` if given.
+
+        The first half-kick uses the acceleration of the current state *with these
+        amplitudes*: it is recomputed whenever ``a`` differs from the amplitudes it was
+        computed with (a new iteration), not carried over from the previous iteration's
+        amplitudes (issue *trust*: that carried the old wave force into one step per
+        iteration).
+        """
+        if not self._acc_ready or not np.array_equal(a, self._acc_a):
             K.initial_acceleration(self.x, self.u, a, self.x0, self.istep, self.P, self.cxi,
                                    self.sxi, self.acc, self.in_contact)
+            self._acc_a = np.array(a, dtype=float)
             self._acc_ready = True
         acc_on = stats is not None
         if stats is None:
