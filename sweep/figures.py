@@ -119,12 +119,16 @@ def _amplitude(ax, row: pd.Series, prof: dict[str, np.ndarray], colour, style: s
         ax.fill_between(x, (a - se) / a0, (a + se) / a0, color=colour, alpha=0.25, lw=0)
     if not zone:
         return
+    # only where a compact zone exists (W_c is NaN without one): the dot at its start and
+    # the compact-ice solution along it
     W_c, alpha_c = float(row["W_c"]), float(row["alpha_c"])
-    if np.isfinite(W_c) and W_c < x[-1]:
+    end = float(row.get("compact_end", np.nan))
+    end = min(end, x[-1]) if np.isfinite(end) else x[-1]
+    if np.isfinite(W_c) and W_c < end:
         a_w = float(np.interp(W_c, x, a))
         ax.plot([W_c], [a_w / a0], "o", color=colour, ms=6, mec="k", mew=0.6, zorder=5)
         if np.isfinite(alpha_c) and a_w > 0:
-            xx = np.linspace(W_c, x[-1], 100)
+            xx = np.linspace(W_c, end, 100)
             ax.plot(xx, 1.0 / (1.0 / a_w + alpha_c * (xx - W_c)) / a0, "k--", lw=0.9)
 
 
