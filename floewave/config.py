@@ -173,7 +173,7 @@ class ModelConfig:
     compact_min_pairs: int = 3
     compact_min_length: float = 3.0
     compact_bridge: int = 2
-    compact_bridge_gap: float = 3.0e-4
+    compact_bridge_gap: float = 2.0e-4
     fit_min_floes: int = 5
     fit_min_length: float = 2.0
 

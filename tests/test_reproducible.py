@@ -78,3 +78,52 @@ def test_point_bits_do_not_depend_on_the_jit_cache(tmp_path):
         # the points are chaotic: contacts happen (a last-bit change would move them)
         assert warm[name] == cold[name], f"{name}: warm cache differs from the cold compile"
         assert other_order[name] == cold[name], f"{name}: compile order changes the bits"
+
+
+def test_campaign_bits_in_process_mpi_and_after_kill_and_resume(tmp_path):
+    """A small real campaign stores the same bits per hash (every result column, every
+    profile) whether it ran in-process with a cold cache, under ``mpiexec -n 3`` with
+    another cold cache (the workers compile at the same time), or was killed with SIGKILL
+    after its first points and resumed (with the cache the killed run left)."""
+    import signal
+    import time
+
+    from test_sweep_torture import MPIEXEC, TORTURE_TOML, _command, _env, _group_gone, compare
+
+    if MPIEXEC is None:
+        pytest.skip("no mpiexec (pip install mpich)")
+    from sweep.store import journal_path, read_journal
+
+    config = tmp_path / "c.toml"
+    config.write_text(TORTURE_TOML)
+
+    def env(cache):
+        return {**_env(), "NUMBA_CACHE_DIR": str(tmp_path / cache)}
+
+    def run(store, n_ranks, cache):
+        proc = subprocess.run(_command(config, store, n_ranks), env=env(cache),
+                              capture_output=True, text=True, timeout=600)
+        assert proc.returncode == 0, proc.stderr[-2000:]
+
+    one, mpi, killed = tmp_path / "one.h5", tmp_path / "mpi.h5", tmp_path / "killed.h5"
+    run(one, 1, "cache-one")
+    run(mpi, 3, "cache-mpi")
+    # killed after its first stored points, then resumed
+    proc = subprocess.Popen(_command(config, killed, 3), env=env("cache-kill"),
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            start_new_session=True)
+    deadline = time.monotonic() + 300
+    while time.monotonic() < deadline and proc.poll() is None:
+        if journal_path(killed).exists() and sum(1 for _ in read_journal(journal_path(killed))) >= 3:
+            break
+        time.sleep(0.05)
+    assert proc.poll() is None, "the campaign ended before it could be killed"
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait()
+    assert _group_gone(proc.pid)
+    n_before = sum(1 for _ in read_journal(journal_path(killed)))
+    assert 3 <= n_before < 24
+    run(killed, 3, "cache-kill")
+    for store in (mpi, killed):
+        res = compare(one, store)
+        assert res["problems"] == [] and res["compared"] == 24, res["problems"][:5]

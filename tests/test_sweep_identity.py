@@ -13,7 +13,7 @@ from sweep.identity import canonical_json, point_hash, short_hash
 # (issue *trust*): kernels without fast-math (new bits), the acceleration recomputed when
 # the amplitudes change, the robust compact-zone rule and its six new fields.
 KNOWN = {
-    "default": "dd50a8ecd117ba24ac45359f6d28806424fdd6bd27443597788944515a3c3b46",
+    "default": "d3555e79ba3166fa9dd4423e4643614512b2ead5f276f9e009e3c3a60313a0d8",
 }
 
 
@@ -49,8 +49,8 @@ def test_known_hashes(changes, expected):
 
 
 PINNED = {
-    "KNOWN_1": "cd49744c4a80c44e7e93ff03f95784bdc945a53059bb9da7c9549b987628ce8b",
-    "KNOWN_2": "8e61dfbc400057f5c4524d776fe3d2a9810229c1231121f0e9489d83087087ef",
+    "KNOWN_1": "c0711e540e8e7bfb8fe8fc806b11aa7e927d29d54dae71d87401bd3824816055",
+    "KNOWN_2": "5da7dd808d75e3b5adc8e5a9cd2768f3e1b877545408727cc220d0423025c066",
 }
 
 
