@@ -43,15 +43,22 @@ def main() -> int:
     for name in ("compiled", "cached"):
         store = tmp / f"{name}.h5"
         subprocess.run([sys.executable, "-m", "sweep", "run", str(config), "--store",
-                        str(store), "--no-bar"], env=env, check=True, capture_output=True)
+                        str(store), "--no-bar"], env=env, check=True, capture_output=True,
+                       cwd=tmp)    # not this checkout's directory: it would shadow --rev
         stores.append(store)
     sys.path.insert(0, str(ROOT / "tests"))
+    import floewave
     import sweep
     from test_sweep_torture import compare
 
     a, b = (sweep.load(s).set_index("hash").sort_index() for s in stores)
-    print(f"{args.rev or 'this checkout'}: {config.name}, one empty numba cache, the kernels"
-          " compiled in the first run and loaded in the second")
+    version = subprocess.run([sys.executable, "-c", "import floewave; print(floewave.__file__,"
+                              " floewave.MODEL_VERSION)"], env=env, cwd=tmp,
+                             capture_output=True, text=True).stdout.split()
+    print(f"{args.rev or 'this checkout'} ({version[0]}, model version {version[1]};"
+          f" this process reads with model version {floewave.MODEL_VERSION}): {config.name},"
+          " one empty numba cache, the kernels compiled in the first run and loaded in the"
+          " second")
     keys = [k for k in ("L_x", "T", "a0", "C_sd", "eps", "d_f", "dispersion")
             if a[k].nunique() > 1]
     for h in a.index:
