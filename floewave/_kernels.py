@@ -347,6 +347,9 @@ def drag_pass(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc, idx, ev
     by the cell loop (long floes, where one-sign floes are rare).
     """
     n = ck.shape[0]
+    if sc.shape[0] < N_SC or sc.shape[1] < n + LANES or idx.shape[0] < n:
+        raise ValueError("drag_pass: scratch too small (sc needs N_SC rows and N_f + LANES"
+                         " columns: new_scratch)")
     if everyone:
         for i in range(n):
             sc[SC_C, i] = ck[i] * cwt + sk[i] * swt
@@ -546,6 +549,9 @@ def advance(x, u, acc, a, x0, in_contact, istep, nsteps, accumulate, P, cxi, sxi
     Same results to rounding either way.
     """
     n = x.shape[0]
+    if work.shape[0] < N_WORK or work.shape[1] < n + LANES or idx.shape[0] < n:
+        raise ValueError("advance: scratch too small (work needs N_WORK rows and N_f + LANES"
+                         " columns: new_work)")
     dt = P.dt
     uh = work[0, :n]
     vs = work[1, :n]

@@ -93,7 +93,7 @@ class PointResult:
 
 
 #: Layouts of the compact zone (``PointResult.compact_zone``), see :func:`compact_zones`.
-LAYOUTS = ("edge", "inverted", "patchy", "none")
+LAYOUTS = ("edge", "compact", "inverted", "patchy", "none")
 
 
 @dataclass(frozen=True)
@@ -101,12 +101,14 @@ class Zones:
     """Where the ice is compact: the result of :func:`compact_zones`.
 
     layout : ``"edge"`` (the paper's: collisional at the ice edge, one compact zone from
-        W_c to the far end), ``"inverted"`` (compact from the ice edge, collisional further
-        in to the far end), ``"patchy"`` (anything else with a compact zone: a compact band
-        with collisional ice on both sides, or several compact zones), ``"none"`` (no
-        sustained compact zone: the whole ice is collisional).
+        W_c to the far end), ``"compact"`` (compact from the first pair to the far end: no
+        collisional zone, W_c = 0), ``"inverted"`` (compact from the ice edge, collisional
+        further in to the far end), ``"patchy"`` (anything else with a compact zone: a
+        compact band with collisional ice on both sides, or several compact zones),
+        ``"none"`` (no sustained compact zone: the whole ice is collisional).
     W_c : [m] distance from the ice edge to the start of the first compact zone (the
-        paper's dot); NaN for ``"none"``.
+        paper's dot: the right end of the first compact pair's left floe; 0 if the first
+        pair is compact); NaN for ``"none"``.
     compact_end : [m] where that compact zone ends (the ice extent when it reaches the far
         end); NaN for ``"none"``.
     ice_extent : [m] the far end of the ice, last floe's mean centre + L_x / 2.
@@ -146,7 +148,8 @@ def compact_zones(x_mean: np.ndarray, gap_mean: np.ndarray, L_x: float, *,
     1. a pair is compact if its mean gap is below ``gap_threshold``;
     2. bridging: a run of at most ``bridge`` non-compact pairs with compact pairs on both
        sides, each with a mean gap below ``bridge_gap`` (marginal, not colliding), counts
-       as compact;
+       as compact — but a bridged zone must begin and end with ``min_pairs`` compact pairs
+       in a row, so a bridge never attaches an isolated compact pair to a zone;
     3. a run of compact pairs is a compact *zone* only if it is sustained: at least
        ``min_pairs`` pairs spanning at least ``min_length`` metres (L_x per pair) —
        shorter runs are isolated compact pairs in collisional ice;
@@ -163,17 +166,30 @@ def compact_zones(x_mean: np.ndarray, gap_mean: np.ndarray, L_x: float, *,
     with np.errstate(invalid="ignore"):
         compact = gaps < gap_threshold
         marginal = gaps < bridge_gap
-    # 2. bridge short marginal interruptions between compact pairs
-    if bridge > 0:
-        for i0, i1 in _runs(~compact):
-            if i0 > 0 and i1 < n_pairs and i1 - i0 <= bridge and marginal[i0:i1].all():
-                compact[i0:i1] = True
-    # 3. keep the sustained runs only
 
     def sustained(i0: int, i1: int) -> bool:
         return i1 - i0 >= min_pairs and (i1 - i0) * L_x >= min_length - 1e-9
 
-    zones = [(i0, i1) for i0, i1 in _runs(compact) if sustained(i0, i1)]
+    # 2. bridge short marginal interruptions between runs of compact pairs; a bridged zone
+    # must begin and end with a run of at least min_pairs compact pairs, so that a bridge
+    # never attaches an isolated compact pair to a zone (and so moves W_c)
+    groups: list[list[tuple[int, int]]] = []
+    for run in _runs(compact):
+        prev = groups[-1][-1] if groups else None
+        if (prev is not None and bridge > 0 and run[0] - prev[1] <= bridge
+                and marginal[prev[1]:run[0]].all()):
+            groups[-1].append(run)
+        else:
+            groups.append([run])
+    # 3. keep the sustained runs only
+    zones = []
+    for g in groups:
+        while g and g[0][1] - g[0][0] < min_pairs:
+            g = g[1:]
+        while g and g[-1][1] - g[-1][0] < min_pairs:
+            g = g[:-1]
+        if g and sustained(g[0][0], g[-1][1]):
+            zones.append((g[0][0], g[-1][1]))
     keep = np.zeros(n_pairs, dtype=bool)
     for i0, i1 in zones:
         keep[i0:i1] = True
@@ -182,12 +198,15 @@ def compact_zones(x_mean: np.ndarray, gap_mean: np.ndarray, L_x: float, *,
     i0, i1 = zones[0]
     lead = sustained(0, i0)                        # a collisional zone at the ice edge
     tail = sustained(zones[-1][1], n_pairs)        # a collisional zone at the far end
-    W_c = float(x[i0] + 0.5 * L_x)
+    # W_c: the right end of floe i0; 0 when the first pair is already compact
+    W_c = float(x[i0] + 0.5 * L_x) if i0 > 0 else 0.0
     end = ice_extent if (len(zones) == 1 and not tail) else float(x[i1 - 1] + 0.5 * L_x)
     if len(zones) > 1 or (lead and tail):
         layout = "patchy"
     elif tail:
         layout = "inverted"
+    elif i0 == 0:
+        layout = "compact"
     else:
         layout = "edge"
     return Zones(layout, W_c, end, ice_extent, keep, (i0, i1), len(zones))
@@ -220,9 +239,12 @@ def zone_fits(x: np.ndarray, a: np.ndarray, a0: float, zones: Zones, *, min_floe
         return (*fit(np.ones(n, dtype=bool)), *nan)
     i0, i1 = zones.first
     edge = np.zeros(n, dtype=bool)
-    edge[:i0 + 1] = True            # centres before W_c = x[i0] + L_x / 2
     inner = np.zeros(n, dtype=bool)
-    inner[i0 + 1:i1 + 1] = True     # the right floes of the zone's pairs
+    if zones.W_c > 0:
+        edge[:i0 + 1] = True        # centres before W_c = x[i0] + L_x / 2
+        inner[i0 + 1:i1 + 1] = True  # the right floes of the zone's pairs
+    else:
+        inner[:i1 + 1] = True       # compact from the first floe (W_c = 0): no edge zone
     return (*fit(edge), *fit(inner))
 
 

@@ -173,7 +173,7 @@ def fig2(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> list[P
             _confined(ax, rows.iloc[0], x_end)
             ax.plot([], [], "k--", lw=0.9, label="compact ice from x = W_c")
             ax.plot([], [], "o", color="0.6", mec="k", mew=0.6,
-                    label="gap < threshold (x = W_c)")
+                    label="start of the compact zone (x = W_c)")
             ax.set_title(f"({chr(97 + panel)}) {disp.upper()}", loc="left")
             ax.set_xlabel("distance from the ice edge x [m]")
             ax.grid(alpha=0.3)
@@ -310,18 +310,24 @@ def summary(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> lis
         shown = groups[:12]
         vary = [i for i, k in enumerate(keys) if len({kv[0][i] for kv in shown}) > 1]
         same = [i for i in range(len(keys)) if i not in vary]
+        sheet = derived(df)["L_sheet"].max()
+        ax_top = float(sheet) if np.isfinite(sheet) else float(np.nanmax(df["W_c"]))
+        marked_none = False
         for key, sub in shown:
             sub = sub.sort_values("eps")
             label = _title([keys[i] for i in vary], [key[i] for i in vary]) or None
-            ax.plot(sub["eps"], sub["W_c"], "o-", ms=4, lw=1, label=label)
+            line, = ax.plot(sub["eps"], sub["W_c"], "o-", ms=4, lw=1, label=label)
+            none = sub["W_c"].isna()
+            if none.any():      # no compact zone: marked at the top, not a width
+                ax.plot(sub.loc[none, "eps"], np.full(int(none.sum()), ax_top), "x",
+                        color=line.get_color(), ms=6)
+                marked_none = True
         ax.set_title(_title([keys[i] for i in same], [shown[0][0][i] for i in same]),
                      fontsize=8)
         ax.set_xlabel("restitution coefficient ε [–]")
         ax.set_ylabel("collision-zone width W_c [m]")
-        sheet = derived(df)["L_sheet"].max()
-        if np.isfinite(sheet) and (df["W_c"] >= sheet).any():
-            ax.axhline(sheet, color="k", ls=":", lw=1,
-                       label=f"sheet length {sheet:g} m (zone spans the sheet)")
+        if marked_none:
+            ax.plot([], [], "kx", label=f"no compact zone (drawn at {ax_top:g} m)")
             vary = vary or [-1]
         ax.grid(alpha=0.3)
         if vary:

@@ -103,6 +103,8 @@ COLUMNS: tuple[Column, ...] = (
     _C("provenance", "str", "", "JSON: versions of package, git, python, numpy, numba, MPI"),
 )
 _BY_NAME = {c.name: c for c in COLUMNS}
+#: Schema version that added a column (columns not listed: version 1).
+ADDED_IN = {"compact_zone": 2, "compact_end": 2, "ice_extent": 2}
 
 #: Per-point profiles (``/profiles/<hh>/<hash>/<name>``): name -> (units, long_name).
 PROFILE_VARS: dict[str, tuple[str, str]] = {
@@ -219,7 +221,9 @@ def schema_document() -> dict[str, Any]:
 def validate(path: str | Path) -> list[str]:
     """Check a store against this schema; returns the problems found (empty: valid).
 
-    Checks the root attributes and version, that every column exists, has the kind of
+    Checks the root attributes and version (an older version with a migration path is
+    valid: readers read it as it is, a writer migrates it), that every column of its
+    version exists, has the kind of
     its schema entry and at least ``n_rows`` values, that hashes are unique 64-hex
     strings and statuses known, and that every committed non-failed point has a profile
     group whose datasets have length ``n_floes``.
@@ -236,8 +240,12 @@ def validate(path: str | Path) -> list[str]:
             if key not in f.attrs:
                 problems.append(f"/: missing attribute {key!r}")
         version = f.attrs.get("schema_version")
-        if version is not None and int(version) != SCHEMA_VERSION:
-            problems.append(f"/: schema_version {int(version)} != {SCHEMA_VERSION}")
+        version = SCHEMA_VERSION if version is None else int(version)
+        if version > SCHEMA_VERSION:
+            problems.append(f"/: schema_version {version} is newer than {SCHEMA_VERSION}")
+        elif version < SCHEMA_VERSION and version not in MIGRATIONS:
+            problems.append(f"/: schema_version {version} has no migration to"
+                            f" {SCHEMA_VERSION}")
         if f.attrs.get("format") not in (FORMAT, FORMAT.encode()):
             problems.append(f"/: format {f.attrs.get('format')!r} != {FORMAT!r}")
         if "table" not in f:
@@ -247,6 +255,8 @@ def validate(path: str | Path) -> list[str]:
             problems.append("/table: missing attribute 'n_rows'")
         for col in COLUMNS:
             if col.name not in f["table"]:
+                if ADDED_IN.get(col.name, 1) > version:
+                    continue        # an older (readable, migratable) store lacks it
                 problems.append(f"/table/{col.name}: missing")
                 continue
             ds = f["table"][col.name]

@@ -319,6 +319,7 @@ class Store:
             self._create(campaign)
         elif campaign is not None:
             self._check_campaign(campaign, extend)
+            self._migrate()
 
     def _check_version(self) -> None:
         assert self.file is not None
@@ -334,9 +335,18 @@ class Store:
             if version not in MIGRATIONS:
                 raise SchemaVersionError(f"{self.path}: no migration from schema version"
                                          f" {version} to {SCHEMA_VERSION}")
+            version = MIGRATIONS[version][0]
+
+    def _migrate(self) -> None:
+        """Migrate an older store step by step (only once the campaign check passed: a
+        refused store is left as it was)."""
+        assert self.file is not None
+        version = int(self.file.attrs.get("schema_version", 0))
+        while version < SCHEMA_VERSION:
             version, _, migrate = MIGRATIONS[version]
             migrate(self.file)
             self.file.attrs["schema_version"] = version
+            self.file.flush()
 
     def _create(self, campaign: Any) -> None:
         f = h5py.File(self.path, "w")

@@ -136,3 +136,15 @@ def test_cell_sums_are_per_floe_sums_bit_for_bit(L_x, m):
                 q2 = K.drag_force_sum(A, sc[K.SC_C, i], sc[K.SC_S, i], v[i] * 0.05,
                                       chain.cxi, chain.sxi)
             assert sc[K.SC_S2, i] == q2
+
+
+def test_scratch_too_small_is_refused():
+    """The padded scratch is checked, not silently overrun."""
+    from floewave import _kernels as K
+    cfg = ModelConfig()
+    k, _ = solve_dispersion(cfg)
+    chain = FloeChain(cfg, k)
+    a = np.full(cfg.n_floes, cfg.a0)
+    chain.work = np.zeros((K.N_WORK, cfg.n_floes))          # no padding lanes
+    with pytest.raises(ValueError, match="scratch too small"):
+        chain.run(a, 10)

@@ -36,6 +36,9 @@ SCRIPT = textwrap.dedent("""
         "long": dict(L_x=1.5, T=1.2, a0=0.02, eps=0.8, d_f=0.005, dispersion="ep"),
         "exact": dict(L_x=0.5, T=1.2, a0=0.015, eps=0.6, d_f=0.005, dispersion="ml",
                       drag_integration="exact"),
+        # 1.5 m floes, exact drag: the per-floe exact loop (most floes need roots)
+        "exact-long": dict(L_x=1.5, T=1.2, a0=0.02, eps=0.8, d_f=0.005, dispersion="ep",
+                           drag_integration="exact", integrator="half_step"),
     }
     SHORT = dict(n0=2, nT=1, max_iterations=4, noise_window=2, n_average=2, n0_warm=0)
 
@@ -68,7 +71,7 @@ def _run(cache_dir, order):
 
 @pytest.mark.skipif(os.environ.get("NUMBA_DISABLE_JIT") == "1", reason="needs the JIT")
 def test_point_bits_do_not_depend_on_the_jit_cache(tmp_path):
-    names = ["quadrature", "long", "exact"]
+    names = ["quadrature", "long", "exact", "exact-long"]
     cold = _run(tmp_path / "cache-a", names)
     assert any((tmp_path / "cache-a").rglob("*.nbc")), "nothing was cached"
     warm = _run(tmp_path / "cache-a", names)

@@ -69,6 +69,9 @@ def test_collision_stats_by_eps(table):
     assert s.loc[0.8, "W_c_rel_mean"] == pytest.approx(4.0 / 6.0)
     assert s.loc[0.8, "frac_no_compact_zone"] == pytest.approx(0.5)
     assert s.loc[0.8, "n_inner_over_c"] == 12
+    # only the paper's layout: the same here (every point with a zone is "edge")
+    e = collision_stats(table, by="eps", layouts=["edge"]).set_index("eps")
+    assert e.loc[0.8, "n_points"] == 12 and e.loc[0.8, "W_c_mean"] == pytest.approx(4.0)
     assert s.loc[0.2, "inner_over_c_mean"] == pytest.approx(1.2)
     assert s.loc[0.8, "inner_over_c_median"] == pytest.approx(1.8)
     assert s.loc[0.2, "edge_over_inner_mean"] == pytest.approx(3.25)   # (2.5 + 4) / 2
@@ -104,7 +107,8 @@ def test_alpha_omega_recovers_the_exponents(table):
     assert list(r.columns[:5]) == ["L_x", "a0", "C_sd", "eps", "d_f"]
     assert len(r) == 2 * 2 * 2 * 2                      # L_x x eps x d_f x dispersion
     none = (r["L_x"] == 1.0) & (r["eps"] == 0.8)        # no compact zone: no alpha_inner
-    assert r.loc[none, "m"].isna().all() and (r.loc[none, "n_dropped_nan"] == 3).all()
+    assert r.loc[none, "m"].isna().all() and (r.loc[none, "n_dropped_no_zone"] == 3).all()
+    assert (r["n_dropped_nan"] == 0).all()
     assert (r.loc[none, "n_points"] == 0).all()
     r = r[~none]
     for disp, m in POWER_M.items():
@@ -123,7 +127,7 @@ def test_alpha_omega_recovers_the_exponents(table):
 def test_alpha_omega_coarser_groups_pool_points(table):
     r = alpha_omega(table, by="dispersion").set_index("dispersion")
     assert r.loc["ep", "n_points"] == 18 and r.loc["ep", "m"] == pytest.approx(2.0)
-    assert r.loc["ep", "n_dropped_nan"] == 6
+    assert r.loc["ep", "n_dropped_no_zone"] == 6
     assert r.loc["ml", "m"] == pytest.approx(6.0)
     # alpha_edge = (2 + 100 d_f) alpha_inner: pooled over d_f the exponent stays, the
     # scatter shows in the residual and the standard error
@@ -139,7 +143,7 @@ def test_alpha_omega_drops_nonpositive_rates_and_needs_enough_periods(table):
                                               t.loc[first_ep, "alpha_inner"])
     r = alpha_omega(t, by="dispersion").set_index("dispersion")
     assert r.loc["ep", "n_dropped_nonpositive"] == 8 and r.loc["ep", "n_periods"] == 2
-    assert r.loc["ep", "n_dropped_nan"] == 4 and r.loc["ep", "n_dropped"] == 12
+    assert r.loc["ep", "n_dropped_no_zone"] == 4 and r.loc["ep", "n_dropped"] == 12
     assert math.isnan(r.loc["ep", "m"])                          # 2 periods < 3
     assert math.isnan(r.loc["ep", "m_c"])                        # same points as m
     assert alpha_omega(t, by="dispersion", min_periods=2).set_index(
@@ -148,3 +152,20 @@ def test_alpha_omega_drops_nonpositive_rates_and_needs_enough_periods(table):
         alpha_omega(t, by=["T"])
     with pytest.raises(KeyError, match="alpha_x"):
         alpha_omega(t, alpha="alpha_x")
+
+
+def test_rows_of_old_stores(table):
+    """Rows written before model version 3 (empty compact_zone, the first-pair W_c): W_c =
+    L_sheet meant no compact pair (now "none": no W_c, no alpha_inner), any other W_c is
+    "legacy" and counted apart."""
+    old = table.copy()
+    old["compact_zone"] = ""
+    old["W_c"] = np.where(old["eps"] == 0.8, 6.0, 1.0)
+    d = derived(old)
+    none = d["eps"] == 0.8
+    assert (d.loc[none, "compact_zone"] == "none").all()
+    assert d.loc[none, "W_c"].isna().all() and d.loc[none, "inner_over_c"].isna().all()
+    assert (d.loc[~none, "compact_zone"] == "legacy").all()
+    s = collision_stats(old, by="eps").set_index("eps")
+    assert s.loc[0.8, "n_no_compact"] == 24 and s.loc[0.8, "n_W_c"] == 0
+    assert s.loc[0.2, "n_legacy"] == 24 and s.loc[0.2, "W_c_mean"] == pytest.approx(1.0)

@@ -85,9 +85,15 @@ def test_schema_v1_store_read_as_is_and_migrated_by_a_writer(tmp_path, campaign)
         for name in ("compact_zone", "compact_end", "ice_extent"):
             del f["table"][name]
     old = sweep.load(path)
+    assert sweep.validate(path) == []                  # readable as it is
     assert (old["compact_zone"] == "").all() and old["ice_extent"].isna().all()
     pd_cols = ["hash", "W_c", "alpha_inner", "status"]
     assert old[pd_cols].equals(before[pd_cols])
+    other = parse_campaign(TOML.replace("0.6]", "0.8]"), "other.toml")
+    with pytest.raises(sweep.SweepError):
+        fill(other, path)                              # refused: left as it was
+    with h5py.File(path, "r") as f:
+        assert int(f.attrs["schema_version"]) == 1 and "compact_zone" not in f["table"]
     fill(campaign, path)                               # a writer opens it: migrated
     with h5py.File(path, "r") as f:
         assert int(f.attrs["schema_version"]) == SCHEMA_VERSION

@@ -75,6 +75,19 @@ def test_isolated_compact_pairs_do_not_start_the_zone():
     assert z.layout == "edge" and not z.compact[10]
 
 
+@pytest.mark.parametrize("L_x", [0.5, 3.0])
+@pytest.mark.parametrize("lead", ["#+", "#++", "##+", "#+#+"])
+def test_a_bridge_never_attaches_an_isolated_pair(L_x, lead):
+    """Isolated compact pairs a marginal pair or two ahead of a zone are not bridged into
+    it: W_c is where min_pairs compact pairs in a row begin (review finding: a 3 m chain's
+    W_c moved from 18 to 9 m by one such pair)."""
+    n = 13 if L_x == 3.0 else 83
+    rest = n - 3 - len(lead) - 6
+    x, z = zones("..." + lead + "#" * 6 + "." * 0 + "#" * rest, L_x=L_x)
+    assert z.W_c == pair_x(x, 3 + len(lead), L_x)
+    assert not z.compact[3:3 + len(lead)].any()
+
+
 def test_no_compact_zone_gives_no_boundary():
     """A few compact pairs near the far end (the periods.toml ep T 1.5 case: a 3-floe
     'inner zone') or none at all: W_c is NaN, not a number that reads as a boundary."""
@@ -90,8 +103,20 @@ def test_inverted_layout():
     """Compact from the ice edge, collisional further in (Fig. 5's 1.5 m ep point as
     measured before this change: compact at 0-20 m, collisional at 23-31 m)."""
     x, z = zones("#" * 13 + "." * 14, L_x=1.5)
-    assert z.layout == "inverted" and z.W_c == pair_x(x, 0, 1.5)
+    assert z.layout == "inverted" and z.W_c == 0.0      # no collisional zone at the edge
     assert z.compact_end == pair_x(x, 12, 1.5)
+    x, z = zones(".." + "#" * 11 + "." * 14, L_x=1.5)    # a short one: still inverted
+    assert z.layout == "inverted" and z.W_c == pair_x(x, 2, 1.5)
+
+
+def test_compact_everywhere():
+    """Compact from the first pair to the far end: no collisional zone, W_c = 0, every
+    floe in the inner fit (a confined chain without gaps looks like this)."""
+    x, z = zones("#" * 83)
+    assert z.layout == "compact" and z.W_c == 0.0 and z.compact_end == z.ice_extent
+    a0, alpha = 0.0125, 2e-3
+    e, _, i, _ = zone_fits(x, 1 / (1 / a0 + alpha * x), a0, z, **FIT)
+    assert math.isnan(e) and i == pytest.approx(alpha, rel=1e-9)
 
 
 def test_patchy_layouts():
