@@ -1,6 +1,6 @@
 """How far does a rounding-level change move a point? The Fig. 2 points, each run with
-d_f and with d_f one ulp larger (``math.nextafter``): a different chaotic trajectory of the
-same physics.
+d_f and with d_f changed so that the floe spacing L_x + d_f is one ulp larger (1 ulp of d_f
+alone would vanish in L_x + d_f): a different chaotic trajectory of the same physics.
 
     python benchmarks/rounding_spread.py [--config configs/fig2.toml] [--jobs 2]
 
@@ -38,11 +38,12 @@ def main() -> int:
 
     campaign = sweep.load_campaign(args.config)
     points = [p.config.to_dict() for p in campaign.points()]
-    bumped = [dict(c, d_f=math.nextafter(c["d_f"], math.inf)) for c in points]
+    bumped = [dict(c, d_f=math.nextafter(c["L_x"] + c["d_f"], math.inf) - c["L_x"])
+              for c in points]
     with ProcessPoolExecutor(args.jobs) as pool:
         res = list(pool.map(_run, points + bumped))
     one, two = res[:len(points)], res[len(points):]
-    print(f"{args.config.name}: d_f and d_f + 1 ulp (single trajectories)")
+    print(f"{args.config.name}: floe spacing L_x + d_f and 1 ulp more (single trajectories)")
     dW = []
     for c, r1, r2 in zip(points, one, two, strict=True):
         z = (r1[2] - r2[2]) / np.sqrt(r1[3] ** 2 + r2[3] ** 2)
