@@ -87,7 +87,7 @@ def test_campaign_bits_in_process_mpi_and_after_kill_and_resume(tmp_path):
     """A small real campaign stores the same bits per hash (every result column, every
     profile) whether it ran in-process with a cold cache, under ``mpiexec -n 3`` with
     another cold cache (the workers compile at the same time), or was killed with SIGKILL
-    after its first points and resumed (with the cache the killed run left)."""
+    after its first points and resumed (with the warm cache of the MPI run)."""
     import signal
     import time
 
@@ -112,7 +112,7 @@ def test_campaign_bits_in_process_mpi_and_after_kill_and_resume(tmp_path):
     run(one, 1, "cache-one")
     run(mpi, 3, "cache-mpi")
     # killed after its first stored points, then resumed
-    proc = subprocess.Popen(_command(config, killed, 3), env=env("cache-kill"),
+    proc = subprocess.Popen(_command(config, killed, 3), env=env("cache-mpi"),
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                             start_new_session=True)
     deadline = time.monotonic() + 300
@@ -126,7 +126,7 @@ def test_campaign_bits_in_process_mpi_and_after_kill_and_resume(tmp_path):
     assert _group_gone(proc.pid)
     n_before = sum(1 for _ in read_journal(journal_path(killed)))
     assert 3 <= n_before < 24
-    run(killed, 3, "cache-kill")
+    run(killed, 3, "cache-mpi")
     for store in (mpi, killed):
         res = compare(one, store)
         assert res["problems"] == [] and res["compared"] == 24, res["problems"][:5]
