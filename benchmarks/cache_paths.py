@@ -47,9 +47,10 @@ def main() -> int:
                        cwd=tmp)    # not this checkout's directory: it would shadow --rev
         stores.append(store)
     sys.path.insert(0, str(ROOT / "tests"))
+    from test_sweep_torture import compare
+
     import floewave
     import sweep
-    from test_sweep_torture import compare
 
     a, b = (sweep.load(s).set_index("hash").sort_index() for s in stores)
     version = subprocess.run([sys.executable, "-c", "import floewave; print(floewave.__file__,"

@@ -1,7 +1,8 @@
 """The measurements behind the compact-zone rule's defaults (floewave.results.compact_zones).
 
     python benchmarks/docs_numbers.py --out paper     # the paper-figure stores (or any)
-    python benchmarks/zone_rule.py paper/fig2.h5 paper/fig5.h5 paper/fig6a.h5 paper/fig6b.h5 paper/periods.h5
+    python benchmarks/zone_rule.py paper/fig2.h5 paper/fig5.h5 paper/fig6a.h5 \
+        paper/fig6b.h5 paper/periods.h5
 
 From the stored mean-gap profiles of every point, with the raw threshold rule (a pair is
 compact if its phase-averaged gap is below gap_threshold = 0.1 mm), prints:

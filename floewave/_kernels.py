@@ -1,6 +1,7 @@
 """Numba kernels: the DEM time loop (private; use :mod:`floewave.model`).
 
-Everything here is nopython, cached, without fast-math (flags and why: :mod:`floewave._jit`). The kernels see only numpy arrays and a
+Everything here is nopython, cached, without fast-math (flags and why:
+:mod:`floewave._jit`). The kernels see only numpy arrays and a
 :class:`KernelParams` named tuple of numbers built once per point from the frozen
 :class:`~floewave.config.ModelConfig`; option switches are small integers fixed for the
 whole call (loop-invariant branches, no Python objects in the time loop).
@@ -26,7 +27,6 @@ from numba import njit
 
 from ._exact import drag_force_exact, drag_pass_exact, drag_sums_exact, general_floes
 from ._jit import JIT, JITN
-
 
 # option codes (decided once from ModelConfig)
 CONTACT_HERTZ_DISK = 0

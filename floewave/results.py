@@ -16,10 +16,11 @@ PROFILE_FIELDS = ("x_mean", "a", "a_stderr", "S_sd", "gap_mean", "contact_fracti
                   "collisions", "F_w_mean", "F_c_mean", "F_d_mean")
 
 #: Scalar results and diagnostics.
-SCALAR_FIELDS = ("n_floes", "W_c", "compact_zone", "compact_end", "ice_extent", "alpha_all", "alpha_all_resid", "alpha_edge",
-                 "alpha_edge_resid", "alpha_inner", "alpha_inner_resid", "alpha_exp",
-                 "alpha_exp_resid", "alpha_c", "k", "c_g", "status", "noise", "iterations",
-                 "residual", "floe_steps", "wall_time", "kernel_mode", "a_end")
+SCALAR_FIELDS = ("n_floes", "W_c", "compact_zone", "compact_end", "ice_extent", "alpha_all",
+                 "alpha_all_resid", "alpha_edge", "alpha_edge_resid", "alpha_inner",
+                 "alpha_inner_resid", "alpha_exp", "alpha_exp_resid", "alpha_c", "k", "c_g",
+                 "status", "noise", "iterations", "residual", "floe_steps", "wall_time",
+                 "kernel_mode", "a_end")
 
 STATUSES = ("converged", "converged_noisy", "not_converged")
 

@@ -224,9 +224,9 @@ def alpha_omega(df: pd.DataFrame, alpha: str = "alpha_inner",
     ``n_points`` (points fitted), ``n_dropped`` (points left out) and why:
     ``n_dropped_no_zone`` (no rate because the point has no compact zone: alpha_inner),
     ``n_dropped_nan`` (no rate otherwise: a zone too short to fit, or no floe to fit) and
-    ``n_dropped_nonpositive`` (alpha <= 0: no logarithm), ``omega_min``, ``omega_max`` [rad s-1], and ``m_c``: the same fit of
-    ``alpha_c`` over the same points (the confined-ice exponent, eq. 24-28), for
-    comparison.
+    ``n_dropped_nonpositive`` (alpha <= 0: no logarithm), ``omega_min``, ``omega_max``
+    [rad s-1], and ``m_c``: the same fit of ``alpha_c`` over the same points (the
+    confined-ice exponent, eq. 24-28), for comparison.
     """
     if alpha not in df.columns:
         raise KeyError(f"alpha_omega: no column {alpha!r}")

@@ -117,7 +117,8 @@ def test_campaign_bits_in_process_mpi_and_after_kill_and_resume(tmp_path):
                             start_new_session=True)
     deadline = time.monotonic() + 300
     while time.monotonic() < deadline and proc.poll() is None:
-        if journal_path(killed).exists() and sum(1 for _ in read_journal(journal_path(killed))) >= 3:
+        jpath = journal_path(killed)
+        if jpath.exists() and sum(1 for _ in read_journal(jpath)) >= 3:
             break
         time.sleep(0.05)
     assert proc.poll() is None, "the campaign ended before it could be killed"

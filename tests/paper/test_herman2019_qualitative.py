@@ -1,9 +1,9 @@
 """Paper §4 qualitative results (MODEL.md §8) on small, reduced-numerics points.
 
 Reduced: L_x = 1.5 m (28 floes; 0.5 m, 84 floes, for the floe-size and W_c checks), n0 = 3,
-nT = 2 periods per iteration, noise-floor averaging over 16 iterations (24 for 0.5 m). Each amplitude
-comparison is between far-end amplitudes whose difference is many standard errors wide
-(asserted).
+nT = 2 periods per iteration, noise-floor averaging over 16 iterations (24 for 0.5 m).
+Each amplitude comparison is between far-end amplitudes whose difference is many standard
+errors wide (asserted).
 """
 import pytest
 
