@@ -1,0 +1,384 @@
+"""The shipped batch scripts (``slurm/*.sbatch``) under a real single-node Slurm (issue 16).
+
+Each test submits the script itself with ``sbatch`` on a small real campaign (16 points of
+~0.1-0.4 s; :data:`CAMPAIGN`), then looks at what Slurm reports (``scontrol show job``:
+state, restarts, exit code) and at the store: every point once, the same values as an
+uninterrupted run (the first test's job; ``compare`` of the torture test).
+
+The daemons are started by the session fixture :func:`slurm` (tests/slurm_cluster.py) and
+need Debian's ``slurm-wlm`` and ``munge`` and root. Without them these tests skip; with
+``FLOEWAVE_REQUIRE_SLURM=1`` (set by ``.ci/run``, which installs both) a missing or
+unstartable Slurm is a failure. To run them here: ``apt-get install slurm-wlm munge`` as
+root, then ``FLOEWAVE_REQUIRE_SLURM=1 python -m pytest tests/test_slurm.py``.
+
+Slurm holds a requeued job for about two minutes (BeginTime); the tests start it at once
+(:meth:`SlurmCluster.release`). With ``pytest -s`` (and at the end of any run) each
+scenario prints what Slurm reported.
+"""
+from __future__ import annotations
+
+import os
+import pwd
+import shutil
+import subprocess
+import sys
+import time
+from datetime import datetime
+from pathlib import Path
+
+import h5py
+import pytest
+from slurm_cluster import SlurmCluster, SlurmError, missing_programs
+from test_sweep_torture import compare
+
+import sweep
+from sweep.store import journal_path, read_journal
+
+ROOT = Path(__file__).resolve().parents[1]
+MPI_SCRIPT = ROOT / "slurm" / "sweep_mpi.sbatch"
+ARRAY_SCRIPT = ROOT / "slurm" / "sweep_array.sbatch"
+REQUIRE = os.environ.get("FLOEWAVE_REQUIRE_SLURM", "") not in ("", "0")
+#: 16 real points of ~0.1-0.4 s (4 or 8 floes of a 24 m sheet, as in the torture test):
+#: ~3 s of computing under 3 ranks on 2 cores, after a start-up of 3-6 s.
+CAMPAIGN = """\
+[base]
+L_sheet = 24.0
+n0 = 1
+nT = 1
+max_iterations = 10
+noise_window = 2
+n_average = 2
+n0_warm = 1
+
+[sweep]
+L_x = [3.0, 1.5]
+T = [1.2, 1.6]
+eps = [0.2, 0.6]
+dispersion = ["ml", "ep"]
+
+[run]
+name = "slurm-test"
+progress_interval = 1.0
+grace_period = 5.0
+"""
+N_POINTS = 16
+RANKS = "3"
+HOW_TO = ("apt-get install slurm-wlm munge (as root), then set FLOEWAVE_REQUIRE_SLURM=1"
+          " (.ci/run does both)")
+
+_report: list[str] = []
+
+
+@pytest.fixture(scope="session")
+def slurm(request):
+    """A running single-node Slurm for the session (skips outside CI when unavailable)."""
+    missing = missing_programs()
+    problem = None
+    if missing:
+        problem = f"Slurm not installed (missing {', '.join(missing)})"
+    elif os.geteuid() != 0:
+        problem = "the Slurm daemons of these tests need root"
+    if problem:
+        if REQUIRE:
+            pytest.fail(f"FLOEWAVE_REQUIRE_SLURM is set but {problem}")
+        pytest.skip(f"{problem}: {HOW_TO}")
+    cluster = SlurmCluster()
+    try:
+        cluster.start()
+    except SlurmError as exc:
+        cluster.stop()
+        pytest.fail(f"Slurm did not start: {exc}")
+    yield cluster
+    cluster.stop()
+    shutil.rmtree(cluster.dir, ignore_errors=True)
+    if _report:
+        reporter = request.config.pluginmanager.get_plugin("terminalreporter")
+        capman = request.config.pluginmanager.get_plugin("capturemanager")
+        if reporter is not None and capman is not None:
+            with capman.global_and_fixture_disabled():
+                reporter.write_line("")
+                for line in _report:
+                    reporter.write_line(f"slurm: {line}")
+
+
+def says(rec: dict[str, str]) -> str:
+    """What Slurm reports of a job (or array task)."""
+    return f"JobState={rec['JobState']} Restarts={rec['Restarts']} ExitCode={rec['ExitCode']}"
+
+
+def report(scenario: str, slurm_says: str, store: Path, extra: str = "") -> None:
+    """One line per scenario, printed at the end of the session (and with ``-s``)."""
+    points = len(sweep.load(store)) if store.exists() else 0
+    line = f"{scenario}: {slurm_says}; store points={points}" + (f"; {extra}" if extra else "")
+    _report.append(line)
+    print(line)
+
+
+@pytest.fixture(scope="session")
+def campaign(tmp_path_factory) -> Path:
+    path = tmp_path_factory.mktemp("slurm-campaign") / "c.toml"
+    path.write_text(CAMPAIGN)
+    return path
+
+
+def job_env(slurm: SlurmCluster, **changes: str | None) -> dict[str, str]:
+    """Job environment: USER set as a login shell sets it; NUMBA_CACHE_DIR left to the
+    script (its default, /tmp/numba-cache-$USER, is shared by the jobs)."""
+    user = pwd.getpwuid(os.getuid()).pw_name
+    return slurm.env(**{"USER": user, "NUMBA_CACHE_DIR": None, **changes})
+
+
+def submit_mpi(slurm, campaign, store: Path, env=None, ntasks: str = RANKS) -> str:
+    return slurm.sbatch(f"--ntasks={ntasks}", f"--output={store.parent}/job-%j.log",
+                        str(MPI_SCRIPT), str(campaign), str(store), env=env or job_env(slurm))
+
+
+def log_of(store: Path, job: str) -> str:
+    path = store.parent / f"job-{job}.log"
+    return path.read_text(errors="replace") if path.exists() else "(no log)"
+
+
+def journal_lines(store: Path) -> int:
+    path = journal_path(store)
+    return path.read_bytes().count(b"\n") if path.exists() else 0
+
+
+def wait_for(pred, timeout: float, what: str, poll: float = 0.02) -> None:
+    deadline = time.monotonic() + timeout
+    while not pred():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"{what}: not within {timeout:g} s")
+        time.sleep(poll)
+
+
+def same_as(reference: Path, store: Path) -> dict:
+    res = compare(reference, store)
+    assert not res["problems"], "\n".join(res["problems"][:20])
+    assert res["points"] == N_POINTS and res["compared"] == N_POINTS
+    assert res["dup_table"] == 0 and res["dup_journal"] == 0
+    return res
+
+
+def hold_seconds(rec: dict[str, str]) -> float:
+    """How long after its (re)submission a pending job may start (EligibleTime)."""
+    t = {k: datetime.fromisoformat(rec[k]) for k in ("SubmitTime", "EligibleTime")}
+    return (t["EligibleTime"] - t["SubmitTime"]).total_seconds()
+
+
+def runs_of(store: Path) -> dict[str, int]:
+    """Per hash: the index of the ``sweep run`` that stored it (the table's run column)."""
+    df = sweep.load(store)
+    return dict(zip(df["hash"], df["run"].astype(int), strict=True))
+
+
+# --------------------------------------------------------------------------- scenarios
+@pytest.fixture(scope="session")
+def reference(slurm, campaign, tmp_path_factory) -> tuple[Path, str]:
+    """The MPI script, USER set, run to completion: the uninterrupted reference."""
+    store = tmp_path_factory.mktemp("slurm-reference") / "ref.h5"
+    job = submit_mpi(slurm, campaign, store)
+    try:
+        slurm.wait(job, timeout=240)  # the first job may compile the numba kernels
+    finally:
+        slurm.cancel_quietly(job)
+    return store, job
+
+
+def test_mpi_script_runs_a_campaign(slurm, reference):
+    store, job = reference
+    rec = slurm.job(job)
+    log = log_of(store, job)
+    report("MPI script, USER set", says(rec), store)
+    assert (rec["JobState"], rec["ExitCode"], rec["Restarts"]) == ("COMPLETED", "0:0", "0"), log
+    assert f"{N_POINTS} grid points: 0 already stored, {N_POINTS} stored now" in log, log
+    df = sweep.load(store)
+    assert len(df) == N_POINTS and df["hash"].is_unique
+    assert set(df["rank"]) == {1, 2}, "the points were not computed by two worker ranks"
+    assert sweep.validate(store) == []
+
+
+def test_mpi_script_without_user(slurm, campaign, reference, tmp_path):
+    """Submitted from an environment without USER (cron, service accounts)."""
+    env = job_env(slurm, USER=None)
+    probe = slurm.sbatch("--ntasks=1", f"--output={tmp_path}/probe.log", "--wrap",
+                         'echo "USER=${USER-<unset>}"', env=env)
+    store = tmp_path / "nouser.h5"
+    job = submit_mpi(slurm, campaign, store, env=env)
+    try:
+        slurm.wait(probe, timeout=60)
+        rec = slurm.wait(job, timeout=120)
+    finally:
+        slurm.cancel_quietly(job)
+    assert (tmp_path / "probe.log").read_text().strip() == "USER=<unset>", \
+        "the job environment had USER: this test proves nothing"
+    log = log_of(store, job)
+    report("MPI script, no USER", says(rec), store)
+    assert "unbound variable" not in log, log
+    assert (rec["JobState"], rec["ExitCode"]) == ("COMPLETED", "0:0"), log
+    same_as(reference[0], store)
+
+
+def test_mpi_script_with_the_wheels_mpiexec(slurm, campaign, reference, tmp_path):
+    """LAUNCHER=mpiexec: the mpich wheel's Hydra, which starts its proxies with srun (so
+    the ranks must be handed the job's SLURM_NTASKS, or sweep refuses the launch)."""
+    store = tmp_path / "hydra.h5"
+    job = submit_mpi(slurm, campaign, store, env=job_env(slurm, LAUNCHER="mpiexec"))
+    try:
+        rec = slurm.wait(job, timeout=120)
+    finally:
+        slurm.cancel_quietly(job)
+    log = log_of(store, job)
+    report("MPI script, LAUNCHER=mpiexec", says(rec), store)
+    assert (rec["JobState"], rec["ExitCode"]) == ("COMPLETED", "0:0"), log
+    same_as(reference[0], store)
+    assert set(sweep.load(store)["rank"]) == {1, 2}
+
+
+def test_time_limit_signal_stops_requeues_and_resumes(slurm, campaign, reference, tmp_path):
+    """What --signal=B:USR1@300 sends: clean stop (6), requeue, resume; nothing recomputed."""
+    store = tmp_path / "usr1.h5"
+    job = submit_mpi(slurm, campaign, store)
+    try:
+        wait_for(lambda: journal_lines(store) >= 1, 120, "no point stored")
+        slurm.run("scancel", "--signal=USR1", "--batch", job)
+        rec1 = slurm.wait(job, "PENDING", timeout=60, restarts=1)
+        log = log_of(store, job)
+        assert "Exited with exit code 6" in log and "exit status 6; requeueing" in log, log
+        first = runs_of(store)
+        assert 0 < len(first) < N_POINTS, f"{len(first)} points stored before the stop"
+        assert set(first.values()) == {0}
+        hold = hold_seconds(rec1)  # Slurm's hold of a requeued job (docs/cluster.md)
+        assert hold >= 60, rec1
+        slurm.release(job)
+        rec = slurm.wait(job, timeout=120)
+    finally:
+        slurm.cancel_quietly(job)
+    log = log_of(store, job)
+    report("time-limit signal (USR1) -> requeue -> resume", says(rec), store,
+           f"stopped after {len(first)} points; requeue hold {hold:.0f} s;"
+           f" runs: {slurm.history(job)}")
+    assert (rec["JobState"], rec["ExitCode"], rec["Restarts"]) == ("COMPLETED", "0:0", "1"), log
+    assert (f"{N_POINTS} grid points: {len(first)} already stored,"
+            f" {N_POINTS - len(first)} stored now") in log, log
+    same_as(reference[0], store)
+    after = runs_of(store)
+    assert {h: after[h] for h in first} == first, "a point stored before the stop was redone"
+    assert set(after.values()) == {0, 1}
+
+
+def test_scancel_cancels_and_does_not_requeue(slurm, campaign, tmp_path):
+    store = tmp_path / "cancel.h5"
+    job = submit_mpi(slurm, campaign, store)
+    try:
+        wait_for(lambda: journal_lines(store) >= 1, 120, "no point stored")
+        slurm.run("scancel", job)
+        rec = slurm.wait(job, {"CANCELLED", "COMPLETED", "FAILED", "PENDING", "REQUEUED"},
+                         timeout=60)
+        time.sleep(1)  # (the batch script has ended: a requeue by it would show)
+        rec = slurm.job(job)
+    finally:
+        slurm.cancel_quietly(job)
+    log = log_of(store, job)
+    report("scancel", says(rec), store)
+    assert (rec["JobState"], rec["Restarts"]) == ("CANCELLED", "0"), log
+    assert "requeueing" not in log, log
+    n = len(sweep.load(store))
+    assert 0 < n < N_POINTS
+    assert sweep.validate(store) == []
+
+
+def test_array_script_and_merge(slurm, campaign, reference, tmp_path):
+    shards = tmp_path / "shards"
+    job = slurm.sbatch("--array=0-3", f"--output={tmp_path}/shard-%A_%a.log",
+                       str(ARRAY_SCRIPT), str(campaign), str(shards), env=job_env(slurm))
+    try:
+        slurm.wait(job, timeout=180)
+    finally:
+        slurm.cancel_quietly(job)
+    recs = slurm.jobs(job)
+    logs = "\n".join(p.read_text() for p in sorted(tmp_path.glob("shard-*.log")))
+    assert len(recs) == 4, recs
+    assert all((r["JobState"], r["ExitCode"]) == ("COMPLETED", "0:0") for r in recs), logs
+    parts = sorted(shards.glob("c-*.h5"))
+    assert [p.name for p in parts] == [f"c-{k}.h5" for k in range(4)]
+    sizes = [len(sweep.load(p)) for p in parts]
+    assert sum(sizes) == N_POINTS and all(s > 0 for s in sizes), sizes
+    merged = tmp_path / "merged.h5"
+    proc = subprocess.run([sys.executable, "-m", "sweep", "merge", str(merged),
+                           *map(str, parts)], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    report("array script (4 tasks) + sweep merge",
+           ", ".join(f"task {r['ArrayTaskId']}: {says(r)}" for r in recs), merged,
+           f"shard sizes {sizes}")
+    same_as(reference[0], merged)
+
+
+def test_array_task_time_limit_signal_during_startup(slurm, campaign, reference, tmp_path):
+    """The time-limit signal to an array task still starting (one shard: the whole grid):
+    held back until ``sweep run`` listens, then a clean stop, that task requeued, resumed."""
+    shards = tmp_path / "shards"
+    job = slurm.sbatch("--array=0", f"--output={tmp_path}/shard-%A_%a.log", str(ARRAY_SCRIPT),
+                       str(campaign), str(shards), env=job_env(slurm, SHARDS="1"))
+    task = f"{job}_0"
+    store = shards / "c-0.h5"
+    try:
+        slurm.wait(task, "RUNNING", timeout=60)
+        slurm.run("scancel", "--signal=USR1", "--batch", task)
+        slurm.wait(task, "PENDING", timeout=90, restarts=1)
+        first = runs_of(store)
+        assert 0 < len(first) < N_POINTS, f"{len(first)} points stored before the stop"
+        slurm.release(task)
+        rec = slurm.wait(task, timeout=90)
+    finally:
+        slurm.cancel_quietly(job)
+    log = (tmp_path / f"shard-{job}_0.log").read_text()
+    report("array task, USR1 during start-up -> requeue -> resume", says(rec), store,
+           f"stopped after {len(first)} points")
+    assert "exit status 6; requeueing task" in log, log
+    assert (rec["JobState"], rec["ExitCode"], rec["Restarts"]) == ("COMPLETED", "0:0", "1"), log
+    same_as(reference[0], store)
+    after = runs_of(store)
+    assert {h: after[h] for h in first} == first, "a point stored before the stop was redone"
+
+
+@pytest.mark.parametrize("moment", ["step", "rebuild"])
+def test_node_failure_then_time_limit_signal_during_startup(slurm, campaign, reference,
+                                                           tmp_path, moment):
+    """The job step killed with SIGKILL (as by a node failure), the job requeued, and the
+    time-limit signal during the resumed job's start-up: as soon as its campaign step runs
+    (ranks importing, ``step``), or as soon as the master rebuilds the store its killed
+    predecessor left (``rebuild``). The store must end complete and as the reference."""
+    store = tmp_path / "node.h5"
+    job = submit_mpi(slurm, campaign, store)
+    try:
+        wait_for(lambda: journal_lines(store) >= 1, 120, "no point stored")
+        slurm.run("scancel", "--signal=KILL", f"{job}.0")
+        killed = slurm.wait(job, timeout=60)
+        assert killed["Restarts"] == "0", "the script requeued a job it should not have"
+        with h5py.File(store, "r", locking=False) as f:
+            assert bool(f.attrs["writer_open"]), "the kill left a clean store: nothing to test"
+        stored_before = len({r["row"]["hash"] for r in read_journal(journal_path(store))})
+
+        slurm.run("scontrol", "requeue", job)
+        slurm.release(job)
+        if moment == "step":  # the campaign is step k of run k (the script's empty steps)
+            wait_for(lambda: f"{job}.1" in slurm.steps(job), 60, "no campaign step")
+        else:
+            aside = store.with_name(store.name + ".unclean")
+            wait_for(aside.exists, 60, "no rebuild of the store", poll=0.002)
+        slurm.run("scancel", "--signal=USR1", "--batch", job)
+        rec = slurm.wait(job, {"PENDING", *sorted({"COMPLETED", "FAILED", "CANCELLED"})},
+                         timeout=90)
+        log = log_of(store, job)
+        assert rec["JobState"] == "PENDING" and rec["Restarts"] == "2", \
+            f"the time-limit signal did not stop and requeue the job: {rec}\n{log}"
+        slurm.release(job)
+        rec = slurm.wait(job, timeout=90)
+    finally:
+        slurm.cancel_quietly(job)
+    log = log_of(store, job)
+    report(f"node failure (step SIGKILL: {killed['JobState']} {killed['ExitCode']}),"
+           f" requeue, USR1 at {moment}", says(rec), store,
+           f"{stored_before} points before the kill; runs: {slurm.history(job)}")
+    assert (rec["JobState"], rec["ExitCode"], rec["Restarts"]) == ("COMPLETED", "0:0", "2"), log
+    same_as(reference[0], store)
