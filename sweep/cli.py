@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import signal
 import sys
 import time
 import traceback
@@ -92,7 +94,20 @@ def _err(message: str) -> None:
 
 
 # ---------------------------------------------------------------------- commands
+def _stop_during_start_up(signum: int, frame: Any) -> None:
+    from .errors import Interrupted
+
+    raise Interrupted(f"stopped by {signal.Signals(signum).name} during start-up, before"
+                      " the store was opened; nothing was changed — the campaign is resumable: run"
+                      " the same command again")
+
+
 def cmd_run(args: argparse.Namespace) -> int:
+    from .executor import _LAUNCHER_VARS
+
+    if not any(v in os.environ for v in _LAUNCHER_VARS):  # under MPI: workers would wait
+        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1):
+            signal.signal(sig, _stop_during_start_up)
     from .config import load_campaign
     from .executor import check_launch, mpi_world, run_campaign
 
@@ -216,7 +231,8 @@ def status_report(path: Path, slowest: int = 5) -> dict[str, Any]:
     failures = [{"hash": r.hash[:12], "status": r.status, "swept": {k: getattr(r, k) for k in
                                                                      campaign["sweep"]},
                  "message": r.message.splitlines()[0] if r.message else ""}
-                for r in df[df["status"].isin(["failed", "invalid"])].itertuples()]
+                for r in df[df["status"].isin(["failed", "invalid", "crashed",
+                                               "timeout"])].itertuples()]
     slow = df.sort_values("wall_time", ascending=False).head(slowest)
     return {"store": str(path), "grid_points": total, "stored": len(df),
             "remaining": max(total - len(df), 0), "counts": counts, "failures": failures,

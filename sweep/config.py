@@ -38,6 +38,8 @@ __all__ = ["Campaign", "Point", "RunOptions", "load_campaign", "parse_campaign",
 #: (collisional, high eps and C_sd) run to max_iterations = 100, a heavy tail that makes
 #: small samples scatter (means of 11, 22, 23 and 28 for the four samples).
 DEFAULT_EXPECTED_ITERATIONS = 22
+#: Longest time [s] accepted for a ``[run]`` duration (a year).
+MAX_SECONDS = 3.2e7
 
 
 @dataclass(frozen=True)
@@ -52,6 +54,8 @@ class RunOptions:
     grace_period : seconds the master waits for running points after a stop signal.
     expected_iterations : iterations per point assumed by cost estimates (0: the
         default, ``min(max_iterations, DEFAULT_EXPECTED_ITERATIONS)``).
+    max_attempts : a point whose worker (or the whole job) died while computing it this
+        many times is stored as ``crashed`` instead of being handed out again (0: never).
     """
 
     name: str = ""
@@ -59,6 +63,7 @@ class RunOptions:
     progress_interval: float = 30.0
     grace_period: float = 60.0
     expected_iterations: int = 0
+    max_attempts: int = 3
 
 
 @dataclass(frozen=True)
@@ -284,6 +289,11 @@ def _parse_run(table: dict[str, Any], source: str, errors: list[str]) -> RunOpti
             ok[key] = float(value) if kind == "float" else value
     if ok.get("progress_interval") == 0:
         errors.append(f"{source}: [run] progress_interval = 0: must be > 0")
+    for key in ("progress_interval", "grace_period"):
+        if ok.get(key, 0) > MAX_SECONDS:
+            errors.append(f"{source}: [run] {key} = {table[key]!r}: at most {MAX_SECONDS:g}"
+                          " s (a year)")
+            ok.pop(key)
     return RunOptions(**ok)
 
 
