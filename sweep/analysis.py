@@ -6,6 +6,7 @@ writer; only committed rows (below ``/table.attrs["n_rows"]``) are returned.
 from __future__ import annotations
 
 import json
+import time
 from pathlib import Path
 from typing import Any
 
@@ -17,7 +18,8 @@ import xarray as xr
 from .errors import StoreError
 from .schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, column, profile_path
 
-__all__ = ["load", "load_xarray", "load_profile", "store_attrs", "resolve_hash"]
+__all__ = ["load", "load_xarray", "load_profile", "store_attrs", "resolve_hash",
+           "journal_points"]
 
 #: Columns that are bookkeeping, not results: left out of :func:`load_xarray`.
 _NOT_RESULTS = {"hash", "message", "host", "rank", "pid", "start_time", "end_time", "run",
@@ -40,11 +42,71 @@ def _decode(values: np.ndarray) -> np.ndarray:
 
 def store_attrs(path: str | Path) -> dict[str, Any]:
     """The root attributes of a store (strings decoded)."""
-    with _open(path) as f:
-        return {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
+    def read() -> dict[str, Any]:
+        with _open(path) as f:
+            return {k: (v.decode() if isinstance(v, bytes) else v)
+                    for k, v in f.attrs.items()}
+
+    return _retried(read)
+
+
+def journal_points(path: str | Path) -> int | None:
+    """Distinct points recorded in the store's journal (``None`` without a journal).
+
+    Counts what is durable even when the HDF5 file lags behind (a live run between its
+    journal write and its HDF5 write, or a killed run whose next start writes them).
+    A quick count: the hash of each record line, not its checksum.
+    """
+    import re
+
+    from .journal import journal_path
+
+    jp = journal_path(path)
+    if not jp.exists():
+        return None
+    pattern = re.compile(rb'"hash":"([0-9a-f]{64})"')
+    seen = set()
+    with open(jp, "rb") as fh:
+        for line in fh:
+            if line.startswith(b'{"row":') and line.endswith(b"\n"):
+                m = pattern.search(line)
+                if m:
+                    seen.add(m.group(1))
+    return len(seen)
+
+
+#: A read that fails while a writer changes the file is tried again this many times,
+#: after 0.05, 0.1, 0.2 ... s (readers open without HDF5 locking and may see metadata
+#: half-written; each commit ends with a flush, so a later read sees a consistent file).
+READ_RETRIES = 6
+
+
+def _retried(read: Any) -> Any:
+    """Run ``read()``; on an HDF5 read error try again (a writer is mid-commit)."""
+    delay = 0.05
+    for attempt in range(READ_RETRIES + 1):
+        try:
+            return read()
+        except StoreError:
+            raise
+        except (OSError, RuntimeError, ValueError, KeyError, TypeError):
+            if attempt == READ_RETRIES:
+                raise
+            time.sleep(delay)
+            delay *= 2
+    raise AssertionError("unreachable")  # pragma: no cover
 
 
 def load(path: str | Path) -> pd.DataFrame:
+    """The per-point table as a DataFrame: one row per stored point (see :func:`_load`);
+    a read that fails while a live writer commits is tried again."""
+    try:
+        return _retried(lambda: _load(path))
+    except KeyError as exc:
+        raise StoreError(f"{path}: cannot read the store: {exc}") from None
+
+
+def _load(path: str | Path) -> pd.DataFrame:
     """The per-point table as a DataFrame: one row per stored point.
 
     Columns are those of :data:`sweep.schema.COLUMNS` (swept values, status, message,
@@ -80,7 +142,7 @@ def load_xarray(path: str | Path) -> xr.Dataset:
     coords = {d: np.asarray(sorted(campaign["sweep"][d])) for d in dims}
     keep = [c.name for c in COLUMNS if c.name not in _NOT_RESULTS and c.name not in dims
             and c.name not in ("L_x", "T", "a0", "C_sd", "eps", "d_f", "dispersion")]
-    bad = df["status"].isin(["failed", "invalid"])
+    bad = df["status"].isin(["failed", "invalid", "crashed", "timeout"])
     values = df[dims + keep].copy()
     for name in keep:
         if column(name).kind != "str":

@@ -56,6 +56,10 @@ class RunOptions:
         default, ``min(max_iterations, DEFAULT_EXPECTED_ITERATIONS)``).
     max_attempts : a point whose worker (or the whole job) died while computing it this
         many times is stored as ``crashed`` instead of being handed out again (0: never).
+    max_points : the largest grid accepted (a guard against a typo that would expand
+        billions of points).
+    point_timeout : seconds a point may run; one that runs longer is stored as
+        ``timeout`` (0: no limit; ``--point-timeout`` overrides it).
     """
 
     name: str = ""
@@ -64,6 +68,8 @@ class RunOptions:
     grace_period: float = 60.0
     expected_iterations: int = 0
     max_attempts: int = 3
+    max_points: int = 1_000_000
+    point_timeout: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -197,8 +203,21 @@ def parse_campaign(text: str, source: str = "<string>") -> Campaign:
     if errors:
         raise ConfigError(errors)
     assert base is not None
+    if not sweep:
+        raise ConfigError(f"{source}: [sweep] is empty: list the values of at least one"
+                          f" swept dimension ({', '.join(floewave.SWEPT_FIELDS)})")
+    size = math.prod(len(v) for v in sweep.values())
+    if size > run.max_points:
+        raise ConfigError(f"{source}: the grid has {size:,} points, more than [run]"
+                          f" max_points = {run.max_points:,}; raise max_points if that is"
+                          " intended")
     campaign = Campaign(base=base, sweep=sweep, run=run, text=text, source=source)
-    _check_physics(campaign, source)
+    try:
+        _check_physics(campaign, source)
+    except (OverflowError, ZeroDivisionError, RecursionError) as exc:
+        raise ConfigError(f"{source}: a value is out of range ({type(exc).__name__}: {exc});"
+                          " check the [base] and [sweep] lengths, periods and time steps"
+                          ) from None
     return campaign
 
 
@@ -289,7 +308,7 @@ def _parse_run(table: dict[str, Any], source: str, errors: list[str]) -> RunOpti
             ok[key] = float(value) if kind == "float" else value
     if ok.get("progress_interval") == 0:
         errors.append(f"{source}: [run] progress_interval = 0: must be > 0")
-    for key in ("progress_interval", "grace_period"):
+    for key in ("progress_interval", "grace_period", "point_timeout"):
         if ok.get(key, 0) > MAX_SECONDS:
             errors.append(f"{source}: [run] {key} = {table[key]!r}: at most {MAX_SECONDS:g}"
                           " s (a year)")

@@ -83,6 +83,61 @@ class _GraceExpired(BaseException):
     """Raised in-process when the grace period after a stop signal runs out."""
 
 
+class _PointTimeout(BaseException):
+    """Raised in the computing thread when a point runs past its ``point_timeout``."""
+
+
+#: The hard limit of a point stuck in native code: ``point_timeout`` plus this much
+#: (at least ``_HARD_MIN`` s) later the process ends (``faulthandler``; exit 1 and a
+#: traceback; under MPI the job ends with it) and the point counts as an attempt.
+_HARD_FACTOR, _HARD_MIN = 1.0, 30.0
+_TIMEOUT_SIGNAL = signal.SIGUSR2
+
+
+class _Deadline:
+    """``point_timeout`` for the computation in the main thread.
+
+    Soft: a timer thread sends SIGUSR2 to the main thread at the limit and its handler
+    raises :class:`_PointTimeout` (between bytecodes: at once in Python code or a sleep,
+    when a numba kernel call returns). Hard: ``faulthandler`` ends the process a margin
+    later if the point is stuck in native code.
+    """
+
+    def __init__(self, seconds: float) -> None:
+        self.seconds = seconds
+        self._timer: Any = None
+        self._old: Any = None
+
+    def _raise(self, signum: int, frame: Any) -> None:
+        raise _PointTimeout(f"ran longer than point_timeout = {self.seconds:g} s")
+
+    def __enter__(self) -> _Deadline:
+        import faulthandler
+        import threading
+
+        if threading.current_thread() is not threading.main_thread():
+            return self
+        self._old = signal.signal(_TIMEOUT_SIGNAL, self._raise)
+        main = threading.main_thread().ident
+        self._timer = threading.Timer(self.seconds, signal.pthread_kill,
+                                      args=(main, _TIMEOUT_SIGNAL))
+        self._timer.daemon = True
+        self._timer.start()
+        hard = self.seconds + max(_HARD_MIN, _HARD_FACTOR * self.seconds)
+        faulthandler.dump_traceback_later(min(hard, _MAX_TIMER), exit=True)
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        import faulthandler
+
+        if self._timer is None:
+            return
+        self._timer.cancel()
+        faulthandler.cancel_dump_traceback_later()
+        signal.signal(_TIMEOUT_SIGNAL, self._old)
+        self._timer = None
+
+
 # ---------------------------------------------------------------------- worker side
 def resolve_compute(spec: str) -> Callable[[ModelConfig], Any]:
     """Import ``"module:function"``."""
@@ -115,7 +170,12 @@ def compute_point(task: dict[str, Any], fn: Callable[[ModelConfig], Any],
     try:
         cfg = ModelConfig.from_dict(task["config"])
         cfg.check_physics()
-        result = fn(cfg)
+        limit = float(task.get("timeout") or 0.0)
+        if limit > 0:
+            with _Deadline(limit):
+                result = fn(cfg)
+        else:
+            result = fn(cfg)
         data = result.to_dict() if hasattr(result, "to_dict") else dict(result)
         profiles = {k: np.asarray(data[k], dtype=np.float64) for k in PROFILE_VARS
                     if k in data}
@@ -141,6 +201,11 @@ def compute_point(task: dict[str, Any], fn: Callable[[ModelConfig], Any],
         out["message"] = f"{type(exc).__name__}: {exc}"
     except _GraceExpired:
         raise  # the in-process grace period ran out: the master stops
+    except _PointTimeout as exc:
+        out["status"] = "timeout"
+        out["scalars"], out["profiles"] = {}, {}
+        out["residual_history"] = np.zeros(0)
+        out["message"] = f"{exc} (rank {rank}, host {host()}, pid {os.getpid()})"
     except BaseException as exc:  # noqa: BLE001 - a point's failure is data, not a crash
         # SystemExit and KeyboardInterrupt raised by a point are its failure too
         out["status"] = "failed"
@@ -380,8 +445,9 @@ class Master:
     """
 
     def __init__(self, store: Store, transport: Transport, compute: str = DEFAULT_COMPUTE,
-                 git: dict[str, Any] | None = None) -> None:
+                 git: dict[str, Any] | None = None, point_timeout: float = 0.0) -> None:
         self.store = store
+        self.point_timeout = point_timeout
         self.transport = transport
         self.compute = compute
         self.git = git or {}
@@ -484,7 +550,8 @@ class Master:
                     self.store.handout([(point.hash, worker)], alone=True)
                     self.outstanding += 1
                     self.transport.send(worker, {"hash": point.hash, "compute": self.compute,
-                                                 "config": queues[worker][-1][1]})
+                                                 "config": queues[worker][-1][1],
+                                                 "timeout": self.point_timeout})
                 elif not signals.requested and not suspects:
                     depth = self.depth
                     sent: list[tuple[Point, dict[str, Any], int]] = []
@@ -499,7 +566,8 @@ class Master:
                         self.outstanding += 1
                         self.transport.send(worker, {"hash": point.hash,
                                                      "compute": self.compute,
-                                                     "config": config})
+                                                     "config": config,
+                                                     "timeout": self.point_timeout})
                 if not self.outstanding:
                     break
                 if time.monotonic() > stop_at:
@@ -617,11 +685,13 @@ def check_launch(size: int, environ: dict[str, str] | None = None) -> None:
 
 def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_COMPUTE,
                  retry_failed: bool = False, extend: bool = False, comm: Any = None,
-                 progress_bar: bool | None = None, command: str = "") -> RunSummary | None:
+                 progress_bar: bool | None = None, command: str = "",
+                 point_timeout: float | None = None) -> RunSummary | None:
     """Run (or resume) ``campaign`` into the store at ``store_path``.
 
     With ``comm`` (an MPI communicator of size > 1) rank 0 is the master and the other
     ranks are workers (they return ``None``); otherwise the campaign runs in-process.
+    ``point_timeout`` [s] overrides ``[run] point_timeout`` (0: none).
     The workers' start-up is checked before the store is touched; stop signals are
     caught from before the store is opened (a stop during the open or its rebuild is
     honoured right after it: :class:`Interrupted`).
@@ -660,7 +730,8 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
                                       " campaign is resumable: run the same command again")
                 git = {"git_commit": info["git_commit"], "git_dirty": info["git_dirty"],
                        "sweep_version": info["sweep_version"]}
-                master = Master(store, transport, compute, git)
+                limit = campaign.run.point_timeout if point_timeout is None else point_timeout
+                master = Master(store, transport, compute, git, limit)
                 _run_points(campaign, store, master, signals, summary, retry_failed,
                             progress_bar)
                 summary.elapsed = time.monotonic() - t0

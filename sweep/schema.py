@@ -217,8 +217,12 @@ def validate(path: str | Path) -> list[str]:
             if key not in f.attrs:
                 problems.append(f"/: missing attribute {key!r}")
         version = f.attrs.get("schema_version")
-        if version is not None and int(version) != SCHEMA_VERSION:
-            problems.append(f"/: schema_version {int(version)} != {SCHEMA_VERSION}")
+        try:
+            number = None if version is None else int(version)
+        except (TypeError, ValueError):
+            return problems + [f"/: schema_version {version!r} is not a number"]
+        if number is not None and number != SCHEMA_VERSION:
+            problems.append(f"/: schema_version {number} != {SCHEMA_VERSION}")
         if f.attrs.get("format") not in (FORMAT, FORMAT.encode()):
             problems.append(f"/: format {f.attrs.get('format')!r} != {FORMAT!r}")
         if "table" not in f:

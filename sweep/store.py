@@ -140,6 +140,26 @@ def _oserror(path: Path, exc: BaseException, doing: str) -> StoreError:
     return StoreError(f"{path}: {doing} failed: {getattr(exc, 'strerror', None) or text}")
 
 
+#: Free space [bytes] kept in reserve beyond what a write needs (HDF5 metadata, the
+#: journal's next lines): below it a write is refused with one clear line instead of
+#: failing half-way inside HDF5 (which can crash the process).
+_SPACE_RESERVE = 1 << 20
+
+
+def _check_space(path: Path, needed: int, doing: str) -> None:
+    """Refuse to start a write that the free space cannot hold (exit 3, one line)."""
+    try:
+        st = os.statvfs(path.parent)
+    except OSError:
+        return
+    free = st.f_bavail * st.f_frsize
+    if free < needed + _SPACE_RESERVE:
+        raise StoreError(f"{path}: no space left on the device for {doing} ({free >> 10}"
+                         f" KiB free, about {(needed + _SPACE_RESERVE) >> 10} KiB needed);"
+                         " nothing acknowledged was lost: free space and run the same"
+                         " command again")
+
+
 def _json(text: str) -> dict[str, Any]:
     import json
 
@@ -321,7 +341,12 @@ class Store:
                         raise StoreError(f"{p}: an HDF5 file but not a sweep store (format"
                                          f" {fmt!r}); it was left untouched")
                     return "damaged", {"why": "no format attribute (creation interrupted)"}
-                version = int(f.attrs.get("schema_version", 0))
+                raw = f.attrs.get("schema_version", 0)
+                try:
+                    version = int(raw)
+                except (TypeError, ValueError):
+                    raise StoreError(f"{p}: schema_version {_text(raw)!r} is not a version"
+                                     " number; it was left untouched") from None
                 if version > SCHEMA_VERSION:
                     raise SchemaVersionError(
                         f"{p}: store schema version {version} is newer than this sweep's"
@@ -407,6 +432,8 @@ class Store:
                  info: dict[str, Any]) -> None:
         """Build the store from the journal into a temporary file, then replace."""
         tmp = self.path.with_name(f".{self.path.name}.rebuild-{os.getpid()}.tmp")
+        size = self.path.stat().st_size if self.path.exists() else 0
+        _check_space(self.path, max(size, self.journal.size() // 2), "rebuilding the store")
         w: H5Writer | None = None
         try:
             w = H5Writer.create(tmp, campaign)
@@ -479,6 +506,7 @@ class Store:
             fsync_path(tmp)
             os.replace(tmp, self.path)
             fsync_dir(self.path)
+        _check_space(self.path, 0, "opening the store")
         self.w = w = H5Writer.open(self.path)
         f = w.file
         f.attrs["writer_open"] = True  # before anything in the file changes
@@ -625,6 +653,7 @@ class Store:
         staged, lines = self._staged, self._lines
         self._staged, self._lines = [], []
         assert self.w is not None
+        _check_space(self.path, 2 * sum(map(len, lines)), "storing points")
         with signals_deferred():
             try:
                 self.journal.append(lines)

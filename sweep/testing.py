@@ -18,7 +18,8 @@ import numpy as np
 from floewave import ModelConfig
 
 __all__ = ["fake_point", "raising_point", "nan_point", "trivial_point", "sleepy_point",
-           "power_point", "faulty_point", "crashing_point", "POWER_M"]
+           "power_point", "faulty_point", "crashing_point", "stuck_point",
+           "sleepy_trivial_point", "POWER_M"]
 
 
 def fake_point(cfg: ModelConfig) -> dict[str, Any]:
@@ -166,3 +167,20 @@ def crashing_point(cfg: ModelConfig) -> dict[str, Any]:
     if cfg.eps == 0.4:
         os._exit(3)
     return fake_point(cfg)
+
+
+def stuck_point(cfg: ModelConfig) -> dict[str, Any]:
+    """:func:`fake_point`, but eps = 0.4 never returns (a Python loop) and eps = 0.6
+    sleeps for an hour (a blocking call)."""
+    if cfg.eps == 0.4:
+        while True:
+            sum(range(1000))
+    if cfg.eps == 0.6:
+        time.sleep(3600)
+    return fake_point(cfg)
+
+
+def sleepy_trivial_point(cfg: ModelConfig) -> dict[str, Any]:
+    """:func:`trivial_point` after 2 ms (a steady stream of commits: reader tests)."""
+    time.sleep(0.002)
+    return trivial_point(cfg)

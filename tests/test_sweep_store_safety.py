@@ -408,3 +408,89 @@ def test_a_point_that_kills_its_process_is_recorded_crashed(tmp_path):
                      retry_failed=True)
     assert s.computed == 1 and set(sweep.load(path)["status"]) <= {"converged",
                                                                     "converged_noisy"}
+
+
+def test_point_timeout_records_timeout(tmp_path):
+    """[run] point_timeout: a point that loops (Python) or blocks (sleep) is stored as
+    ``timeout`` and the campaign goes on; --point-timeout overrides it."""
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(TOML.replace("[0.5, 1.5]", "[0.5]") + "[run]\npoint_timeout = 100.0\n")
+    path = tmp_path / "s.h5"
+    t0 = time.monotonic()
+    assert main(["run", str(cfg), "--store", str(path), "--compute",
+                 "sweep.testing:stuck_point", "--point-timeout", "0.5", "--no-bar"]) == 0
+    assert time.monotonic() - t0 < 30
+    df = sweep.load(path).set_index("eps")
+    assert df.loc[0.4, "status"] == "timeout" and df.loc[0.6, "status"] == "timeout"
+    assert "point_timeout = 0.5 s" in df.loc[0.4, "message"]
+    assert df.loc[0.2, "status"] == "converged" and df.loc[0.8, "status"] != "timeout"
+    assert sweep.validate(path) == []
+
+
+def test_merge_refuses_itself_and_other_versions_and_stops_with_6(tmp_path):
+    cfg, path = _big(tmp_path)
+    a = str(path)
+    assert main(["merge", a, a]) == 3
+    assert main(["merge", str(tmp_path / "out.h5"), a, a]) == 3
+    old = tmp_path / "old.h5"
+    old.write_bytes(path.read_bytes())
+    with h5py.File(old, "r+", locking=False) as f:
+        f.attrs["schema_version"] = 0
+    assert main(["merge", str(tmp_path / "out.h5"), str(old)]) == 3
+    assert not (tmp_path / "out.h5").exists()
+    statuses = []
+    for k in range(3):
+        out = tmp_path / f"merged{k}.h5"
+        p = subprocess.Popen([sys.executable, "-m", "sweep", "merge", str(out), a],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        while p.poll() is None and not _catches_sigterm(p.pid):
+            time.sleep(0.002)
+        time.sleep(0.05 * k)
+        p.send_signal(signal.SIGTERM)
+        _, err = p.communicate(timeout=60)
+        statuses.append(p.returncode)
+        assert p.returncode in (0, 6), err
+        if out.exists():
+            assert sweep.validate(out) == []
+            assert main(["merge", str(out), a]) == 0  # resumes
+            assert table(out).equals(table(path))
+    assert 6 in statuses, statuses
+
+
+def test_status_counts_the_journal(tmp_path, campaign, capsys):
+    path = tmp_path / "s.h5"
+    run_campaign(campaign, str(path), compute=FAKE)
+    with h5py.File(path, "r+", locking=False) as f:  # the last points never reached it
+        f["table"].attrs["n_rows"] = 5
+    capsys.readouterr()
+    assert main(["status", str(path), "--json"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    assert (rep["stored"], rep["journaled"]) == (5, 8)
+    assert main(["status", str(path)]) == 0
+    assert "journal holds 8 points: 3 more" in capsys.readouterr().out
+
+
+def test_reads_during_writes(tmp_path):
+    """sweep.load and status while a live run commits quickly: every read succeeds and
+    sees a growing, duplicate-free table."""
+    eps = ", ".join(repr(round(0.001 + 0.0009 * i, 5)) for i in range(1000))
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(f"[base]\nL_sheet = 6.0\n[sweep]\neps = [{eps}]\n")
+    path = tmp_path / "s.h5"
+    p = subprocess.Popen([sys.executable, "-m", "sweep", "run", str(cfg), "--store",
+                          str(path), "--compute", "sweep.testing:sleepy_trivial_point",
+                          "--no-bar"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                         text=True)
+    sizes = []
+    try:
+        deadline = time.monotonic() + 60
+        while not path.exists() and time.monotonic() < deadline:
+            time.sleep(0.02)
+        while p.poll() is None and len(sizes) < 60:
+            df = sweep.load(path)
+            assert df["hash"].is_unique
+            sizes.append(len(df))
+    finally:
+        p.wait(timeout=120)
+    assert p.returncode == 0, p.stderr.read()
+    assert len(sizes) >= 10 and sizes == sorted(sizes) and sizes[-1] > sizes[0]

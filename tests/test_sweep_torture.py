@@ -57,6 +57,10 @@ dispersion = ["ml", "ep"]
 name = "torture"
 progress_interval = 1.0
 grace_period = 5.0
+# kill -9 from outside while a point runs alone cannot be told apart from the point
+# killing its worker: with many kills an innocent point could reach max_attempts and be
+# stored as crashed (benchmarks/torture_store.py counts how often with the default)
+max_attempts = 0
 """
 
 #: Table columns that describe how/where/when a point ran, not what it is or gave.
