@@ -17,7 +17,6 @@ from pathlib import Path
 from typing import Any
 
 from .errors import EXIT_CONFIG, EXIT_INTERNAL, EXIT_OK, EXIT_STORE, ConfigError, SweepError
-from .executor import DEFAULT_COMPUTE
 
 __all__ = ["main", "build_parser"]
 
@@ -64,6 +63,8 @@ def _count(text: str) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (documented in sweep/README.md)."""
+    from .executor import DEFAULT_COMPUTE
+
     p = argparse.ArgumentParser(prog="sweep", description="Run and analyse floewave"
                                 " parameter campaigns (MPI master/worker, one HDF5 store).")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
@@ -135,12 +136,25 @@ def _stop_during_start_up(signum: int, frame: Any) -> None:
                       " the same command again")
 
 
-def cmd_run(args: argparse.Namespace) -> int:
-    from .executor import _LAUNCHER_VARS
+#: Variables an MPI launcher sets (as :data:`sweep.executor._LAUNCHER_VARS`; kept here
+#: so that the check needs no heavy import).
+_LAUNCHER_VARS = ("PMI_RANK", "PMI_SIZE", "PMIX_RANK", "OMPI_COMM_WORLD_SIZE",
+                  "MPI_LOCALNRANKS", "HYDRA_CONTROL_FD", "PMI_FD")
 
-    if not any(v in os.environ for v in _LAUNCHER_VARS):  # under MPI: workers would wait
-        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1):
-            signal.signal(sig, _stop_during_start_up)
+
+def _catch_stops_at_start_up(argv: Sequence[str]) -> None:
+    """``run`` and ``merge``: a stop signal before the store is opened ends the command
+    with status 6 (nothing was changed). Not under an MPI launcher: there rank 0 alone
+    leaving would leave the workers waiting; the default action ends the job."""
+    if not argv or argv[0] not in ("run", "merge"):
+        return
+    if any(v in os.environ for v in _LAUNCHER_VARS):
+        return
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1):
+        signal.signal(sig, _stop_during_start_up)
+
+
+def cmd_run(args: argparse.Namespace) -> int:
     from .config import load_campaign
     from .executor import check_launch, mpi_world, run_campaign
 
@@ -366,7 +380,12 @@ _COMMANDS = {"run": cmd_run, "plan": cmd_plan, "status": cmd_status, "export": c
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``sweep`` console script; returns the exit status."""
-    args = build_parser().parse_args(argv)
+    _catch_stops_at_start_up(list(sys.argv[1:] if argv is None else argv))
+    try:
+        args = build_parser().parse_args(argv)
+    except SweepError as exc:  # a stop during the parser's imports
+        _err(str(exc))
+        return exc.exit_status
     try:
         return _COMMANDS[args.command](args)
     except SweepError as exc:  # ConfigError, StoreError, ...: each carries its exit status

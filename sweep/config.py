@@ -188,6 +188,8 @@ def parse_campaign(text: str, source: str = "<string>") -> Campaign:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{source}: not valid TOML: {exc}") from None
+    except RecursionError:
+        raise ConfigError(f"{source}: not valid TOML: nested too deeply") from None
     errors: list[str] = []
     for key in sorted(set(data) - {"base", "sweep", "run"}):
         errors.append(f"{source}: unknown table or key [{key}] (allowed: [base], [sweep], [run])")

@@ -651,8 +651,7 @@ def _average(old: float, new: float, weight: float = 0.3) -> float:
 
 
 # ---------------------------------------------------------------------- entry points
-_LAUNCHER_VARS = ("PMI_RANK", "PMI_SIZE", "PMIX_RANK", "OMPI_COMM_WORLD_SIZE",
-                  "MPI_LOCALNRANKS", "HYDRA_CONTROL_FD", "PMI_FD")
+from .cli import _LAUNCHER_VARS  # noqa: E402 - one list (the CLI checks it early)
 
 
 def mpi_world() -> Any:
