@@ -527,6 +527,41 @@ class Store:
         self.replayed = len(newer) - quarantined
         self.next_seq = max(max(w.seq_of.values(), default=-1), self.scan.max_seq) + 1
         w.durable()
+        self._backfill_journal(w)
+
+    def _backfill_journal(self, w: H5Writer) -> None:
+        """Journal the committed rows the journal lacks (it was deleted, or predates
+        them): the journal is what a rebuild uses, so it must hold every stored point."""
+        missing = [h for h in w.rows if h not in self.scan.latest]
+        if not missing:
+            return
+        from .schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, profile_path
+
+        table = w.file["table"]
+        n = int(table.attrs["n_rows"])
+        cols = {c.name: table[c.name][:n] for c in COLUMNS}
+        lines = []
+        for h in missing:
+            i = w.rows[h]
+            row = {name: (_text(v[i]) if isinstance(v[i], (bytes, str)) else v[i].item())
+                   for name, v in cols.items()}
+            name = profile_path(h)
+            profiles, history = {}, []
+            if name in w.file:
+                profiles = {k: w.file[name][k][()].tolist() for k in PROFILE_VARS
+                            if k in w.file[name]}
+                history = w.file[name][HISTORY_VAR[0]][()].tolist()
+            lines.append(encode({"row": row, "profiles": profiles,
+                                 "residual_history": history}))
+        self.journal.open_for_append()
+        _check_space(self.journal.path, 2 * sum(map(len, lines)), "journaling stored points")
+        try:
+            self.journal.append(lines)
+        except OSError as exc:
+            raise _oserror(self.journal.path, exc, "writing the journal") from None
+        self._note(f"{self.journal.path}: {len(missing)} stored point(s) were not in the"
+                   " journal (removed or older than it); journaled again from the store")
+        self.scan = self.journal.scan(self.model_version, STATUSES)
 
     def _migrate(self, f: Any) -> None:
         version = int(f.attrs.get("schema_version", 0))

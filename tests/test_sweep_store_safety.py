@@ -494,3 +494,19 @@ def test_reads_during_writes(tmp_path):
         p.wait(timeout=120)
     assert p.returncode == 0, p.stderr.read()
     assert len(sizes) >= 10 and sizes == sorted(sizes) and sizes[-1] > sizes[0]
+
+
+def test_a_removed_journal_is_journaled_again_from_the_store(tmp_path, campaign, capsys):
+    """The journal of a complete store removed, then a run killed: the rebuild must not
+    lose the points only the file held (they are journaled again on open)."""
+    path = tmp_path / "s.h5"
+    run_campaign(campaign.shard(0, 2), str(path), compute=FAKE)
+    journal_path(path).unlink()
+    capsys.readouterr()
+    with Store(path, campaign.shard(0, 2)) as store:
+        n = len(store)
+    assert "journaled again from the store" in capsys.readouterr().err
+    make_unclean(path)  # as if the next run were killed
+    s = run_campaign(campaign.shard(0, 2), str(path), compute="sweep.testing:raising_point")
+    assert s.computed == 0 and len(sweep.load(path)) == n
+    assert sweep.validate(path) == []
