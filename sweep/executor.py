@@ -243,8 +243,11 @@ def worker_loop(comm: Any, compute: str = DEFAULT_COMPUTE) -> None:
         fn = resolve_compute(compute)
         env = environment(with_git=False, with_mpi=True)
     except Exception as exc:  # noqa: BLE001 - reported to the master, which stops
-        comm.send(("error", {"rank": rank, "host": host(), "message": f"{exc!r}",
-                             "traceback": traceback.format_exc()}), dest=0, tag=_TAG_RESULT)
+        plain = isinstance(exc, SweepError)  # its message says it all
+        comm.send(("error", {"rank": rank, "host": host(),
+                             "message": str(exc) if plain else f"{exc!r}",
+                             "traceback": "" if plain else traceback.format_exc()}),
+                  dest=0, tag=_TAG_RESULT)
         fn, env = None, {}
     else:
         comm.send(("ready", env), dest=0, tag=_TAG_RESULT)
@@ -325,7 +328,8 @@ class MPITransport:
         if errors:
             e = errors[0]
             raise WorkerError(f"worker rank {e['rank']} on {e['host']} failed to start:"
-                              f" {e['message']}\n{e['traceback']}")
+                              f" {e['message']}" + (f"\n{e['traceback']}" if e["traceback"]
+                                                    else ""))
 
     def send(self, worker: int, task: dict[str, Any]) -> None:
         self.comm.send(task, dest=worker, tag=_TAG_TASK)
