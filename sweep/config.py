@@ -38,6 +38,8 @@ __all__ = ["Campaign", "Point", "RunOptions", "load_campaign", "parse_campaign",
 #: (collisional, high eps and C_sd) run to max_iterations = 100, a heavy tail that makes
 #: small samples scatter (means of 11, 22, 23 and 28 for the four samples).
 DEFAULT_EXPECTED_ITERATIONS = 22
+#: Most floes accepted in a sheet (L_sheet / L_x); the paper's largest is a few hundred.
+MAX_FLOES = 1_000_000
 #: Longest time [s] accepted for a ``[run]`` duration (a year).
 MAX_SECONDS = 3.2e7
 
@@ -319,8 +321,23 @@ def _parse_run(table: dict[str, Any], source: str, errors: list[str]) -> RunOpti
 
 
 def _check_physics(campaign: Campaign, source: str) -> None:
-    """Refuse swept values (or a base) for which every point is physically impossible."""
+    """Refuse swept values (or a base) for which every point is physically impossible,
+    sheets of more than :data:`MAX_FLOES` floes, and periods that give the same number of
+    time steps per period (the same physics under two hashes)."""
     points = campaign.points()
+    big = max(points, key=lambda p: p.config.n_floes)
+    if big.config.n_floes > MAX_FLOES:
+        raise ConfigError(f"{source}: {big.swept}: L_sheet / L_x = {big.config.n_floes:,}"
+                          f" floes, more than {MAX_FLOES:,}: check L_sheet and L_x")
+    if "T" in campaign.sweep:
+        steps: dict[int, float] = {}
+        for T in campaign.sweep["T"]:
+            n_t = campaign.base.replace(T=T).n_t
+            if n_t in steps:
+                raise ConfigError(f"{source}: [sweep] T = {T!r}: the same {n_t} time steps"
+                                  f" per period as T = {steps[n_t]!r} (dt ="
+                                  f" {campaign.base.dt!r}): the same point twice")
+            steps[n_t] = T
     invalid = [p for p in points if p.invalid]
     if not invalid:
         return

@@ -510,3 +510,26 @@ def test_a_removed_journal_is_journaled_again_from_the_store(tmp_path, campaign,
     s = run_campaign(campaign.shard(0, 2), str(path), compute="sweep.testing:raising_point")
     assert s.computed == 0 and len(sweep.load(path)) == n
     assert sweep.validate(path) == []
+
+
+HUGE = "[sweep]\n" + "\n".join(
+    f"{k} = [{', '.join(repr(round(v * (i + 1), 6)) for i in range(40))}]"
+    for k, v in (("L_x", 0.1), ("T", 0.5), ("eps", 0.02), ("d_f", 0.001), ("C_sd", 0.01)))
+
+
+@pytest.mark.parametrize("text,needle", [
+    ("[base]\nL_sheet = 1e308\n[sweep]\neps = [0.2]\n", "out of range"),
+    ("[base]\ndt = 1e-305\n[sweep]\neps = [0.2]\n", "out of range"),
+    ("[base]\nL_sheet = 1e9\n[sweep]\neps = [0.2]\n", "floes, more than 1,000,000"),
+    ("[base]\nL_sheet = 6.0\n[sweep]\nT = [1.2, 1.2000000001]\n", "the same point twice"),
+    ("[base]\nL_sheet = 6.0\n[sweep]\n", "[sweep] is empty"),
+    (HUGE, "102,400,000 points, more than [run] max_points"),
+    ("[base]\nL_sheet = 6.0\n[sweep]\neps = " + "[" * 2000 + "]" * 2000 + "\n", "TOML"),
+    (TOML + "[run]\ngrace_period = 1e300\n", "grace_period"),
+    (TOML + "[run]\npoint_timeout = -1.0\n", "point_timeout"),
+])
+def test_hostile_campaigns_are_one_clear_config_error(text, needle):
+    with pytest.raises(sweep.ConfigError) as info:
+        parse_campaign(text, "h.toml")
+    assert needle in str(info.value)
+    assert len(str(info.value).splitlines()) == 1
