@@ -60,13 +60,12 @@ class Tally:
             c[k] += int(v)
 
     def table(self) -> str:
-        cols = ["cases", "kills", "ruined", "lost", "duplicated", "wrong", "traceback",
-                "notes"]
+        cols = ["cases", "kills", "ruined", "lost", "duplicated", "wrong", "traceback"]
         lines = ["| phase | " + " | ".join(cols) + " |",
                  "|---|" + "---|" * len(cols)]
         total = Counter()
         for phase, c in self.rows.items():
-            total.update({k: v for k, v in c.items() if k != "notes"})
+            total.update(c)
             lines.append(f"| {phase} | " + " | ".join(str(c.get(k, 0)) for k in cols) + " |")
         lines.append("| **total** | " + " | ".join(str(total.get(k, 0)) for k in cols) + " |")
         return "\n".join(lines)
@@ -114,17 +113,31 @@ def judge(tally: Tally, phase: str, ref: Path, store: Path, rc: int, log: str,
     problems += [f"{phase}: {p}" for p in res["problems"][:5]]
 
 
+def _left(store: Path, total: int) -> float:
+    """Share of the ``total`` points not yet in the store's journal."""
+    try:
+        return 1 - sweep.analysis.journal_points(store) / total
+    except (TypeError, OSError):
+        return 1.0
+
+
 def kill_loop(tally: Tally, phase: str, args: list[str], ref: Path, store: Path, kills: int,
               rng: random.Random, window: tuple[float, float], mpi: int = 0,
-              problems: list[str] | None = None, before=None, history: bool = False) -> None:
+              problems: list[str] | None = None, before=None, history: bool = False,
+              shrink: int = 0) -> None:
     """Start ``args`` and SIGKILL its process group at a random instant of ``window``,
-    ``kills`` times (resuming each time), then finish and compare."""
+    ``kills`` times (resuming each time), then finish and compare. With ``shrink`` (the
+    number of points), the window's end after the first second shrinks with the share
+    of points still missing, so later kills still hit a running campaign."""
     done = 0
     while done < kills:
         if before is not None:
             before()
+        lo, hi = window
+        if shrink:
+            hi = lo + 1.0 + (hi - lo - 1.0) * _left(store, shrink)
         p = run_cmd(args, mpi)
-        delay = rng.uniform(*window)
+        delay = rng.uniform(lo, hi)
         try:
             rc = p.wait(timeout=delay)
         except subprocess.TimeoutExpired:
@@ -283,7 +296,7 @@ def main() -> int:
                 mpi = 3 if "mpiexec" in phase else 0
                 kill_loop(tally, phase, [*base, "--compute", SLEEPY], ref_big, store,
                           min(5, per - k), rng, (0.3, 2.5 + 0.2 * n_big / (2 if mpi else 1)),
-                          mpi=mpi, problems=problems)
+                          mpi=mpi, problems=problems, shrink=n_big)
             elif phase == "resume-rebuild":  # a killed (unclean) store: every start rebuilds
                 fresh_copy(ref_rebuild, store)
                 kill_loop(tally, phase, ["run", str(rebuild), "--store", str(store),
@@ -291,9 +304,9 @@ def main() -> int:
                           min(5, per - k), rng, (t_start, t_start + t_rebuild),
                           problems=problems, before=lambda s=store: unclean(s))
             elif phase == "retry":
-                finish([*base, "--compute", "sweep.testing:raising_point"])
+                finish([*base, "--compute", "sweep.testing:faulty_point"])  # 15 failed
                 kill_loop(tally, phase, [*base, "--compute", SLEEPY, "--retry-failed"],
-                          ref_big, store, min(5, per - k), rng, (0.3, 3.0), problems=problems,
+                          ref_big, store, min(5, per - k), rng, (0.3, 4.0), problems=problems,
                           history=True)
             elif phase == "extend":
                 finish(["run", str(small), "--store", str(store), "--compute", FAKE,
@@ -309,9 +322,9 @@ def main() -> int:
                     shards.append(str(sp))
                 kill_loop(tally, phase, ["merge", str(store), *shards], ref_big, store,
                           min(5, per - k), rng, (0.3, 1.6), problems=problems)
-            k += tally.rows[phase]["kills"] - before
-            if tally.rows[phase]["kills"] == before:
-                k += 1  # finished before any kill: counts as a case, not a kill
+            k += tally.rows[phase]["kills"] - before  # cases that finished before any
+            if tally.rows[phase]["cases"] > 6 * per:  # kill count as cases only
+                break
         print(f"{phase}: {dict(tally.rows[phase])} ({time.monotonic() - t0:.0f} s)", flush=True)
 
     # journal corruptions: each on a copy of the reference, with the file to be rebuilt
@@ -379,7 +392,6 @@ def main() -> int:
         rc, log = finish(["run", str(big), "--store", str(store), "--compute", FAKE,
                           "--no-bar"])
         judge(tally, phase, ref_big, store, rc, log, problems)
-    tally.rows[phase]["notes"] = 0
     print(f"{phase}: {dict(tally.rows[phase])}; exit statuses of the stopped runs"
           f" {dict(statuses)}", flush=True)
 
