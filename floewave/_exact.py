@@ -67,9 +67,7 @@ import math
 
 from numba import njit
 
-# no allocation anywhere here: compiled without numba's reference counting (see JITN in
-# floewave._kernels: the NRT incref/decref of array arguments cost ~15 % of a time step)
-JIT = dict(cache=True, fastmath=True, nogil=True, _nrt=False)
+from ._jit import JITN as JIT  # no allocation anywhere here: no reference counting
 
 __all__ = ["exact_geometry", "drag_integrals", "drag_sums_exact", "drag_force_exact",
            "drag_sums_exact_phase", "drag_pass_exact", "general_floes"]
@@ -447,7 +445,7 @@ def drag_pass_exact(ck, sk, cwt, swt, a, u_amp, vs, geom, accumulate, sc, idx):
     ``theta_i = k x_i - omega t`` from ``ck, sk = cos, sin(k x_i)`` and ``cwt, swt = cos,
     sin(omega t)``; ``A_i = a_i u_amp``, ``v_i = vs[i]``. Fills ``sc[0], sc[1] = cos, sin
     theta_i``, ``sc[2] = s2``, ``sc[3] = s3`` (only if ``accumulate``); ``sc[4]`` and the
-    int array ``idx`` are scratch (shapes (5, N_f), (N_f,)).
+    int array ``idx`` are scratch (``sc`` has at least 5 rows and N_f columns; ``idx`` (N_f,)).
 
     Two passes, same results as calling :func:`drag_sums_exact` floe by floe: a branch-free
     (vectorised) loop over all floes evaluates the one-sign case ``sigma W`` of
@@ -489,7 +487,7 @@ def drag_pass_exact(ck, sk, cwt, swt, a, u_amp, vs, geom, accumulate, sc, idx):
                 - 2.0 * h * v2 * v
             sc[3, i] = scale * max(sig * W3, 0.0)
         sc[4, i] = 1.0 if root else 0.0
-    m = general_floes(sc[4], idx, h <= _H_POINT)
+    m = general_floes(sc[4, :n], idx, h <= _H_POINT)
     for t in range(m):
         i = idx[t]
         s2, s3 = drag_sums_exact(a[i] * u_amp, sc[0, i], sc[1, i], vs[i], geom)

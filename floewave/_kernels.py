@@ -1,6 +1,7 @@
 """Numba kernels: the DEM time loop (private; use :mod:`floewave.model`).
 
-Everything here is nopython, ``cache=True``. The kernels see only numpy arrays and a
+Everything here is nopython, cached, without fast-math (flags and why:
+:mod:`floewave._jit`). The kernels see only numpy arrays and a
 :class:`KernelParams` named tuple of numbers built once per point from the frozen
 :class:`~floewave.config.ModelConfig`; option switches are small integers fixed for the
 whole call (loop-invariant branches, no Python objects in the time loop).
@@ -25,14 +26,7 @@ import numpy as np
 from numba import njit
 
 from ._exact import drag_force_exact, drag_pass_exact, drag_sums_exact, general_floes
-
-JIT = dict(cache=True, fastmath=True, nogil=True)
-# Functions called every step that never allocate: compiled without numba's reference
-# counting (``_nrt=False``). With it, every call of eval_forces paid ~40 atomic NRT
-# incref/decref operations on its array arguments: measured ~110 ns per step, 15 % of a step
-# of 84 floes (benchmarks/bench_kernel.py, 2026-11-22). Such a function must not create or
-# return arrays (numba refuses to compile one that does).
-JITN = dict(JIT, _nrt=False)
+from ._jit import JIT, JITN
 
 # option codes (decided once from ModelConfig)
 CONTACT_HERTZ_DISK = 0
@@ -54,6 +48,17 @@ ST_FW = 5        # sum over steps of |F_w,i|                        [N]
 ST_FC = 6        # sum over steps of |net contact force on i|       [N]
 ST_FD = 7        # sum over steps of |F_d,i|                        [N]
 N_STATS = 8
+
+# rows of the drag scratch ``sc`` (shape (N_SC, N_f)) of drag_pass / drag_pass_exact
+SC_C = 0         # cos theta_i
+SC_S = 1         # sin theta_i
+SC_S2 = 2        # drag sum of |u_rel| u_rel
+SC_S3 = 3        # drag sum of |u_rel|^3 (accumulating steps only)
+SC_FLAG = 4      # 1: the floe needs the general evaluation
+SC_GATHER = 5    # rows 5-10: the general floes gathered by cell_sums (A, c, s, v, s2, s3)
+N_SC = 11
+N_WORK = 5 + N_SC   # rows of advance's scratch ``work``
+LANES = 16          # cell_sums pads its gathered floes to a multiple of this
 
 # steps of the plain per-floe drag loop after a two-pass step that found >3/4 of the floes
 # needing the general evaluation (see advance)
@@ -203,14 +208,133 @@ def drag_tables(cxi, sxi, P):
 
 
 @njit(**JITN)
-def drag_pass(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc, idx):
+def cell_sums(sc, idx, m, a, ua, vs, cxi, sxi, accumulate):
+    """:func:`drag_sums` (``accumulate``) or :func:`drag_force_sum` of the ``m`` floes
+    ``idx[:m]`` into ``sc[2]`` (and ``sc[3]``), vectorised across floes.
+
+    Bit for bit the per-floe functions (tested): the kernels are compiled without
+    fast-math (:mod:`floewave._jit`), so a sum over cells cannot be vectorised along the
+    cells (that needs re-association). Instead the floes' A = a u_amp, cos theta,
+    sin theta, v are gathered into contiguous rows of ``sc`` (rows SC_GATHER ...; lanes
+    padded with zeros to a multiple of LANES, which the loop vectoriser needs for its
+    vector body), the loop over cells is outside and the loop over floes inside: no
+    reduction in the inner loop, so it vectorises across floes, and each floe's sum runs
+    over the cells in the source's order with the source's expression. Four cells per
+    pass keep each floe's running sums in registers for four additions.
+    """
+    gA = sc[SC_GATHER]
+    gc = sc[SC_GATHER + 1]
+    gs = sc[SC_GATHER + 2]
+    gv = sc[SC_GATHER + 3]
+    g2 = sc[SC_GATHER + 4]
+    g3 = sc[SC_GATHER + 5]
+    for t in range(m):
+        i = idx[t]
+        gA[t] = a[i] * ua
+        gc[t] = sc[SC_C, i]
+        gs[t] = sc[SC_S, i]
+        gv[t] = vs[i]
+    mp = ((m + LANES - 1) // LANES) * LANES
+    for t in range(m, mp):      # padding lanes: u_rel = 0, results unused
+        gA[t] = 0.0
+        gc[t] = 0.0
+        gs[t] = 0.0
+        gv[t] = 0.0
+    for t in range(mp):
+        g2[t] = 0.0
+        g3[t] = 0.0
+    nx = cxi.shape[0]
+    nb = nx - nx % 4
+    if accumulate:
+        for jb in range(0, nb, 4):
+            c0 = cxi[jb]
+            c1 = cxi[jb + 1]
+            c2 = cxi[jb + 2]
+            c3 = cxi[jb + 3]
+            s0 = sxi[jb]
+            s1 = sxi[jb + 1]
+            s2 = sxi[jb + 2]
+            s3 = sxi[jb + 3]
+            for t in range(mp):
+                A = gA[t]
+                c = gc[t]
+                s = gs[t]
+                v = gv[t]
+                p = g2[t]
+                q = g3[t]
+                ur = A * (c * c0 - s * s0) - v
+                au = abs(ur)
+                p += au * ur
+                q += au * ur * ur
+                ur = A * (c * c1 - s * s1) - v
+                au = abs(ur)
+                p += au * ur
+                q += au * ur * ur
+                ur = A * (c * c2 - s * s2) - v
+                au = abs(ur)
+                p += au * ur
+                q += au * ur * ur
+                ur = A * (c * c3 - s * s3) - v
+                au = abs(ur)
+                p += au * ur
+                q += au * ur * ur
+                g2[t] = p
+                g3[t] = q
+        for j in range(nb, nx):
+            cj = cxi[j]
+            sj = sxi[j]
+            for t in range(mp):
+                ur = gA[t] * (gc[t] * cj - gs[t] * sj) - gv[t]
+                au = abs(ur)
+                g2[t] += au * ur
+                g3[t] += au * ur * ur
+        for t in range(m):
+            sc[SC_S2, idx[t]] = g2[t]
+            sc[SC_S3, idx[t]] = g3[t]
+    else:
+        for jb in range(0, nb, 4):
+            c0 = cxi[jb]
+            c1 = cxi[jb + 1]
+            c2 = cxi[jb + 2]
+            c3 = cxi[jb + 3]
+            s0 = sxi[jb]
+            s1 = sxi[jb + 1]
+            s2 = sxi[jb + 2]
+            s3 = sxi[jb + 3]
+            for t in range(mp):
+                A = gA[t]
+                c = gc[t]
+                s = gs[t]
+                v = gv[t]
+                p = g2[t]
+                ur = A * (c * c0 - s * s0) - v
+                p += abs(ur) * ur
+                ur = A * (c * c1 - s * s1) - v
+                p += abs(ur) * ur
+                ur = A * (c * c2 - s * s2) - v
+                p += abs(ur) * ur
+                ur = A * (c * c3 - s * s3) - v
+                p += abs(ur) * ur
+                g2[t] = p
+        for j in range(nb, nx):
+            cj = cxi[j]
+            sj = sxi[j]
+            for t in range(mp):
+                ur = gA[t] * (gc[t] * cj - gs[t] * sj) - gv[t]
+                g2[t] += abs(ur) * ur
+        for t in range(m):
+            sc[SC_S2, idx[t]] = g2[t]
+
+
+@njit(**JITN)
+def drag_pass(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc, idx, everyone):
     """Quadrature drag sums of every floe (:func:`drag_sums` / :func:`drag_force_sum`);
     returns the number of floes that needed the cell loop.
 
     ``theta_i`` from ``ck, sk = cos, sin(k x_i)`` and ``cwt, swt = cos, sin(omega t)``;
     fills ``sc[0], sc[1] = cos, sin theta_i``, ``sc[2] = s2``, ``sc[3] = s3`` (only if
-    ``accumulate``); ``sc[4]`` (1: the floe needs the cell loop), ``idx``: scratch;
-    ``mom`` from :func:`drag_tables`.
+    ``accumulate``); ``sc`` has N_SC rows, the others and ``idx`` are scratch; ``mom`` from
+    :func:`drag_tables`.
 
     Two passes: a branch-free (vectorised) loop over all floes bounds u_rel on the floe
     (the cosine over the span [theta - h, theta + h] lies between its end values, or
@@ -218,9 +342,21 @@ def drag_pass(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc, idx):
     closed form from the table moments: with mu the mean of u_j and d_j = u_j - mu,
     ``sum u^2 = n mu^2 + sum d^2``, ``sum u^3 = n mu^3 + 3 mu sum d^2 + sum d^3``
     (sums of non-negative terms up to the small third moment: no cancellation; equal to
-    the cell loop to rounding). Only the other floes run the cell loop.
+    the cell loop to rounding). Only the other floes run the cell loop
+    (:func:`cell_sums`, vectorised across them). ``everyone``: no closed forms, every floe
+    by the cell loop (long floes, where one-sign floes are rare).
     """
     n = ck.shape[0]
+    if sc.shape[0] < N_SC or sc.shape[1] < n + LANES or idx.shape[0] < n:
+        raise ValueError("drag_pass: scratch too small (sc needs N_SC rows and N_f + LANES"
+                         " columns: new_scratch)")
+    if everyone:
+        for i in range(n):
+            sc[SC_C, i] = ck[i] * cwt + sk[i] * swt
+            sc[SC_S, i] = sk[i] * cwt - ck[i] * swt
+            idx[i] = i
+        cell_sums(sc, idx, n, a, P.u_amp, vs, cxi, sxi, accumulate)
+        return n
     nn = mom[M_N]
     cb = mom[M_CB]
     sbb = mom[M_SB]
@@ -238,8 +374,8 @@ def drag_pass(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc, idx):
     for i in range(n):
         c = ck[i] * cwt + sk[i] * swt
         s = sk[i] * cwt - ck[i] * swt
-        sc[0, i] = c
-        sc[1, i] = s
+        sc[SC_C, i] = c
+        sc[SC_S, i] = s
         A = a[i] * ua
         v = vs[i]
         X = A * c
@@ -260,22 +396,14 @@ def drag_pass(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc, idx):
         sig = 1.0 if w1 > 0.0 else -1.0
         mu = X * cb - Y * sbb - v
         d2 = X * X * vcc - 2.0 * X * Y * vcs + Y * Y * vss
-        sc[2, i] = sig * (nn * mu * mu + d2)
+        sc[SC_S2, i] = sig * (nn * mu * mu + d2)
         if accumulate:
             d3 = (X * X * X * tccc - 3.0 * X * X * Y * tccs
                   + 3.0 * X * Y * Y * tcss - Y * Y * Y * tsss)
-            sc[3, i] = sig * (nn * mu * mu * mu + 3.0 * mu * d2 + d3)
-        sc[4, i] = 0.0 if w1 * w2 > 0.0 else 1.0
-    m = general_floes(sc[4], idx, mom[M_FAST] < 0.5)
-    for t in range(m):
-        i = idx[t]
-        A = a[i] * ua
-        if accumulate:
-            s2, s3 = drag_sums(A, sc[0, i], sc[1, i], vs[i], cxi, sxi)
-            sc[2, i] = s2
-            sc[3, i] = s3
-        else:
-            sc[2, i] = drag_force_sum(A, sc[0, i], sc[1, i], vs[i], cxi, sxi)
+            sc[SC_S3, i] = sig * (nn * mu * mu * mu + 3.0 * mu * d2 + d3)
+        sc[SC_FLAG, i] = 0.0 if w1 * w2 > 0.0 else 1.0
+    m = general_floes(sc[SC_FLAG, :n], idx, mom[M_FAST] < 0.5)
+    cell_sums(sc, idx, m, a, ua, vs, cxi, sxi, accumulate)
     return m
 
 
@@ -316,43 +444,38 @@ def eval_forces(x, vs, a, x0, ck, sk, cwt, swt, P, cxi, sxi, F, in_contact, accu
     Fills ``F`` [N]; when ``accumulate``, adds this step to ``stats`` and counts contact
     onsets against ``in_contact`` (always updated).
 
-    ``two_pass``: drag by :func:`drag_pass` / :func:`~floewave._exact.drag_pass_exact`
-    (``mom``, scratch ``sc``, ``idx``); returns the number of floes that needed the general
-    evaluation (-1 without ``two_pass``: one loop over the floes).
+    Drag by :func:`drag_pass` / :func:`~floewave._exact.drag_pass_exact` (``mom``, scratch
+    ``sc`` of N_SC rows, ``idx``); ``two_pass``: closed forms where they apply, else the
+    general evaluation of every floe. Returns the number of floes that needed the general
+    evaluation (-1 without ``two_pass``).
     """
     n = x.shape[0]
     m = -1
-    # wave (Froude-Krylov) + ice-water drag, per floe; one loop per drag mode so that the
-    # quadrature loop stays free of the exact mode's code (measured: 35 % faster)
-    if two_pass:
-        if P.drag == DRAG_EXACT:
+    # wave (Froude-Krylov) + ice-water drag: the drag sums of all floes first, then one
+    # loop over the floes
+    if P.drag == DRAG_EXACT:
+        if two_pass:
             m = drag_pass_exact(ck, sk, cwt, swt, a, P.u_amp, vs, P.geom, accumulate, sc,
                                 idx)
         else:
-            m = drag_pass(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc, idx)
-        for i in range(n):
-            wave_drag_update(i, x, a, sc[1, i], sc[2, i], sc[3, i], P, F, accumulate,
-                             stats)
-    elif P.drag == DRAG_EXACT:
-        for i in range(n):
-            c = ck[i] * cwt + sk[i] * swt
-            s = sk[i] * cwt - ck[i] * swt
-            if accumulate:
-                s2, s3 = drag_sums_exact(a[i] * P.u_amp, c, s, vs[i], P.geom)
-            else:
-                s2 = drag_force_exact(a[i] * P.u_amp, c, s, vs[i], P.geom)
-                s3 = 0.0
-            wave_drag_update(i, x, a, s, s2, s3, P, F, accumulate, stats)
+            for i in range(n):
+                c = ck[i] * cwt + sk[i] * swt
+                s = sk[i] * cwt - ck[i] * swt
+                sc[SC_S, i] = s
+                if accumulate:
+                    s2, s3 = drag_sums_exact(a[i] * P.u_amp, c, s, vs[i], P.geom)
+                    sc[SC_S3, i] = s3
+                else:
+                    s2 = drag_force_exact(a[i] * P.u_amp, c, s, vs[i], P.geom)
+                sc[SC_S2, i] = s2
     else:
-        for i in range(n):
-            c = ck[i] * cwt + sk[i] * swt
-            s = sk[i] * cwt - ck[i] * swt
-            if accumulate:
-                s2, s3 = drag_sums(a[i] * P.u_amp, c, s, vs[i], cxi, sxi)
-            else:
-                s2 = drag_force_sum(a[i] * P.u_amp, c, s, vs[i], cxi, sxi)
-                s3 = 0.0
-            wave_drag_update(i, x, a, s, s2, s3, P, F, accumulate, stats)
+        m = drag_pass(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc, idx,
+                      not two_pass)
+        if not two_pass:
+            m = -1
+    for i in range(n):
+        wave_drag_update(i, x, a, sc[SC_S, i], sc[SC_S2, i], sc[SC_S3, i], P, F,
+                         accumulate, stats)
     # contacts between neighbours i, i+1
     Fc_prev = 0.0   # force of pair (i-1, i) pushing floe i towards +x
     for i in range(n - 1):
@@ -388,7 +511,8 @@ def initial_acceleration(x, u, a, x0, istep, P, cxi, sxi, acc, in_contact):
     ck = np.cos(P.k * x)
     sk = np.sin(P.k * x)
     eval_forces(x, u, a, x0, ck, sk, math.cos(wt), math.sin(wt), P, cxi, sxi, F, in_contact,
-                False, dummy, np.zeros(N_MOM), dummy, np.zeros(0, np.int64), False)
+                False, dummy, np.zeros(N_MOM), np.zeros((N_SC, x.shape[0] + LANES)),
+                np.zeros(x.shape[0], np.int64), False)
     for i in range(x.shape[0]):
         acc[i] = F[i] * P.inv_mass
 
@@ -409,8 +533,9 @@ def advance(x, u, acc, a, x0, in_contact, istep, nsteps, accumulate, P, cxi, sxi
     accumulate : bool, add this window to ``stats`` (rows ST_*).
     cxi, sxi : (n_x,) cos(k xi_j), sin(k xi_j) at the cell midpoints xi_j relative to the
         floe centre.
-    work : (10, N_f) scratch: half-step velocity, v*, force, cos(k x), sin(k x), and rows
-        5-9 for the two-pass drag (``sc`` of :func:`drag_pass`).
+    work : (N_WORK, N_f + LANES) scratch (:func:`new_work`): half-step velocity, v*,
+        force, cos(k x), sin(k x), and rows 5... for the drag (``sc`` of
+        :func:`drag_pass`, N_SC rows).
     mom : :func:`drag_tables` of ``cxi, sxi``; idx : (N_f,) int64 scratch.
 
     cos, sin(k x_i) are computed once per call and then rotated by k dx_i each step
@@ -424,12 +549,15 @@ def advance(x, u, acc, a, x0, in_contact, istep, nsteps, accumulate, P, cxi, sxi
     Same results to rounding either way.
     """
     n = x.shape[0]
+    if work.shape[0] < N_WORK or work.shape[1] < n + LANES or idx.shape[0] < n:
+        raise ValueError("advance: scratch too small (work needs N_WORK rows and N_f + LANES"
+                         " columns: new_work)")
     dt = P.dt
-    uh = work[0]
-    vs = work[1]
-    F = work[2]
-    ck = work[3]
-    sk = work[4]
+    uh = work[0, :n]
+    vs = work[1, :n]
+    F = work[2, :n]
+    ck = work[3, :n]
+    sk = work[4, :n]
     sc = work[5:]
     for i in range(n):
         ck[i] = math.cos(P.k * x[i])
@@ -489,6 +617,17 @@ def confined_window(x0, a, nsteps, P, cxi, sxi, stats):
             s = sk[i] * cwt - ck[i] * swt
             s2, s3 = floe_drag(a[i] * P.u_amp, c, s, 0.0, True, P, cxi, sxi)
             wave_drag_update(i, x0, a, s, s2, s3, P, F, True, stats)
+
+
+def new_scratch(n: int) -> np.ndarray:
+    """Drag scratch ``sc`` of :func:`drag_pass` / :func:`~floewave._exact.drag_pass_exact`
+    for ``n`` floes: (N_SC, n + LANES)."""
+    return np.zeros((N_SC, n + LANES))
+
+
+def new_work(n: int) -> np.ndarray:
+    """Scratch ``work`` of :func:`advance` for ``n`` floes: (N_WORK, n + LANES)."""
+    return np.zeros((N_WORK, n + LANES))
 
 
 def new_stats(n: int) -> np.ndarray:

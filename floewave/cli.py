@@ -74,8 +74,11 @@ def summary(cfg: ModelConfig, r) -> str:
         f"d_f={cfg.d_f} dispersion={cfg.dispersion}  (N_f={r.n_floes}, {r.kernel_mode})",
         f"status: {r.status} after {r.iterations} iterations (final residual {r.residual:.3g},"
         f" noise {r.noise:.3g})",
-        f"a/a0 at far end: {r.a_end / cfg.a0:.4f} +- {r.a_stderr[-1] / cfg.a0:.4f};"
-        f" collision-zone width W_c = {r.W_c:.2f} m",
+        f"a/a0 at far end: {r.a_end / cfg.a0:.4f} +- {r.a_stderr[-1] / cfg.a0:.4f}",
+        (f"compact zone ({r.compact_zone}) from W_c = {r.W_c:.2f} m to {r.compact_end:.2f} m;"
+         if r.compact_zone != "none" else
+         "no compact zone (the whole ice collides): no W_c, no alpha_inner;")
+        + f" ice extent {r.ice_extent:.2f} m",
         f"alpha_all = {r.alpha_all:.4g} 1/m^2, alpha_edge = {r.alpha_edge:.4g},"
         f" alpha_inner = {r.alpha_inner:.4g}, alpha_c (eq. 24) = {r.alpha_c:.4g};"
         f" alpha_exp = {r.alpha_exp:.4g} 1/m",

@@ -111,7 +111,18 @@ class ModelConfig:
 
     Diagnostics (§6)
     ----------------
-    gap_threshold : phase-averaged gap that ends the collisional zone [m]
+    gap_threshold : phase-averaged gap below which a pair is compact [m] (the paper's
+        1e-4 m)
+    compact_min_pairs, compact_min_length : a run of compact pairs (and a collisional
+        stretch at either end of the ice) is a zone only if it has at least this many pairs
+        and spans at least this many metres [-], [m]
+    compact_bridge, compact_bridge_gap : up to ``compact_bridge`` consecutive pairs with
+        mean gaps below ``compact_bridge_gap`` [m] between compact pairs count as compact
+        (marginal pairs inside compact ice)
+    fit_min_floes, fit_min_length : alpha_edge and alpha_inner are fitted only over a zone
+        of at least this many floes spanning at least this many metres [-], [m]
+    (the rule and how its defaults were chosen: :func:`floewave.results.compact_zones`,
+    README "The collision-zone width W_c")
     """
 
     # --- swept (paper §4.1) ---
@@ -159,6 +170,12 @@ class ModelConfig:
     s_min: float = 0.03
     # --- diagnostics ---
     gap_threshold: float = 1.0e-4
+    compact_min_pairs: int = 3
+    compact_min_length: float = 3.0
+    compact_bridge: int = 2
+    compact_bridge_gap: float = 2.0e-4
+    fit_min_floes: int = 5
+    fit_min_length: float = 2.0
 
     # ------------------------------------------------------------------ validation
     def __post_init__(self) -> None:
@@ -169,7 +186,8 @@ class ModelConfig:
                     "dt", "dx", "delta", "gap_threshold")
         for name in positive:
             _require(self, name, getattr(self, name) > 0, "must be > 0")
-        non_negative = ("C_sd", "d_f", "E", "k_s", "C_m", "c_ow", "s_min")
+        non_negative = ("C_sd", "d_f", "E", "k_s", "C_m", "c_ow", "s_min",
+                        "compact_min_length", "fit_min_length")
         for name in non_negative:
             _require(self, name, getattr(self, name) >= 0, "must be >= 0")
         _require(self, "eps", 0 < self.eps <= 1, "must be in (0, 1]")
@@ -181,6 +199,10 @@ class ModelConfig:
         _require(self, "noise_window", self.noise_window >= 0, "must be >= 0")
         _require(self, "n_average", self.n_average >= 2, "must be >= 2")
         _require(self, "n0_warm", self.n0_warm >= 0, "must be >= 0")
+        _require(self, "compact_min_pairs", self.compact_min_pairs >= 1, "must be >= 1")
+        _require(self, "compact_bridge", self.compact_bridge >= 0, "must be >= 0")
+        _require(self, "compact_bridge_gap", self.compact_bridge_gap > 0, "must be > 0")
+        _require(self, "fit_min_floes", self.fit_min_floes >= 3, "must be >= 3")
         _require(self, "target_stderr", 0 <= self.target_stderr < 1, "must be in [0, 1)")
         _require(self, "rho_i", self.rho_i < self.rho_w or self.rho_i == self.rho_w,
                  "must not exceed rho_w (floes float)")

@@ -11,7 +11,7 @@ from . import _kernels as K
 from .config import FloewaveError, G, ModelConfig
 from .dispersion import alpha_confined, solve_dispersion
 from .forces import cell_offsets, kernel_params
-from .results import PointResult, collision_zone_width, fit_exponential, fit_inverse
+from .results import PointResult, compact_zones, fit_exponential, fit_inverse, zone_fits
 
 __all__ = ["FloeChain", "NumericalError", "march_amplitude", "dissipation", "residual",
            "run_point", "Window"]
@@ -34,7 +34,7 @@ class FloeChain:
         n = cfg.n_floes
         # x_1 = L_x / 2, x_{i+1} = x_i + L_x + d_f: the ice edge is x = 0
         self.x0 = cfg.L_x / 2.0 + np.arange(n) * (cfg.L_x + cfg.d_f)
-        self.work = np.zeros((10, n))
+        self.work = K.new_work(n)
         self.mom = K.drag_tables(self.cxi, self.sxi, self.P)
         self.idx = np.zeros(n, np.int64)
         self.reset()
@@ -48,12 +48,21 @@ class FloeChain:
         self.in_contact = np.zeros(n, dtype=np.int8)
         self.istep = 0
         self._acc_ready = False
+        self._acc_a = np.zeros(0)
 
     def run(self, a: np.ndarray, nsteps: int, stats: np.ndarray | None = None) -> None:
-        """Advance ``nsteps`` steps with amplitudes ``a``; accumulate into ``stats`` if given."""
-        if not self._acc_ready:
+        """Advance ``nsteps`` steps with amplitudes ``a``; accumulate into ``stats`` if given.
+
+        The first half-kick uses the acceleration of the current state *with these
+        amplitudes*: it is recomputed whenever ``a`` differs from the amplitudes it was
+        computed with (a new iteration), not carried over from the previous iteration's
+        amplitudes (issue *trust*: that carried the old wave force into one step per
+        iteration).
+        """
+        if not self._acc_ready or not np.array_equal(a, self._acc_a):
             K.initial_acceleration(self.x, self.u, a, self.x0, self.istep, self.P, self.cxi,
                                    self.sxi, self.acc, self.in_contact)
+            self._acc_a = np.array(a, dtype=float)
             self._acc_ready = True
         acc_on = stats is not None
         if stats is None:
@@ -273,18 +282,20 @@ def run_point(cfg: ModelConfig,
         noise = 0.0 if status == "converged" else float(history[-1])
 
     x = prof["x_mean"]
-    W_c = collision_zone_width(x, prof["gap_mean"], cfg.L_x, cfg.gap_threshold, cfg.L_sheet)
+    zones = compact_zones(x, prof["gap_mean"], cfg.L_x, gap_threshold=cfg.gap_threshold,
+                          min_pairs=cfg.compact_min_pairs, min_length=cfg.compact_min_length,
+                          bridge=cfg.compact_bridge, bridge_gap=cfg.compact_bridge_gap)
     alpha_all, r_all = fit_inverse(x, a_out, cfg.a0)
-    edge = x < W_c
-    alpha_edge, r_edge = fit_inverse(x[edge], a_out[edge], cfg.a0)
-    alpha_inner, r_inner = fit_inverse(x[~edge], a_out[~edge], cfg.a0)
+    alpha_edge, r_edge, alpha_inner, r_inner = zone_fits(
+        x, a_out, cfg.a0, zones, min_floes=cfg.fit_min_floes, min_length=cfg.fit_min_length)
     alpha_exp, r_exp = fit_exponential(x, a_out, cfg.a0)
     wall = time.perf_counter() - t_start
     return PointResult(
         x_mean=x, a=a_out, a_stderr=a_stderr, S_sd=dissipation(cfg, prof["s3_mean"]),
         gap_mean=prof["gap_mean"], contact_fraction=prof["contact_fraction"],
         collisions=prof["collisions"], F_w_mean=prof["F_w_mean"], F_c_mean=prof["F_c_mean"],
-        F_d_mean=prof["F_d_mean"], n_floes=n, W_c=W_c,
+        F_d_mean=prof["F_d_mean"], n_floes=n, W_c=zones.W_c, compact_zone=zones.layout,
+        compact_end=zones.compact_end, ice_extent=zones.ice_extent,
         alpha_all=alpha_all, alpha_all_resid=r_all, alpha_edge=alpha_edge,
         alpha_edge_resid=r_edge, alpha_inner=alpha_inner, alpha_inner_resid=r_inner,
         alpha_exp=alpha_exp, alpha_exp_resid=r_exp, alpha_c=alpha_c, k=k, c_g=c_g,

@@ -8,18 +8,19 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["PointResult", "PROFILE_FIELDS", "SCALAR_FIELDS", "collision_zone_width",
-           "fit_inverse", "fit_exponential", "power_law"]
+__all__ = ["PointResult", "PROFILE_FIELDS", "SCALAR_FIELDS", "LAYOUTS", "Zones",
+           "compact_zones", "zone_fits", "fit_inverse", "fit_exponential", "power_law"]
 
 #: Per-floe (length N_f) or per-pair (length N_f - 1, padded to N_f with NaN) profiles.
 PROFILE_FIELDS = ("x_mean", "a", "a_stderr", "S_sd", "gap_mean", "contact_fraction",
                   "collisions", "F_w_mean", "F_c_mean", "F_d_mean")
 
 #: Scalar results and diagnostics.
-SCALAR_FIELDS = ("n_floes", "W_c", "alpha_all", "alpha_all_resid", "alpha_edge",
-                 "alpha_edge_resid", "alpha_inner", "alpha_inner_resid", "alpha_exp",
-                 "alpha_exp_resid", "alpha_c", "k", "c_g", "status", "noise", "iterations",
-                 "residual", "floe_steps", "wall_time", "kernel_mode", "a_end")
+SCALAR_FIELDS = ("n_floes", "W_c", "compact_zone", "compact_end", "ice_extent", "alpha_all",
+                 "alpha_all_resid", "alpha_edge", "alpha_edge_resid", "alpha_inner",
+                 "alpha_inner_resid", "alpha_exp", "alpha_exp_resid", "alpha_c", "k", "c_g",
+                 "status", "noise", "iterations", "residual", "floe_steps", "wall_time",
+                 "kernel_mode", "a_end")
 
 STATUSES = ("converged", "converged_noisy", "not_converged")
 
@@ -39,7 +40,10 @@ class PointResult:
     |F_w|, |F_c| (sum over contacts of the floe), |F_d| per floe.
 
     Scalars: see :data:`SCALAR_FIELDS`; ``residual_history`` holds max_i |a_new-a|/a per
-    iteration.
+    iteration. The collision-zone scalars come from :func:`compact_zones`: ``W_c`` [m]
+    start of the first compact zone (NaN without one), ``compact_zone`` its layout
+    (:data:`LAYOUTS`), ``compact_end`` [m] where that zone ends, ``ice_extent`` [m] the far
+    end of the ice (last floe's mean centre + L_x / 2; above L_sheet when gaps open).
     """
 
     x_mean: np.ndarray
@@ -54,6 +58,9 @@ class PointResult:
     F_d_mean: np.ndarray
     n_floes: int
     W_c: float
+    compact_zone: str
+    compact_end: float
+    ice_extent: float
     alpha_all: float
     alpha_all_resid: float
     alpha_edge: float
@@ -86,18 +93,160 @@ class PointResult:
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
 
 
-def collision_zone_width(x_mean: np.ndarray, gap_mean: np.ndarray, L_x: float,
-                         gap_threshold: float, L_sheet: float) -> float:
-    """W_c: distance from the ice edge (x = 0) to the first pair whose mean gap < threshold.
+#: Layouts of the compact zone (``PointResult.compact_zone``), see :func:`compact_zones`.
+LAYOUTS = ("edge", "compact", "inverted", "patchy", "none")
 
-    The pair (i, i+1) sits at x_mean[i] + L_x / 2. ``L_sheet`` when no pair qualifies
-    (the collisional zone spans the domain), MODEL.md §6.
+
+@dataclass(frozen=True)
+class Zones:
+    """Where the ice is compact: the result of :func:`compact_zones`.
+
+    layout : ``"edge"`` (the paper's: collisional at the ice edge, one compact zone from
+        W_c to the far end), ``"compact"`` (compact from the first pair to the far end: no
+        collisional zone, W_c = 0), ``"inverted"`` (compact from the ice edge, collisional
+        further in to the far end), ``"patchy"`` (anything else with a compact zone: a
+        compact band with collisional ice on both sides, or several compact zones),
+        ``"none"`` (no sustained compact zone: the whole ice is collisional).
+    W_c : [m] distance from the ice edge to the start of the first compact zone (the
+        paper's dot: the right end of the first compact pair's left floe; 0 if the first
+        pair is compact); NaN for ``"none"``.
+    compact_end : [m] where that compact zone ends (the ice extent when it reaches the far
+        end); NaN for ``"none"``.
+    ice_extent : [m] the far end of the ice, last floe's mean centre + L_x / 2.
+    compact : bool per pair: in a sustained compact zone (bridged pairs included).
+    first : (i0, i1) pair indices [i0, i1) of the first compact zone, (0, 0) if none.
+    n_zones : number of sustained compact zones.
     """
-    gaps = np.asarray(gap_mean)[: len(x_mean) - 1]
-    idx = np.flatnonzero(gaps < gap_threshold)
-    if idx.size == 0:
-        return float(L_sheet)
-    return float(x_mean[idx[0]] + 0.5 * L_x)
+
+    layout: str
+    W_c: float
+    compact_end: float
+    ice_extent: float
+    compact: np.ndarray
+    first: tuple[int, int]
+    n_zones: int
+
+
+def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
+    """Maximal runs [i0, i1) of True in ``flags``."""
+    f = np.concatenate([[False], np.asarray(flags, dtype=bool), [False]])
+    d = np.flatnonzero(f[1:] != f[:-1])
+    return [(int(a), int(b)) for a, b in zip(d[::2], d[1::2], strict=True)]
+
+
+def compact_zones(x_mean: np.ndarray, gap_mean: np.ndarray, L_x: float, *,
+                  gap_threshold: float, min_pairs: int, min_length: float, bridge: int,
+                  bridge_gap: float) -> Zones:
+    """The compact zone(s) of a chain from its phase-averaged gaps (MODEL.md §6).
+
+    The paper's dots (Figs. 2, 3a) mark where the phase-averaged floe-floe distance drops
+    below ``gap_threshold`` (1e-4 m): the boundary between the collisional zone at the ice
+    edge and the compact zone downwave. A single pair must not decide that boundary: in
+    the compact zone the mean gaps scatter around the threshold, and isolated compact
+    pairs occur inside collisional ice. So, per pair (i, i+1), sitting at
+    ``x_mean[i] + L_x / 2``:
+
+    1. a pair is compact if its mean gap is below ``gap_threshold``;
+    2. bridging: a run of at most ``bridge`` non-compact pairs with compact pairs on both
+       sides, each with a mean gap below ``bridge_gap`` (marginal, not colliding), counts
+       as compact — but a bridged zone must begin and end with ``min_pairs`` compact pairs
+       in a row, so a bridge never attaches an isolated compact pair to a zone;
+    3. a run of compact pairs is a compact *zone* only if it is sustained: at least
+       ``min_pairs`` pairs spanning at least ``min_length`` metres (L_x per pair) —
+       shorter runs are isolated compact pairs in collisional ice;
+    4. W_c is the position of the first pair of the first compact zone;
+    5. the layout (:class:`Zones`): the non-compact stretches before the first zone (at
+       the ice edge) and after the last (at the far end) count as collisional zones only
+       when they are sustained by the same rule — a stretch shorter than that next to
+       the far-end spring (the "beach") does not make the layout patchy.
+    """
+    x = np.asarray(x_mean, dtype=float)
+    n_pairs = max(len(x) - 1, 0)
+    gaps = np.asarray(gap_mean, dtype=float)[:n_pairs]
+    ice_extent = float(x[-1] + 0.5 * L_x) if len(x) else math.nan
+    with np.errstate(invalid="ignore"):
+        compact = gaps < gap_threshold
+        marginal = gaps < bridge_gap
+
+    def sustained(i0: int, i1: int) -> bool:
+        return i1 - i0 >= min_pairs and (i1 - i0) * L_x >= min_length - 1e-9
+
+    # 2. bridge short marginal interruptions between runs of compact pairs; a bridged zone
+    # must begin and end with a run of at least min_pairs compact pairs, so that a bridge
+    # never attaches an isolated compact pair to a zone (and so moves W_c)
+    groups: list[list[tuple[int, int]]] = []
+    for run in _runs(compact):
+        prev = groups[-1][-1] if groups else None
+        if (prev is not None and bridge > 0 and run[0] - prev[1] <= bridge
+                and marginal[prev[1]:run[0]].all()):
+            groups[-1].append(run)
+        else:
+            groups.append([run])
+    # 3. keep the sustained runs only
+    zones = []
+    for g in groups:
+        while g and g[0][1] - g[0][0] < min_pairs:
+            g = g[1:]
+        while g and g[-1][1] - g[-1][0] < min_pairs:
+            g = g[:-1]
+        if g and sustained(g[0][0], g[-1][1]):
+            zones.append((g[0][0], g[-1][1]))
+    keep = np.zeros(n_pairs, dtype=bool)
+    for i0, i1 in zones:
+        keep[i0:i1] = True
+    if not zones:
+        return Zones("none", math.nan, math.nan, ice_extent, keep, (0, 0), 0)
+    i0, i1 = zones[0]
+    lead = sustained(0, i0)                        # a collisional zone at the ice edge
+    tail = sustained(zones[-1][1], n_pairs)        # a collisional zone at the far end
+    # W_c: the right end of floe i0; 0 when the first pair is already compact
+    W_c = float(x[i0] + 0.5 * L_x) if i0 > 0 else 0.0
+    end = ice_extent if (len(zones) == 1 and not tail) else float(x[i1 - 1] + 0.5 * L_x)
+    if len(zones) > 1 or (lead and tail):
+        layout = "patchy"
+    elif tail:
+        layout = "inverted"
+    elif i0 == 0:
+        layout = "compact"
+    else:
+        layout = "edge"
+    return Zones(layout, W_c, end, ice_extent, keep, (i0, i1), len(zones))
+
+
+def zone_fits(x: np.ndarray, a: np.ndarray, a0: float, zones: Zones, *, min_floes: int,
+              min_length: float) -> tuple[float, float, float, float]:
+    """(alpha_edge, its residual, alpha_inner, its residual): 1/a fits of the collisional
+    zone at the ice edge and of the compact zone (MODEL.md §6, the paper's dashed lines).
+
+    Edge zone: the floes whose centres lie before W_c (floes 0 ... i0 for the first
+    compact zone's pairs [i0, i1); W_c is the right end of floe i0); with no compact zone,
+    every floe (the whole ice is collisional). Inner zone: the floes after W_c in the first
+    compact zone (floes i0 + 1 ... i1); none without a compact zone. A zone is
+    fitted only if it has at least ``min_floes`` floes spanning at least ``min_length``
+    metres (centre to centre); otherwise NaN.
+    """
+    nan = (math.nan, math.nan)
+
+    def fit(sel: np.ndarray) -> tuple[float, float]:
+        if sel.sum() < max(min_floes, 3):
+            return nan
+        xs = x[sel]
+        if xs.max() - xs.min() < min_length - 1e-9:
+            return nan
+        return fit_inverse(xs, a[sel], a0)
+
+    n = len(x)
+    if zones.layout == "none":
+        return (*fit(np.ones(n, dtype=bool)), *nan)
+    i0, i1 = zones.first
+    edge = np.zeros(n, dtype=bool)
+    inner = np.zeros(n, dtype=bool)
+    if zones.W_c > 0:
+        edge[:i0 + 1] = True        # centres before W_c = x[i0] + L_x / 2
+        inner[i0 + 1:i1 + 1] = True  # the right floes of the zone's pairs
+    else:
+        inner[:i1 + 1] = True       # compact from the first floe (W_c = 0): no edge zone
+    return (*fit(edge), *fit(inner))
 
 
 def _linfit(x: np.ndarray, y: np.ndarray) -> tuple[float, float, np.ndarray]:

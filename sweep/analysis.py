@@ -118,7 +118,10 @@ def _load(path: str | Path) -> pd.DataFrame:
             raise StoreError(f"{path}: not a sweep store (no /table)")
         table = f["table"]
         n = int(table.attrs["n_rows"])
-        data = {c.name: _decode(table[c.name][:n]) for c in COLUMNS if c.name in table}
+        # a column an older schema version lacks reads as its fill value
+        data = {c.name: (_decode(table[c.name][:n]) if c.name in table
+                         else np.full(n, c.fill, dtype=object if c.kind == "str" else None))
+                for c in COLUMNS}
         campaign = f.attrs.get("campaign_json", "")
     df = pd.DataFrame(data)
     df.attrs["units"] = {c.name: c.units for c in COLUMNS}

@@ -119,12 +119,16 @@ def _amplitude(ax, row: pd.Series, prof: dict[str, np.ndarray], colour, style: s
         ax.fill_between(x, (a - se) / a0, (a + se) / a0, color=colour, alpha=0.25, lw=0)
     if not zone:
         return
+    # only where a compact zone exists (W_c is NaN without one): the dot at its start and
+    # the compact-ice solution along it
     W_c, alpha_c = float(row["W_c"]), float(row["alpha_c"])
-    if np.isfinite(W_c) and W_c < x[-1]:
+    end = float(row.get("compact_end", np.nan))
+    end = min(end, x[-1]) if np.isfinite(end) else x[-1]
+    if np.isfinite(W_c) and W_c < end:
         a_w = float(np.interp(W_c, x, a))
         ax.plot([W_c], [a_w / a0], "o", color=colour, ms=6, mec="k", mew=0.6, zorder=5)
         if np.isfinite(alpha_c) and a_w > 0:
-            xx = np.linspace(W_c, x[-1], 100)
+            xx = np.linspace(W_c, end, 100)
             ax.plot(xx, 1.0 / (1.0 / a_w + alpha_c * (xx - W_c)) / a0, "k--", lw=0.9)
 
 
@@ -169,7 +173,7 @@ def fig2(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> list[P
             _confined(ax, rows.iloc[0], x_end)
             ax.plot([], [], "k--", lw=0.9, label="compact ice from x = W_c")
             ax.plot([], [], "o", color="0.6", mec="k", mew=0.6,
-                    label="gap < threshold (x = W_c)")
+                    label="start of the compact zone (x = W_c)")
             ax.set_title(f"({chr(97 + panel)}) {disp.upper()}", loc="left")
             ax.set_xlabel("distance from the ice edge x [m]")
             ax.grid(alpha=0.3)
@@ -306,18 +310,24 @@ def summary(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> lis
         shown = groups[:12]
         vary = [i for i, k in enumerate(keys) if len({kv[0][i] for kv in shown}) > 1]
         same = [i for i in range(len(keys)) if i not in vary]
+        sheet = derived(df)["L_sheet"].max()
+        ax_top = float(sheet) if np.isfinite(sheet) else float(np.nanmax(df["W_c"]))
+        marked_none = False
         for key, sub in shown:
             sub = sub.sort_values("eps")
             label = _title([keys[i] for i in vary], [key[i] for i in vary]) or None
-            ax.plot(sub["eps"], sub["W_c"], "o-", ms=4, lw=1, label=label)
+            line, = ax.plot(sub["eps"], sub["W_c"], "o-", ms=4, lw=1, label=label)
+            none = sub["W_c"].isna()
+            if none.any():      # no compact zone: marked at the top, not a width
+                ax.plot(sub.loc[none, "eps"], np.full(int(none.sum()), ax_top), "x",
+                        color=line.get_color(), ms=6)
+                marked_none = True
         ax.set_title(_title([keys[i] for i in same], [shown[0][0][i] for i in same]),
                      fontsize=8)
         ax.set_xlabel("restitution coefficient ε [–]")
         ax.set_ylabel("collision-zone width W_c [m]")
-        sheet = derived(df)["L_sheet"].max()
-        if np.isfinite(sheet) and (df["W_c"] >= sheet).any():
-            ax.axhline(sheet, color="k", ls=":", lw=1,
-                       label=f"sheet length {sheet:g} m (zone spans the sheet)")
+        if marked_none:
+            ax.plot([], [], "kx", label=f"no compact zone (drawn at {ax_top:g} m)")
             vary = vary or [-1]
         ax.grid(alpha=0.3)
         if vary:

@@ -13,7 +13,14 @@ import h5py
 from .config import parse_campaign
 from .errors import CampaignMismatchError, Interrupted, StoreError
 from .provenance import environment
-from .schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, SCHEMA_VERSION, profile_path
+from .schema import (
+    COLUMNS,
+    HISTORY_VAR,
+    MIGRATIONS,
+    PROFILE_VARS,
+    SCHEMA_VERSION,
+    profile_path,
+)
 from .store import Store
 
 __all__ = ["merge", "iter_records"]
@@ -31,7 +38,9 @@ def iter_records(path: str | Path) -> Iterator[dict[str, Any]]:
     with h5py.File(path, "r", locking=False) as f:
         table = f["table"]
         n = int(table.attrs["n_rows"])
-        cols = {c.name: table[c.name][:n] for c in COLUMNS}
+        # a column an older (migratable) schema version lacks reads as its fill value
+        cols = {c.name: table[c.name][:n] if c.name in table else [c.fill] * n
+                for c in COLUMNS}
         for i in range(n):
             row = {name: _text(values[i]) for name, values in cols.items()}
             row = {k: (v.item() if hasattr(v, "item") else v) for k, v in row.items()}
@@ -94,10 +103,14 @@ def merge(output: str | Path, inputs: list[str | Path]) -> str:
         try:
             with h5py.File(path, "r", locking=False) as f:
                 version = f.attrs.get("schema_version")
-                if version is None or int(version) != SCHEMA_VERSION:
-                    raise StoreError(f"{path}: schema version {version!r}, not"
-                                     f" {SCHEMA_VERSION}: open it with a sweep of its version"
-                                     " (or migrate it by running it) before merging")
+                try:
+                    number = int(version)
+                except (TypeError, ValueError):
+                    number = -1
+                if number > SCHEMA_VERSION or (number < SCHEMA_VERSION and
+                                               number not in MIGRATIONS):
+                    raise StoreError(f"{path}: schema version {version!r}: this sweep"
+                                     f" (schema version {SCHEMA_VERSION}) cannot merge it")
                 hashes.append(_text(f.attrs["campaign_hash"]))
                 texts.append(_text(f.attrs["campaign_toml"]))
         except StoreError:

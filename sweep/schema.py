@@ -31,7 +31,7 @@ from .identity import HASH_LENGTH
 __all__ = ["SCHEMA_VERSION", "FORMAT", "Column", "COLUMNS", "PROFILE_VARS", "MIGRATIONS",
            "STATUSES", "schema_document", "validate", "column", "profile_path"]
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
 FORMAT = "sweep-store"
 
 #: Point statuses: the model's three plus sweep's four (``crashed``: its worker died
@@ -69,12 +69,17 @@ COLUMNS: tuple[Column, ...] = (
     _C("status", "str", "", "converged, converged_noisy, not_converged, failed, invalid"),
     _C("message", "str", "", "reason for failed/invalid (traceback with rank and host)"),
     _C("n_floes", "int", "1", "number of floes N_f"),
-    _C("W_c", "float", "m", "collision-zone width"),
+    _C("W_c", "float", "m", "collision-zone width: start of the first compact zone (NaN: none)"),
+    _C("compact_zone", "str", "", "layout of the compact zone: edge, inverted, patchy, none"),
+    _C("compact_end", "float", "m", "end of the first compact zone"),
+    _C("ice_extent", "float", "m", "far end of the ice: last floe's mean centre + L_x/2"),
     _C("alpha_all", "float", "m-2", "slope of 1/a over all floes"),
     _C("alpha_all_resid", "float", "1", "RMS misfit of the 1/a fit over all floes / a0"),
-    _C("alpha_edge", "float", "m-2", "slope of 1/a in the collisional zone x < W_c"),
+    _C("alpha_edge", "float", "m-2", "slope of 1/a in the collisional zone x < W_c (all"
+       " floes without a compact zone; NaN if too short)"),
     _C("alpha_edge_resid", "float", "1", "RMS misfit of the edge fit / a0"),
-    _C("alpha_inner", "float", "m-2", "slope of 1/a in the inner zone x >= W_c"),
+    _C("alpha_inner", "float", "m-2", "slope of 1/a in the first compact zone (NaN: none or"
+       " too short)"),
     _C("alpha_inner_resid", "float", "1", "RMS misfit of the inner fit / a0"),
     _C("alpha_exp", "float", "m-1", "exponential attenuation rate (slope of -ln a)"),
     _C("alpha_exp_resid", "float", "1", "RMS misfit of the exponential fit / a0"),
@@ -100,6 +105,8 @@ COLUMNS: tuple[Column, ...] = (
     _C("provenance", "str", "", "JSON: versions of package, git, python, numpy, numba, MPI"),
 )
 _BY_NAME = {c.name: c for c in COLUMNS}
+#: Schema version that added a column (columns not listed: version 1).
+ADDED_IN = {"compact_zone": 2, "compact_end": 2, "ice_extent": 2}
 
 #: Per-point profiles (``/profiles/<hh>/<hash>/<name>``): name -> (units, long_name).
 PROFILE_VARS: dict[str, tuple[str, str]] = {
@@ -121,9 +128,34 @@ def profile_path(h: str) -> str:
     return f"profiles/{h[:2]}/{h}"
 
 
+def _v1_to_v2(f: Any) -> None:
+    """Add the compact-zone columns (fill values: their points keep the first-pair W_c
+    rule of model version 2, which the empty ``compact_zone`` marks)."""
+    table = f["table"]
+    size = table["hash"].shape[0]
+    for name in ("compact_zone", "compact_end", "ice_extent"):
+        if name in table:
+            continue
+        col = _BY_NAME[name]
+        if col.kind == "str":
+            import h5py
+            ds = table.create_dataset(name, shape=(size,), maxshape=(None,),
+                                      chunks=table["hash"].chunks,
+                                      dtype=h5py.string_dtype("utf-8"))
+            ds[...] = [""] * size
+        else:
+            ds = table.create_dataset(name, shape=(size,), maxshape=(None,),
+                                      chunks=table["hash"].chunks, dtype="float64")
+            ds[...] = np.nan
+
+
 #: Migrations: from-version -> (to-version, description, function(h5py.File)). A store
-#: older than SCHEMA_VERSION is migrated step by step on open; none exist yet.
-MIGRATIONS: dict[int, tuple[int, str, Any]] = {}
+#: older than SCHEMA_VERSION is migrated step by step on open (by a writer; readers read
+#: an old store as it is, missing columns as fill values).
+MIGRATIONS: dict[int, tuple[int, str, Any]] = {
+    1: (2, "add compact_zone, compact_end, ice_extent (model version 3's robust W_c); "
+           "old points keep their values, compact_zone empty", _v1_to_v2),
+}
 
 ROOT_ATTRS = {
     "schema_version": "int: version of this layout",
@@ -200,7 +232,9 @@ def schema_document() -> dict[str, Any]:
 def validate(path: str | Path) -> list[str]:
     """Check a store against this schema; returns the problems found (empty: valid).
 
-    Checks the root attributes and version, that every column exists, has the kind of
+    Checks the root attributes and version (an older version with a migration path is
+    valid: readers read it as it is, a writer migrates it), that every column of its
+    version exists, has the kind of
     its schema entry and at least ``n_rows`` values, that hashes are unique 64-hex
     strings and statuses known, and that every committed non-failed point has a profile
     group whose datasets have length ``n_floes``.
@@ -218,11 +252,14 @@ def validate(path: str | Path) -> list[str]:
                 problems.append(f"/: missing attribute {key!r}")
         version = f.attrs.get("schema_version")
         try:
-            number = None if version is None else int(version)
+            version = SCHEMA_VERSION if version is None else int(version)
         except (TypeError, ValueError):
             return problems + [f"/: schema_version {version!r} is not a number"]
-        if number is not None and number != SCHEMA_VERSION:
-            problems.append(f"/: schema_version {number} != {SCHEMA_VERSION}")
+        if version > SCHEMA_VERSION:
+            problems.append(f"/: schema_version {version} is newer than {SCHEMA_VERSION}")
+        elif version < SCHEMA_VERSION and version not in MIGRATIONS:
+            problems.append(f"/: schema_version {version} has no migration to"
+                            f" {SCHEMA_VERSION}")
         if f.attrs.get("format") not in (FORMAT, FORMAT.encode()):
             problems.append(f"/: format {f.attrs.get('format')!r} != {FORMAT!r}")
         if "table" not in f:
@@ -232,6 +269,8 @@ def validate(path: str | Path) -> list[str]:
             problems.append("/table: missing attribute 'n_rows'")
         for col in COLUMNS:
             if col.name not in f["table"]:
+                if ADDED_IN.get(col.name, 1) > version:
+                    continue        # an older (readable, migratable) store lacks it
                 problems.append(f"/table/{col.name}: missing")
                 continue
             ds = f["table"][col.name]

@@ -5,6 +5,8 @@ the same columns) and returns a new DataFrame; nothing reads profiles.
 
 - :func:`derived` — per point: W_c / L_sheet, alpha_inner / alpha_c,
   alpha_edge / alpha_inner, the n = 1 (exponential) versus n = 2 (1/a, eq. 25) fit quality.
+  A point without a compact zone (``compact_zone == "none"``) has no W_c and no
+  alpha_inner (NaN): it never reads as a boundary, and it is counted apart.
 - :func:`collision_stats` — the same quantities summarised per group of any swept
   parameters (``by="eps"``, ``by=["L_x", "dispersion"]``, ...).
 - :func:`alpha_omega` — least-squares power laws ``alpha = c omega^m`` across the wave
@@ -70,8 +72,11 @@ def derived(df: pd.DataFrame, *, L_sheet: float | None = None,
 
     - ``omega`` [rad s-1] 2 pi / T; ``L_sheet`` [m] the sheet length (from each row's
       ``config_json``, or the ``L_sheet`` argument, which overrides it);
-    - ``W_c_rel`` W_c / L_sheet; ``zone_spans_sheet`` (bool) no pair compacts, the
-      collisional zone is the whole sheet;
+    - ``W_c_rel`` W_c / L_sheet (NaN without a compact zone); ``compact_zone`` the
+      layout (edge, inverted, patchy, none; points of stores written before model
+      version 3 get ``none`` where their W_c reached L_sheet, else ``legacy``);
+      ``no_compact_zone`` (bool) the whole ice is collisional: its W_c and alpha_inner
+      are NaN here whatever the store holds;
     - ``inner_over_c`` alpha_inner / alpha_c (1: confined-ice attenuation, eq. 25);
       ``edge_over_inner`` alpha_edge / alpha_inner;
     - ``fit_ratio`` alpha_exp_resid / alpha_all_resid (> 1: the 1/a law, n = 2, fits better
@@ -81,15 +86,33 @@ def derived(df: pd.DataFrame, *, L_sheet: float | None = None,
     out = df[df["status"].isin(statuses)].copy() if "status" in df.columns else df.copy()
     out["omega"] = 2.0 * math.pi / out["T"].astype(float)
     out["L_sheet"] = _sheet_lengths(out, L_sheet)
-    W_c = out["W_c"].astype(float)
-    out["W_c_rel"] = W_c / out["L_sheet"]
-    out["zone_spans_sheet"] = W_c >= out["L_sheet"]
+    out["compact_zone"] = _layouts(out)
+    out["no_compact_zone"] = out["compact_zone"] == "none"
+    # no compact zone: no boundary and no inner-zone rate (rows of old stores kept the
+    # first-pair rule's W_c = L_sheet and an inner fit over the last floes)
+    out["W_c"] = out["W_c"].astype(float).where(~out["no_compact_zone"])
+    out["alpha_inner"] = out["alpha_inner"].astype(float).where(~out["no_compact_zone"])
+    out["W_c_rel"] = out["W_c"] / out["L_sheet"]
     out["inner_over_c"] = _ratio(out["alpha_inner"], out["alpha_c"])
     out["edge_over_inner"] = _ratio(out["alpha_edge"], out["alpha_inner"])
     out["fit_ratio"] = _ratio(out["alpha_exp_resid"], out["alpha_all_resid"])
     both = out["alpha_all_resid"].notna() & out["alpha_exp_resid"].notna()
     out["prefers_n2"] = both & (out["alpha_all_resid"] < out["alpha_exp_resid"])
     return out
+
+
+def _layouts(df: pd.DataFrame) -> pd.Series:
+    """The compact_zone column; for rows of older stores (empty value) derived from the
+    old rule: W_c >= L_sheet meant no compact pair (``none``), else ``legacy``."""
+    if "compact_zone" in df.columns:
+        lay = df["compact_zone"].astype(object).where(df["compact_zone"].notna(), "")
+    else:
+        lay = pd.Series("", index=df.index, dtype=object)
+    old = lay == ""
+    if old.any():
+        spans = df["W_c"].astype(float) >= df["L_sheet"].astype(float)
+        lay = lay.where(~old, np.where(spans, "none", "legacy"))
+    return lay.astype(str)
 
 
 def _as_list(by: str | Sequence[str] | None) -> list[str]:
@@ -100,7 +123,8 @@ def _as_list(by: str | Sequence[str] | None) -> list[str]:
 
 def collision_stats(df: pd.DataFrame, by: str | Sequence[str] | None = None, *,
                     L_sheet: float | None = None,
-                    statuses: Sequence[str] = RESULT_STATUSES) -> pd.DataFrame:
+                    statuses: Sequence[str] = RESULT_STATUSES,
+                    layouts: Sequence[str] | None = None) -> pd.DataFrame:
     """Collision-zone statistics of a campaign, one row per group of ``by``.
 
     Parameters
@@ -116,10 +140,17 @@ def collision_stats(df: pd.DataFrame, by: str | Sequence[str] | None = None, *,
 
     - ``n_points``, ``n_not_converged``: points in the group, and how many of them hit
       ``max_iterations`` without converging;
-    - ``W_c_mean``, ``W_c_std``, ``W_c_min``, ``W_c_max`` [m];
-    - ``W_c_rel_mean``, ``W_c_rel_std`` (W_c / L_sheet), ``frac_zone_spans_sheet``;
+    - ``n_edge``, ``n_compact``, ``n_inverted``, ``n_patchy``, ``n_no_compact``: points
+      per compact-zone layout (:func:`floewave.results.compact_zones`),
+      ``frac_no_compact_zone``; ``n_legacy``: points of stores written before model
+      version 3 that had a compact pair (old first-pair rule, no layout);
+    - ``layouts`` (argument): only points of these layouts enter (e.g. ``["edge"]`` for the
+      paper's layout alone); default all;
+    - ``n_W_c`` (points with a W_c: a compact zone), ``W_c_mean``, ``W_c_std``,
+      ``W_c_min``, ``W_c_max`` [m] over those;
+    - ``W_c_rel_mean``, ``W_c_rel_std`` (W_c / L_sheet);
     - ``inner_over_c_mean``, ``inner_over_c_median``, ``n_inner_over_c`` (alpha_inner /
-      alpha_c; NaN where the inner zone has < 3 floes);
+      alpha_c; NaN — left out — without a compact zone or where it is too short to fit);
     - ``edge_over_inner_mean``, ``edge_over_inner_median``, ``n_edge_over_inner``;
     - ``frac_prefers_n2`` (share of points where 1/a fits better than the exponential),
       ``fit_ratio_median`` (alpha_exp_resid / alpha_all_resid), ``alpha_all_resid_median``,
@@ -130,16 +161,26 @@ def collision_stats(df: pd.DataFrame, by: str | Sequence[str] | None = None, *,
     if unknown:
         raise KeyError(f"collision_stats: no column {unknown[0]!r} to group by")
     d = derived(df, L_sheet=L_sheet, statuses=statuses)
+    if layouts is not None:
+        d = d[d["compact_zone"].isin(list(layouts))]
     d = d.assign(_nc=(d["status"] == "not_converged") if "status" in d.columns else False,
-                 _all=0)
+                 _all=0, _edge=d["compact_zone"] == "edge",
+                 _compact=d["compact_zone"] == "compact",
+                 _inverted=d["compact_zone"] == "inverted",
+                 _patchy=d["compact_zone"] == "patchy",
+                 _legacy=d["compact_zone"] == "legacy")
     grouped = d.groupby(keys or ["_all"], sort=True, dropna=False)
     agg = grouped.agg(
         n_points=("W_c", "size"),
         n_not_converged=("_nc", "sum"),
+        n_edge=("_edge", "sum"), n_compact=("_compact", "sum"),
+        n_inverted=("_inverted", "sum"), n_patchy=("_patchy", "sum"),
+        n_no_compact=("no_compact_zone", "sum"), n_legacy=("_legacy", "sum"),
+        frac_no_compact_zone=("no_compact_zone", "mean"),
+        n_W_c=("W_c", "count"),
         W_c_mean=("W_c", "mean"), W_c_std=("W_c", "std"),
         W_c_min=("W_c", "min"), W_c_max=("W_c", "max"),
         W_c_rel_mean=("W_c_rel", "mean"), W_c_rel_std=("W_c_rel", "std"),
-        frac_zone_spans_sheet=("zone_spans_sheet", "mean"),
         inner_over_c_mean=("inner_over_c", "mean"),
         inner_over_c_median=("inner_over_c", "median"),
         n_inner_over_c=("inner_over_c", "count"),
@@ -153,7 +194,9 @@ def collision_stats(df: pd.DataFrame, by: str | Sequence[str] | None = None, *,
     ).reset_index()
     if not keys:
         agg = agg.drop(columns="_all")
-    agg["n_not_converged"] = agg["n_not_converged"].astype(int)
+    for col in ("n_not_converged", "n_edge", "n_compact", "n_inverted", "n_patchy",
+                "n_no_compact", "n_legacy"):
+        agg[col] = agg[col].astype(int)
     return agg
 
 
@@ -178,10 +221,12 @@ def alpha_omega(df: pd.DataFrame, alpha: str = "alpha_inner",
     DataFrame with the ``by`` columns and ``m`` (exponent), ``c`` (prefactor, units of
     alpha times s^m), ``m_stderr`` (least-squares standard error of m; NaN with 2 periods),
     ``rms_log_resid`` (RMS of ln alpha - fit), ``n_periods`` (distinct T fitted),
-    ``n_points`` (points fitted), ``n_dropped`` (points with alpha <= 0 or NaN, left out:
-    no logarithm), ``omega_min``, ``omega_max`` [rad s-1], and ``m_c``: the same fit of
-    ``alpha_c`` over the same points (the confined-ice exponent, eq. 24-28), for
-    comparison.
+    ``n_points`` (points fitted), ``n_dropped`` (points left out) and why:
+    ``n_dropped_no_zone`` (no rate because the point has no compact zone: alpha_inner),
+    ``n_dropped_nan`` (no rate otherwise: a zone too short to fit, or no floe to fit) and
+    ``n_dropped_nonpositive`` (alpha <= 0: no logarithm), ``omega_min``, ``omega_max``
+    [rad s-1], and ``m_c``: the same fit of ``alpha_c`` over the same points (the
+    confined-ice exponent, eq. 24-28), for comparison.
     """
     if alpha not in df.columns:
         raise KeyError(f"alpha_omega: no column {alpha!r}")
@@ -195,6 +240,8 @@ def alpha_omega(df: pd.DataFrame, alpha: str = "alpha_inner",
         key = key if isinstance(key, tuple) else (key,)
         om = 2.0 * math.pi / g["T"].to_numpy(float)
         al = g[alpha].to_numpy(float)
+        none = (g["compact_zone"].to_numpy(object) == "none" if "compact_zone" in g.columns
+                else np.zeros(len(g), dtype=bool))
         ok = np.isfinite(al) & (al > 0)
         row = dict(zip(keys, key, strict=True))
         n_per = int(len(np.unique(om[ok])))
@@ -208,9 +255,14 @@ def alpha_omega(df: pd.DataFrame, alpha: str = "alpha_inner",
                if len(np.unique(om[okc])) >= min_periods else math.nan)
         row.update(m=m, c=c, m_stderr=m_se, rms_log_resid=rms, n_periods=n_per,
                    n_points=int(ok.sum()), n_dropped=int((~ok).sum()),
+                   n_dropped_no_zone=int((~np.isfinite(al) & none).sum()),
+                   n_dropped_nan=int((~np.isfinite(al) & ~none).sum()),
+                   n_dropped_nonpositive=int((np.isfinite(al) & (al <= 0)).sum()),
                    omega_min=float(om[ok].min()) if ok.any() else math.nan,
                    omega_max=float(om[ok].max()) if ok.any() else math.nan, m_c=m_c)
         rows.append(row)
     cols = keys + ["m", "c", "m_stderr", "rms_log_resid", "n_periods", "n_points",
-                   "n_dropped", "omega_min", "omega_max", "m_c"]
+                   "n_dropped", "n_dropped_no_zone", "n_dropped_nan",
+                   "n_dropped_nonpositive", "omega_min",
+                   "omega_max", "m_c"]
     return pd.DataFrame(rows, columns=cols)

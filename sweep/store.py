@@ -351,6 +351,12 @@ class Store:
                     raise SchemaVersionError(
                         f"{p}: store schema version {version} is newer than this sweep's"
                         f" schema version {SCHEMA_VERSION}; upgrade sweep to use it")
+                step = version
+                while step < SCHEMA_VERSION:  # a migration path, checked before changes
+                    if step not in MIGRATIONS:
+                        raise SchemaVersionError(f"{p}: no migration from schema version"
+                                                 f" {step} to {SCHEMA_VERSION}")
+                    step = MIGRATIONS[step][0]
                 info["campaign_json"] = _text(f.attrs.get("campaign_json", ""))
                 table = f["table"]
                 n = int(table.attrs["n_rows"])
@@ -572,6 +578,7 @@ class Store:
             version, _, migrate = MIGRATIONS[version]
             migrate(f)
             f.attrs["schema_version"] = version
+            f.flush()
 
     def _start_run(self, info: dict[str, Any]) -> int:
         assert self.w is not None

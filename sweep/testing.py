@@ -35,7 +35,9 @@ def fake_point(cfg: ModelConfig) -> dict[str, Any]:
         "x_mean": x, "a": a, "a_stderr": 0.01 * a, "S_sd": -cfg.C_sd * a ** 3,
         "gap_mean": gap, "contact_fraction": np.linspace(0, 1, n),
         "collisions": np.arange(n, dtype=float), "F_w_mean": a * 100, "F_c_mean": a * 50,
-        "F_d_mean": a * 5, "n_floes": n, "W_c": float(x[n // 3]), "alpha_all": alpha,
+        "F_d_mean": a * 5, "n_floes": n, "W_c": float(x[n // 3]), "compact_zone": "edge",
+        "compact_end": float(x[-1] + 0.5 * cfg.L_x), "ice_extent": float(x[-1] + 0.5 * cfg.L_x),
+        "alpha_all": alpha,
         "alpha_all_resid": 1e-3, "alpha_edge": 2 * alpha, "alpha_edge_resid": 2e-3,
         "alpha_inner": alpha, "alpha_inner_resid": 1e-3, "alpha_exp": alpha * cfg.a0,
         "alpha_exp_resid": 5e-3, "alpha_c": 0.9 * alpha, "k": 4.0 / cfg.T ** 2,
@@ -88,16 +90,21 @@ def power_point(cfg: ModelConfig) -> dict[str, Any]:
 
     alpha_inner = C_sd omega^m (m = :data:`POWER_M` of the dispersion relation),
     alpha_c = alpha_inner / (1 + eps) (so alpha_inner / alpha_c = 1 + eps),
-    alpha_edge = (2 + d_f * 100) alpha_inner, W_c = 10 eps L_x (capped at the sheet:
-    eps = 0.8, L_x = 6 spans it), alpha_all_resid = 1e-3 and alpha_exp_resid = 1e-3 (1 + eps)
-    for eps < 0.5, else 5e-4 (the exponential fits better).
+    alpha_edge = (2 + d_f * 100) alpha_inner, W_c = 10 eps L_x with layout ``edge`` — or,
+    where that would not be inside the sheet (10 eps L_x >= L_sheet), no compact zone:
+    layout ``none``, W_c and alpha_inner NaN, alpha_c = C_sd omega^m / (1 + eps) still;
+    alpha_all_resid = 1e-3 and alpha_exp_resid = 1e-3 (1 + eps) for eps < 0.5, else 5e-4
+    (the exponential fits better).
     """
     out = fake_point(cfg)
     omega = 2.0 * np.pi / cfg.T
     inner = cfg.C_sd * omega ** POWER_M[cfg.dispersion]
-    out.update(alpha_inner=inner, alpha_c=inner / (1.0 + cfg.eps),
+    W_c = 10.0 * cfg.eps * cfg.L_x
+    compact = W_c < cfg.L_sheet
+    out.update(alpha_inner=inner if compact else np.nan, alpha_c=inner / (1.0 + cfg.eps),
                alpha_edge=(2.0 + 100.0 * cfg.d_f) * inner,
-               W_c=min(10.0 * cfg.eps * cfg.L_x, cfg.L_sheet), alpha_all_resid=1e-3,
+               W_c=W_c if compact else np.nan, compact_zone="edge" if compact else "none",
+               compact_end=out["ice_extent"] if compact else np.nan, alpha_all_resid=1e-3,
                alpha_exp_resid=1e-3 * (1.0 + cfg.eps) if cfg.eps < 0.5 else 5e-4,
                status="converged" if cfg.eps < 0.7 else "not_converged")
     return out

@@ -32,7 +32,12 @@ def test_full_dem_point_converges_with_a_decreasing_profile(windows):
     assert np.all((r.contact_fraction[:-1] >= 0) & (r.contact_fraction[:-1] <= 1))
     assert np.all(r.collisions[:-1] >= 0)
     assert np.all(r.S_sd < 0)
-    assert 0 < r.W_c <= cfg.L_sheet
+    assert r.ice_extent == r.x_mean[-1] + 0.5 * cfg.L_x
+    assert r.compact_zone in ("edge", "inverted", "patchy", "none")
+    if r.compact_zone == "none":
+        assert np.isnan(r.W_c) and np.isnan(r.compact_end) and np.isnan(r.alpha_inner)
+    else:
+        assert 0 < r.W_c < r.compact_end <= r.ice_extent
 
 
 def test_standard_error_shrinks_with_the_averaging_window(windows):

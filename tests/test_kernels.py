@@ -60,14 +60,14 @@ def test_two_pass_drag_equals_per_floe_sums(L_x, accumulate):
     cwt, swt = np.cos(0.3), np.sin(0.3)
     P1 = P._replace(u_amp=0.05)
     for exact in (False, True):
-        sc = np.zeros((5, n))
+        sc = K.new_scratch(n)
         idx = np.zeros(n, np.int64)
         if exact:
             m = drag_pass_exact(ck, sk, cwt, swt, a, P1.u_amp, v * 0.05, P.geom, accumulate,
                                 sc, idx)
         else:
             m = K.drag_pass(ck, sk, cwt, swt, a, v * 0.05, P1, chain.cxi, chain.sxi, mom,
-                            accumulate, sc, idx)
+                            accumulate, sc, idx, False)
         if L_x == 0.5:
             assert 0 < m < n
         for i in range(n):
@@ -97,10 +97,54 @@ def test_two_pass_drag_falls_back_on_foreign_tables():
     mom = K.drag_tables(cxi, chain.sxi, chain.P)
     assert mom[K.M_FAST] == 0.0
     n = 20
-    sc = np.zeros((5, n))
+    sc = K.new_scratch(n)
     idx = np.zeros(n, np.int64)
     m = K.drag_pass(np.ones(n), np.zeros(n), 1.0, 0.0, np.full(n, 0.01), np.full(n, 5.0),
-                    chain.P, cxi, chain.sxi, mom, True, sc, idx)
+                    chain.P, cxi, chain.sxi, mom, True, sc, idx, False)
     assert m == n
     q2, q3 = K.drag_sums(0.01 * chain.P.u_amp, 1.0, 0.0, 5.0, cxi, chain.sxi)
     assert sc[2, 0] == q2 and sc[3, 0] == q3
+
+
+@pytest.mark.parametrize("L_x", [0.5, 3.0])
+@pytest.mark.parametrize("m", [1, 13, 17, 40])
+def test_cell_sums_are_per_floe_sums_bit_for_bit(L_x, m):
+    """cell_sums (vectorised across floes, lanes padded) gives exactly drag_sums /
+    drag_force_sum floe by floe: the summation order over the cells is the source's."""
+    from floewave import _kernels as K
+    cfg = ModelConfig(L_x=L_x)
+    k, _ = solve_dispersion(cfg)
+    chain = FloeChain(cfg, k)
+    rng = np.random.default_rng(m)
+    n = 40
+    th, a, v = _random_floes(rng, n, 1.0)
+    idx = rng.permutation(n)[:m].astype(np.int64)
+    for accumulate in (False, True):
+        sc = K.new_scratch(n)
+        sc[K.SC_C, :n] = np.cos(th)
+        sc[K.SC_S, :n] = np.sin(th)
+        sc[K.SC_GATHER:] = np.nan          # padding lanes must not leak into results
+        K.cell_sums(sc, np.concatenate([idx, np.zeros(n - m, np.int64)]), m, a, 0.05,
+                    v * 0.05, chain.cxi, chain.sxi, accumulate)
+        for i in idx:
+            A = a[i] * 0.05
+            if accumulate:
+                q2, q3 = K.drag_sums(A, sc[K.SC_C, i], sc[K.SC_S, i], v[i] * 0.05,
+                                     chain.cxi, chain.sxi)
+                assert sc[K.SC_S3, i] == q3
+            else:
+                q2 = K.drag_force_sum(A, sc[K.SC_C, i], sc[K.SC_S, i], v[i] * 0.05,
+                                      chain.cxi, chain.sxi)
+            assert sc[K.SC_S2, i] == q2
+
+
+def test_scratch_too_small_is_refused():
+    """The padded scratch is checked, not silently overrun."""
+    from floewave import _kernels as K
+    cfg = ModelConfig()
+    k, _ = solve_dispersion(cfg)
+    chain = FloeChain(cfg, k)
+    a = np.full(cfg.n_floes, cfg.a0)
+    chain.work = np.zeros((K.N_WORK, cfg.n_floes))          # no padding lanes
+    with pytest.raises(ValueError, match="scratch too small"):
+        chain.run(a, 10)

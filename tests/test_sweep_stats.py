@@ -36,11 +36,17 @@ def test_derived_columns_per_point(table):
     assert len(d) == 48
     np.testing.assert_allclose(d["L_sheet"], 6.0)
     np.testing.assert_allclose(d["omega"], 2 * np.pi / d["T"])
-    np.testing.assert_allclose(d["W_c_rel"], np.minimum(10 * d["eps"] * d["L_x"], 6.0) / 6.0)
-    np.testing.assert_allclose(d["inner_over_c"], 1 + d["eps"], rtol=1e-12)
-    np.testing.assert_allclose(d["edge_over_inner"], 2 + 100 * d["d_f"], rtol=1e-12)
+    # W_c = 10 eps L_x where that lies inside the 6 m sheet, else no compact zone (NaN)
+    none = (d["eps"] == 0.8) & (d["L_x"] == 1.0)
+    assert (d["no_compact_zone"] == none).all()
+    assert (d["compact_zone"] == np.where(none, "none", "edge")).all()
+    np.testing.assert_allclose(d["W_c_rel"], np.where(none, np.nan, 10 * d["eps"] * d["L_x"]
+                                                      / 6.0))
+    np.testing.assert_allclose(d["inner_over_c"], np.where(none, np.nan, 1 + d["eps"]),
+                               rtol=1e-12)
+    np.testing.assert_allclose(d["edge_over_inner"],
+                               np.where(none, np.nan, 2 + 100 * d["d_f"]), rtol=1e-12)
     assert (d["prefers_n2"] == (d["eps"] < 0.5)).all()
-    assert (d["zone_spans_sheet"] == ((d["eps"] == 0.8) & (d["L_x"] == 1.0))).all()
     # an explicit sheet length overrides config_json
     np.testing.assert_allclose(derived(table, L_sheet=12.0)["W_c_rel"], d["W_c_rel"] / 2)
 
@@ -48,16 +54,24 @@ def test_derived_columns_per_point(table):
 def test_collision_stats_by_eps(table):
     s = collision_stats(table, by="eps").set_index("eps")
     assert list(s.index) == [0.2, 0.8]
-    for col in ("n_points", "n_not_converged", "W_c_mean", "W_c_std", "W_c_rel_mean",
-                "frac_zone_spans_sheet", "inner_over_c_mean", "inner_over_c_median",
+    for col in ("n_points", "n_not_converged", "n_edge", "n_no_compact", "n_W_c", "W_c_mean",
+                "W_c_std", "W_c_rel_mean", "frac_no_compact_zone", "inner_over_c_mean",
+                "inner_over_c_median",
                 "edge_over_inner_mean", "frac_prefers_n2", "fit_ratio_median"):
         assert col in s.columns, col
     assert s.loc[0.2, "n_points"] == 24 and s.loc[0.8, "n_points"] == 24
     assert s.loc[0.2, "n_not_converged"] == 0 and s.loc[0.8, "n_not_converged"] == 24
     assert s.loc[0.2, "W_c_mean"] == pytest.approx(1.5)       # mean of 2 * 0.5, 2 * 1.0
-    assert s.loc[0.8, "W_c_mean"] == pytest.approx(5.0)       # 4 and 8 capped at 6
-    assert s.loc[0.8, "W_c_rel_mean"] == pytest.approx(5.0 / 6.0)
-    assert s.loc[0.8, "frac_zone_spans_sheet"] == pytest.approx(0.5)
+    # eps 0.8: W_c 4 m (L_x 0.5); at L_x 1.0 no compact zone: no W_c, counted apart
+    assert s.loc[0.8, "W_c_mean"] == pytest.approx(4.0)
+    assert s.loc[0.8, "n_W_c"] == 12 and s.loc[0.2, "n_W_c"] == 24
+    assert s.loc[0.8, "n_no_compact"] == 12 and s.loc[0.8, "n_edge"] == 12
+    assert s.loc[0.8, "W_c_rel_mean"] == pytest.approx(4.0 / 6.0)
+    assert s.loc[0.8, "frac_no_compact_zone"] == pytest.approx(0.5)
+    assert s.loc[0.8, "n_inner_over_c"] == 12
+    # only the paper's layout: the same here (every point with a zone is "edge")
+    e = collision_stats(table, by="eps", layouts=["edge"]).set_index("eps")
+    assert e.loc[0.8, "n_points"] == 12 and e.loc[0.8, "W_c_mean"] == pytest.approx(4.0)
     assert s.loc[0.2, "inner_over_c_mean"] == pytest.approx(1.2)
     assert s.loc[0.8, "inner_over_c_median"] == pytest.approx(1.8)
     assert s.loc[0.2, "edge_over_inner_mean"] == pytest.approx(3.25)   # (2.5 + 4) / 2
@@ -70,7 +84,8 @@ def test_collision_stats_grouped_by_two_and_by_none(table):
     s = collision_stats(table, by=["L_x", "dispersion"])
     assert len(s) == 4 and set(s["n_points"]) == {12}
     one = s[(s["L_x"] == 1.0) & (s["dispersion"] == "ml")].iloc[0]
-    assert one["W_c_mean"] == pytest.approx((2.0 + 6.0) / 2)
+    assert one["W_c_mean"] == pytest.approx(2.0)       # eps 0.8 has no compact zone there
+    assert one["n_W_c"] == 6 and one["n_no_compact"] == 6
     total = collision_stats(table)
     assert len(total) == 1 and total["n_points"].iloc[0] == 48
     assert "eps" not in total.columns
@@ -91,6 +106,11 @@ def test_alpha_omega_recovers_the_exponents(table):
     r = alpha_omega(table)
     assert list(r.columns[:5]) == ["L_x", "a0", "C_sd", "eps", "d_f"]
     assert len(r) == 2 * 2 * 2 * 2                      # L_x x eps x d_f x dispersion
+    none = (r["L_x"] == 1.0) & (r["eps"] == 0.8)        # no compact zone: no alpha_inner
+    assert r.loc[none, "m"].isna().all() and (r.loc[none, "n_dropped_no_zone"] == 3).all()
+    assert (r["n_dropped_nan"] == 0).all()
+    assert (r.loc[none, "n_points"] == 0).all()
+    r = r[~none]
     for disp, m in POWER_M.items():
         sub = r[r["dispersion"] == disp]
         if sub.empty:
@@ -106,7 +126,8 @@ def test_alpha_omega_recovers_the_exponents(table):
 
 def test_alpha_omega_coarser_groups_pool_points(table):
     r = alpha_omega(table, by="dispersion").set_index("dispersion")
-    assert r.loc["ep", "n_points"] == 24 and r.loc["ep", "m"] == pytest.approx(2.0)
+    assert r.loc["ep", "n_points"] == 18 and r.loc["ep", "m"] == pytest.approx(2.0)
+    assert r.loc["ep", "n_dropped_no_zone"] == 6
     assert r.loc["ml", "m"] == pytest.approx(6.0)
     # alpha_edge = (2 + 100 d_f) alpha_inner: pooled over d_f the exponent stays, the
     # scatter shows in the residual and the standard error
@@ -121,7 +142,8 @@ def test_alpha_omega_drops_nonpositive_rates_and_needs_enough_periods(table):
     t.loc[first_ep, "alpha_inner"] = np.where(t.loc[first_ep, "T"] == 2.0, -1.0,
                                               t.loc[first_ep, "alpha_inner"])
     r = alpha_omega(t, by="dispersion").set_index("dispersion")
-    assert r.loc["ep", "n_dropped"] == 8 and r.loc["ep", "n_periods"] == 2
+    assert r.loc["ep", "n_dropped_nonpositive"] == 8 and r.loc["ep", "n_periods"] == 2
+    assert r.loc["ep", "n_dropped_no_zone"] == 4 and r.loc["ep", "n_dropped"] == 12
     assert math.isnan(r.loc["ep", "m"])                          # 2 periods < 3
     assert math.isnan(r.loc["ep", "m_c"])                        # same points as m
     assert alpha_omega(t, by="dispersion", min_periods=2).set_index(
@@ -130,3 +152,20 @@ def test_alpha_omega_drops_nonpositive_rates_and_needs_enough_periods(table):
         alpha_omega(t, by=["T"])
     with pytest.raises(KeyError, match="alpha_x"):
         alpha_omega(t, alpha="alpha_x")
+
+
+def test_rows_of_old_stores(table):
+    """Rows written before model version 3 (empty compact_zone, the first-pair W_c): W_c =
+    L_sheet meant no compact pair (now "none": no W_c, no alpha_inner), any other W_c is
+    "legacy" and counted apart."""
+    old = table.copy()
+    old["compact_zone"] = ""
+    old["W_c"] = np.where(old["eps"] == 0.8, 6.0, 1.0)
+    d = derived(old)
+    none = d["eps"] == 0.8
+    assert (d.loc[none, "compact_zone"] == "none").all()
+    assert d.loc[none, "W_c"].isna().all() and d.loc[none, "inner_over_c"].isna().all()
+    assert (d.loc[~none, "compact_zone"] == "legacy").all()
+    s = collision_stats(old, by="eps").set_index("eps")
+    assert s.loc[0.8, "n_no_compact"] == 24 and s.loc[0.8, "n_W_c"] == 0
+    assert s.loc[0.2, "n_legacy"] == 24 and s.loc[0.2, "W_c_mean"] == pytest.approx(1.0)

@@ -15,7 +15,7 @@ import sweep
 import sweep.testing
 from sweep import parse_campaign, run_campaign
 from sweep.cli import main
-from sweep.schema import schema_document
+from sweep.schema import SCHEMA_VERSION, schema_document
 from sweep.store import Store
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -32,7 +32,7 @@ def fill(campaign, path, compute="sweep.testing:fake_point"):
 
 
 def test_schema_file_matches_code():
-    doc = json.loads((ROOT / "results_schema" / "schema_v1.json").read_text())
+    doc = json.loads((ROOT / "results_schema" / f"schema_v{SCHEMA_VERSION}.json").read_text())
     assert doc == json.loads(json.dumps(schema_document()))
 
 
@@ -67,11 +67,39 @@ def test_newer_schema_refused(tmp_path, campaign):
     fill(campaign, path)
     with h5py.File(path, "r+") as f:
         f.attrs["schema_version"] = 99
-    with pytest.raises(sweep.SchemaVersionError, match="99.*newer.*1"):
+    with pytest.raises(sweep.SchemaVersionError, match=f"99.*newer.*{SCHEMA_VERSION}"):
         fill(campaign, path)
     cfg = tmp_path / "c.toml"
     cfg.write_text(TOML)
     assert main(["run", str(cfg), "--store", str(path)]) == 3
+
+
+def test_schema_v1_store_read_as_is_and_migrated_by_a_writer(tmp_path, campaign):
+    """A version-1 store (no compact-zone columns) loads with fill values and is migrated
+    (columns added, values kept) when a writer opens it."""
+    path = tmp_path / "s.h5"
+    fill(campaign, path)
+    before = sweep.load(path)
+    with h5py.File(path, "r+") as f:
+        f.attrs["schema_version"] = 1
+        for name in ("compact_zone", "compact_end", "ice_extent"):
+            del f["table"][name]
+    old = sweep.load(path)
+    assert sweep.validate(path) == []                  # readable as it is
+    assert (old["compact_zone"] == "").all() and old["ice_extent"].isna().all()
+    pd_cols = ["hash", "W_c", "alpha_inner", "status"]
+    assert old[pd_cols].equals(before[pd_cols])
+    other = parse_campaign(TOML.replace("0.6]", "0.8]"), "other.toml")
+    with pytest.raises(sweep.SweepError):
+        fill(other, path)                              # refused: left as it was
+    with h5py.File(path, "r") as f:
+        assert int(f.attrs["schema_version"]) == 1 and "compact_zone" not in f["table"]
+    fill(campaign, path)                               # a writer opens it: migrated
+    with h5py.File(path, "r") as f:
+        assert int(f.attrs["schema_version"]) == SCHEMA_VERSION
+    assert sweep.validate(path) == []
+    new = sweep.load(path)
+    assert new[pd_cols].equals(before[pd_cols]) and (new["compact_zone"] == "").all()
 
 
 def test_other_campaign_refused(tmp_path, campaign):

@@ -435,7 +435,7 @@ def test_merge_refuses_itself_and_other_versions_and_stops_with_6(tmp_path):
     old = tmp_path / "old.h5"
     old.write_bytes(path.read_bytes())
     with h5py.File(old, "r+", locking=False) as f:
-        f.attrs["schema_version"] = 0
+        f.attrs["schema_version"] = 99  # newer than this sweep
     assert main(["merge", str(tmp_path / "out.h5"), str(old)]) == 3
     assert not (tmp_path / "out.h5").exists()
     statuses = []

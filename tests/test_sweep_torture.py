@@ -138,7 +138,7 @@ def _table(store: Path) -> tuple[dict[str, dict[str, Any]], Counter]:
     with h5py.File(store, "r", locking=False) as f:
         t = f["table"]
         n = int(t.attrs["n_rows"])
-        cols = {c.name: t[c.name][:n] for c in COLUMNS}
+        cols = {c.name: t[c.name][:n] for c in COLUMNS if c.name in t}
     decode = lambda v: v.decode() if isinstance(v, bytes) else v  # noqa: E731
     hashes = [decode(h) for h in cols["hash"]]
     rows = {h: {k: decode(v[i]) for k, v in cols.items()} for i, h in enumerate(hashes)}
@@ -169,7 +169,7 @@ def compare(ref: Path, store: Path) -> dict[str, Any]:
             for col in COLUMNS:
                 if col.name in BOOKKEEPING:
                     continue
-                x, y = a[h][col.name], b[h][col.name]
+                x, y = a[h].get(col.name), b[h].get(col.name)
                 same = (x == y) or (isinstance(x, float) and np.isnan(x) and np.isnan(y))
                 if not same:
                     problems.append(f"{h[:12]} {col.name}: {x!r} != {y!r}")

@@ -1,0 +1,99 @@
+"""Every number quoted in README.md and docs/guide.md about results, regenerated.
+
+    python benchmarks/docs_numbers.py [--out DIR] [--skip-runs]
+
+Runs the shipped campaigns the docs quote (``configs/demo.toml`` under ``mpiexec -n 2``
+when a launcher is available, else in-process; ``fig2``, ``fig5``, ``fig6a``, ``fig6b``,
+``periods`` in-process, two at a time) into stores in ``--out`` (default: a new temporary
+directory; ``--skip-runs`` reuses the stores there) and prints, labelled as in the docs:
+
+- the wall time of each campaign (a timing: machine-dependent);
+- the demo's ``collision_stats`` table and the periods' ``alpha_omega`` tables;
+- W_c, layout and alpha_inner / alpha_c of the Fig. 2 points.
+
+Which numbers are *stochastic*: every result is one chaotic floe trajectory per point. On
+one machine it is reproduced bit for bit (README "Reproducibility"); a rounding-level
+change (another CPU, compiler, numba or glibc) moves it, and W_c then moves by metres
+(measured: README). Such numbers are marked "(single trajectory)" in the docs.
+"""
+from __future__ import annotations
+
+import argparse
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+CAMPAIGNS = ("fig2", "fig5", "fig6a", "fig6b", "periods")
+
+
+def run(name: str, out: Path, launcher: list[str]) -> float:
+    store = out / f"{name}.h5"
+    t = time.perf_counter()
+    proc = subprocess.run([*launcher, sys.executable, "-m", "sweep", "run",
+                           str(ROOT / "configs" / f"{name}.toml"), "--store", str(store),
+                           "--no-bar"], capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise SystemExit(f"{name}: sweep run failed ({proc.returncode}):\n{proc.stderr}")
+    return time.perf_counter() - t
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, default=None)
+    ap.add_argument("--skip-runs", action="store_true")
+    args = ap.parse_args()
+    out = args.out or Path(tempfile.mkdtemp(prefix="docs_numbers-"))
+    out.mkdir(parents=True, exist_ok=True)
+    import pandas as pd
+
+    import sweep
+
+    pd.set_option("display.width", 200)
+    pd.set_option("display.max_columns", 30)
+    if not args.skip_runs:
+        mpiexec = shutil.which("mpiexec")
+        launcher = [mpiexec, "-n", "2"] if mpiexec else []
+        t = run("demo", out, launcher)
+        print(f"[timing] demo campaign ({'mpiexec -n 2' if mpiexec else 'in-process'}),"
+              f" cache warm: {t:.1f} s")
+        with ThreadPoolExecutor(2) as pool:
+            times = dict(zip(CAMPAIGNS, pool.map(lambda n: run(n, out, []), CAMPAIGNS),
+                             strict=True))
+        for name, t in times.items():
+            n = len(sweep.load(out / f"{name}.h5"))
+            print(f"[timing] {name}: {n} points in-process, {t:.0f} s (two campaigns at a"
+                  " time on 2 cores)")
+    print(f"stores in {out}\n")
+
+    df = sweep.load(out / "demo.h5")
+    stats = sweep.collision_stats(df, by=["L_x", "eps"])
+    print("[single trajectory] demo: sweep.collision_stats(df, by=['L_x', 'eps'])")
+    print(stats[["L_x", "eps", "n_points", "n_W_c", "n_no_compact", "W_c_mean",
+                 "W_c_rel_mean", "inner_over_c_mean", "edge_over_inner_mean",
+                 "frac_prefers_n2"]].round(3).to_string())
+
+    p = sweep.load(out / "periods.h5")
+    print("\n[single trajectory] periods: sweep.alpha_omega(p) (alpha_inner, per curve)")
+    cols = ["dispersion", "m", "m_stderr", "n_periods", "n_dropped_nan", "m_c"]
+    print(sweep.alpha_omega(p)[cols].round(3).to_string())
+    print("\n[single trajectory] periods: sweep.alpha_omega(p, 'alpha_all', by='dispersion')")
+    print(sweep.alpha_omega(p, "alpha_all", by="dispersion")[cols].round(3).to_string())
+    lay = sweep.derived(p).pivot_table(index="T", columns="dispersion", values="compact_zone",
+                                       aggfunc="first")
+    print("\n[single trajectory] periods: compact-zone layout per T and dispersion")
+    print(lay.to_string())
+
+    f2 = sweep.derived(sweep.load(out / "fig2.h5")).sort_values(["dispersion", "eps"])
+    print("\n[single trajectory] Fig. 2 points: W_c [m], layout, alpha_inner / alpha_c")
+    print(f2[["dispersion", "eps", "W_c", "compact_zone", "inner_over_c", "status",
+              "iterations"]].round(2).to_string(index=False))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,41 @@
+"""The one definition of the numba JIT flags of floewave's kernels.
+
+**No fast-math, on purpose.** A kernel's result must be a function of its inputs alone: the
+same configuration gives the same bits on one machine whatever the JIT cache holds, the
+order in which functions were first compiled, or the number of MPI ranks. With
+``fastmath=True`` it was not (issue *trust*, 2026-11-30: the Fig. 2 ``ml`` eps 0.6 point
+gave W_c 18.42 m and 16 iterations when the kernels were compiled in the process, 15.92 m and
+27 iterations when they were loaded from the cache). The cause, found by comparing the two
+paths state by state (the forces differed in the last bit after one step) and reading the
+generated code:
+
+- numba compiles every ``@njit`` function into its own code library and links each callee's
+  *optimised* module into its caller's, which is optimised again as a whole;
+- a callee that LLVM does not inline (``eval_forces``, ``drag_pass``, ``general_floes`` … are
+  called out of line from ``advance``) exists twice in a cold process: its own library,
+  compiled first, and the copy inside the caller's library. The JIT linker resolves the call
+  to the first definition of the symbol it loaded — the callee's own library. A warm process
+  loads only the caller's cached object and runs the other copy;
+- under fast-math the two copies are *different programs*: the second optimisation of the
+  linked copy re-associates and contracts (FMA) differently (seen:
+  ``(1 + C_m) F_w + F_d`` differing by 1 ulp). A chaotic DEM makes that a different
+  trajectory.
+
+Without the value-changing fast-math flags every copy of a function computes the IEEE result
+of its source, so it does not matter which copy runs. What fast-math bought (vectorised cell
+sums, a reduction that needs re-association) is won back explicitly: the cell sums are
+vectorised *across floes* (``floewave._kernels.cell_sums``), each floe's sum kept in the
+source's order.
+"""
+from __future__ import annotations
+
+#: Flags of every jitted kernel: cached on disk, IEEE arithmetic (see the module docstring),
+#: the GIL released.
+JIT = dict(cache=True, fastmath=False, nogil=True)
+
+#: Per-step functions that never allocate: compiled without numba's reference counting
+#: (``_nrt=False``). With it, every call of ``eval_forces`` paid ~40 atomic NRT
+#: incref/decref operations on its array arguments: measured ~110 ns per step, 15 % of a
+#: step of 84 floes (benchmarks/bench_kernel.py, 2026-11-22). Such a function must not
+#: create or return arrays (numba refuses to compile one that does).
+JITN = dict(JIT, _nrt=False)

@@ -1,0 +1,133 @@
+"""One configuration, one result, bit for bit, whatever the numba cache holds (issue *trust*).
+
+The kernels used to be compiled with fast-math, and a process that compiled them ran other
+machine code than a process that loaded them from the on-disk cache (see
+:mod:`floewave._jit`): the Fig. 2 ``ml`` eps 0.6 point gave W_c 18.42 m cold and 15.92 m
+warm. Here short DEM points (every kernel path: two-pass and plain quadrature drag, exact
+drag, the amplitude iteration) run in fresh interpreters:
+
+- A: an empty cache directory, the quadrature point first, then the exact-drag point;
+- B: the cache A left (everything loaded, nothing compiled);
+- C: another empty cache directory, compiled in the other order (exact first).
+
+Every array and scalar of every point must be equal bit for bit across A, B and C. The
+points are chaotic: a last-bit difference in any force moves the trajectory (and so the
+digests) within a few steps.
+"""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+SCRIPT = textwrap.dedent("""
+    import hashlib, json, sys
+    import numpy as np
+    from floewave import ModelConfig, run_point
+
+    POINTS = {
+        # 84 floes of 0.5 m: closed-form and cell-loop floes in the two-pass drag
+        "quadrature": dict(L_x=0.5, T=1.2, a0=0.015, eps=0.6, d_f=0.005, dispersion="ml"),
+        # 28 floes of 1.5 m: the plain (every floe by the cell loop) drag path
+        "long": dict(L_x=1.5, T=1.2, a0=0.02, eps=0.8, d_f=0.005, dispersion="ep"),
+        "exact": dict(L_x=0.5, T=1.2, a0=0.015, eps=0.6, d_f=0.005, dispersion="ml",
+                      drag_integration="exact"),
+        # 1.5 m floes, exact drag: the per-floe exact loop (most floes need roots)
+        "exact-long": dict(L_x=1.5, T=1.2, a0=0.02, eps=0.8, d_f=0.005, dispersion="ep",
+                           drag_integration="exact", integrator="half_step"),
+    }
+    SHORT = dict(n0=2, nT=1, max_iterations=4, noise_window=2, n_average=2, n0_warm=0)
+
+    out = {}
+    for name in sys.argv[1:]:
+        r = run_point(ModelConfig(**POINTS[name], **SHORT))
+        d = {}
+        for key, val in r.to_dict().items():
+            if key == "wall_time":
+                continue
+            if isinstance(val, np.ndarray):
+                d[key] = hashlib.sha256(np.ascontiguousarray(val).tobytes()).hexdigest()
+            elif isinstance(val, float):
+                d[key] = val.hex()
+            else:
+                d[key] = val
+        out[name] = d
+    print(json.dumps(out))
+""")
+
+
+def _run(cache_dir, order):
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache_dir))
+    env.pop("NUMBA_DISABLE_JIT", None)
+    proc = subprocess.run([sys.executable, "-c", SCRIPT, *order], env=env,
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    return json.loads(proc.stdout)
+
+
+@pytest.mark.skipif(os.environ.get("NUMBA_DISABLE_JIT") == "1", reason="needs the JIT")
+def test_point_bits_do_not_depend_on_the_jit_cache(tmp_path):
+    names = ["quadrature", "long", "exact", "exact-long"]
+    cold = _run(tmp_path / "cache-a", names)
+    assert any((tmp_path / "cache-a").rglob("*.nbc")), "nothing was cached"
+    warm = _run(tmp_path / "cache-a", names)
+    other_order = _run(tmp_path / "cache-c", names[::-1])
+    for name in names:
+        assert cold[name]["iterations"] >= 2
+        # the points are chaotic: contacts happen (a last-bit change would move them)
+        assert warm[name] == cold[name], f"{name}: warm cache differs from the cold compile"
+        assert other_order[name] == cold[name], f"{name}: compile order changes the bits"
+
+
+def test_campaign_bits_in_process_mpi_and_after_kill_and_resume(tmp_path):
+    """A small real campaign stores the same bits per hash (every result column, every
+    profile) whether it ran in-process with a cold cache, under ``mpiexec -n 3`` with
+    another cold cache (the workers compile at the same time), or was killed with SIGKILL
+    after its first points and resumed (with the warm cache of the MPI run)."""
+    import signal
+    import time
+
+    from test_sweep_torture import MPIEXEC, TORTURE_TOML, _command, _env, _group_gone, compare
+
+    if MPIEXEC is None:
+        pytest.skip("no mpiexec (pip install mpich)")
+    from sweep.store import journal_path, read_journal
+
+    config = tmp_path / "c.toml"
+    config.write_text(TORTURE_TOML)
+
+    def env(cache):
+        return {**_env(), "NUMBA_CACHE_DIR": str(tmp_path / cache)}
+
+    def run(store, n_ranks, cache):
+        proc = subprocess.run(_command(config, store, n_ranks), env=env(cache),
+                              capture_output=True, text=True, timeout=600)
+        assert proc.returncode == 0, proc.stderr[-2000:]
+
+    one, mpi, killed = tmp_path / "one.h5", tmp_path / "mpi.h5", tmp_path / "killed.h5"
+    run(one, 1, "cache-one")
+    run(mpi, 3, "cache-mpi")
+    # killed after its first stored points, then resumed
+    proc = subprocess.Popen(_command(config, killed, 3), env=env("cache-mpi"),
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            start_new_session=True)
+    deadline = time.monotonic() + 300
+    while time.monotonic() < deadline and proc.poll() is None:
+        jpath = journal_path(killed)
+        if jpath.exists() and sum(1 for _ in read_journal(jpath)) >= 3:
+            break
+        time.sleep(0.05)
+    assert proc.poll() is None, "the campaign ended before it could be killed"
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait()
+    assert _group_gone(proc.pid)
+    n_before = sum(1 for _ in read_journal(journal_path(killed)))
+    assert 3 <= n_before < 24
+    run(killed, 3, "cache-mpi")
+    for store in (mpi, killed):
+        res = compare(one, store)
+        assert res["problems"] == [] and res["compared"] == 24, res["problems"][:5]
