@@ -26,11 +26,16 @@ _NOT_RESULTS = {"hash", "message", "host", "rank", "pid", "start_time", "end_tim
                 "seq", "config_json", "provenance", "kernel_mode"}
 
 
+class _OpenError(StoreError):
+    """The file exists but HDF5 cannot open it (yet): a writer may be mid-commit."""
+
+
 def _open(path: str | Path) -> h5py.File:
     try:
         return h5py.File(path, "r", locking=False)
     except (OSError, FileNotFoundError) as exc:
-        raise StoreError(f"{path}: cannot open store: {exc}") from None
+        cls = _OpenError if Path(path).is_file() else StoreError
+        raise cls(f"{path}: cannot open store: {exc}") from None
 
 
 def _decode(values: np.ndarray) -> np.ndarray:
@@ -87,8 +92,11 @@ def _retried(read: Any) -> Any:
     for attempt in range(READ_RETRIES + 1):
         try:
             return read()
-        except StoreError:
-            raise
+        except StoreError as exc:
+            if not isinstance(exc, _OpenError) or attempt == READ_RETRIES:
+                raise
+            time.sleep(delay)
+            delay *= 2
         except (OSError, RuntimeError, ValueError, KeyError, TypeError):
             if attempt == READ_RETRIES:
                 raise
@@ -181,14 +189,20 @@ def load_profile(path: str | Path, hash: str) -> xr.Dataset:
     Reads only that point's group. ``hash`` may be a unique prefix (the short hash).
     """
     h = hash if len(hash) == 64 else resolve_hash(path, hash)
-    with _open(path) as f:
-        name = profile_path(h)
-        if name not in f:
-            raise KeyError(f"{path}: no profiles stored for point {h[:12]} (missing, failed"
-                           " or invalid)")
-        g = f[name]
-        data = {k: g[k][()] for k in PROFILE_VARS}
-        history = g[HISTORY_VAR[0]][()]
+
+    def read() -> tuple[dict[str, Any], Any] | None:
+        with _open(path) as f:
+            name = profile_path(h)
+            if name not in f:
+                return None
+            g = f[name]
+            return {k: g[k][()] for k in PROFILE_VARS}, g[HISTORY_VAR[0]][()]
+
+    got = _retried(read)
+    if got is None:
+        raise KeyError(f"{path}: no profiles stored for point {h[:12]} (missing, failed"
+                       " or invalid)")
+    data, history = got
     n = len(data["a"])
     ds = xr.Dataset({k: ("floe", v) for k, v in data.items()},
                     coords={"floe": np.arange(n)})
