@@ -11,8 +11,9 @@
 
 The command line is ``sweep`` (:mod:`sweep.cli`); user docs are in ``sweep/README.md``.
 """
-from .analysis import load, load_profile, load_xarray
-from .config import Campaign, Point, RunOptions, load_campaign, parse_campaign
+import importlib
+from typing import Any
+
 from .errors import (
                      CampaignMismatchError,
                      ConfigError,
@@ -24,10 +25,37 @@ from .errors import (
                      SweepError,
                      WorkerError,
 )
-from .executor import run_campaign
-from .identity import canonical_json, point_hash, short_hash
-from .schema import SCHEMA_VERSION, validate
-from .stats import alpha_omega, collision_stats, derived
+
+#: Imported on first use (``import sweep`` stays light, so the ``sweep`` command can
+#: catch stop signals from its first instants): name -> module.
+_LAZY = {
+    "load": "analysis", "load_profile": "analysis", "load_xarray": "analysis",
+    "Campaign": "config", "Point": "config", "RunOptions": "config",
+    "load_campaign": "config", "parse_campaign": "config",
+    "run_campaign": "executor",
+    "canonical_json": "identity", "point_hash": "identity", "short_hash": "identity",
+    "SCHEMA_VERSION": "schema", "validate": "schema",
+    "alpha_omega": "stats", "collision_stats": "stats", "derived": "stats",
+}
+_MODULES = {"analysis", "cli", "config", "errors", "executor", "figures", "identity",
+            "journal", "lock", "merge", "progress", "provenance", "schema", "stats", "store",
+            "testing", "writer"}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+    elif name in _MODULES:
+        value = importlib.import_module(f".{name}", __name__)
+    else:
+        raise AttributeError(f"module 'sweep' has no attribute {name!r}")
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY) | _MODULES)
+
 
 __all__ = ["load_campaign", "parse_campaign", "Campaign", "Point", "RunOptions",
            "point_hash", "short_hash", "canonical_json", "run_campaign", "load",

@@ -6,6 +6,7 @@ writer; only committed rows (below ``/table.attrs["n_rows"]``) are returned.
 from __future__ import annotations
 
 import json
+import time
 from pathlib import Path
 from typing import Any
 
@@ -17,18 +18,24 @@ import xarray as xr
 from .errors import StoreError
 from .schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, column, profile_path
 
-__all__ = ["load", "load_xarray", "load_profile", "store_attrs", "resolve_hash"]
+__all__ = ["load", "load_xarray", "load_profile", "store_attrs", "resolve_hash",
+           "journal_points"]
 
 #: Columns that are bookkeeping, not results: left out of :func:`load_xarray`.
 _NOT_RESULTS = {"hash", "message", "host", "rank", "pid", "start_time", "end_time", "run",
                 "seq", "config_json", "provenance", "kernel_mode"}
 
 
+class _OpenError(StoreError):
+    """The file exists but HDF5 cannot open it (yet): a writer may be mid-commit."""
+
+
 def _open(path: str | Path) -> h5py.File:
     try:
         return h5py.File(path, "r", locking=False)
     except (OSError, FileNotFoundError) as exc:
-        raise StoreError(f"{path}: cannot open store: {exc}") from None
+        cls = _OpenError if Path(path).is_file() else StoreError
+        raise cls(f"{path}: cannot open store: {exc}") from None
 
 
 def _decode(values: np.ndarray) -> np.ndarray:
@@ -40,11 +47,74 @@ def _decode(values: np.ndarray) -> np.ndarray:
 
 def store_attrs(path: str | Path) -> dict[str, Any]:
     """The root attributes of a store (strings decoded)."""
-    with _open(path) as f:
-        return {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
+    def read() -> dict[str, Any]:
+        with _open(path) as f:
+            return {k: (v.decode() if isinstance(v, bytes) else v)
+                    for k, v in f.attrs.items()}
+
+    return _retried(read)
+
+
+def journal_points(path: str | Path) -> int | None:
+    """Distinct points recorded in the store's journal (``None`` without a journal).
+
+    Counts what is durable even when the HDF5 file lags behind (a live run between its
+    journal write and its HDF5 write, or a killed run whose next start writes them).
+    A quick count: the hash of each record line, not its checksum.
+    """
+    import re
+
+    from .journal import journal_path
+
+    jp = journal_path(path)
+    if not jp.exists():
+        return None
+    pattern = re.compile(rb'"hash":"([0-9a-f]{64})"')
+    seen = set()
+    with open(jp, "rb") as fh:
+        for line in fh:
+            if line.startswith(b'{"row":') and line.endswith(b"\n"):
+                m = pattern.search(line)
+                if m:
+                    seen.add(m.group(1))
+    return len(seen)
+
+
+#: A read that fails while a writer changes the file is tried again this many times,
+#: after 0.05, 0.1, 0.2 ... s (readers open without HDF5 locking and may see metadata
+#: half-written; each commit ends with a flush, so a later read sees a consistent file).
+READ_RETRIES = 6
+
+
+def _retried(read: Any) -> Any:
+    """Run ``read()``; on an HDF5 read error try again (a writer is mid-commit)."""
+    delay = 0.05
+    for attempt in range(READ_RETRIES + 1):
+        try:
+            return read()
+        except StoreError as exc:
+            if not isinstance(exc, _OpenError) or attempt == READ_RETRIES:
+                raise
+            time.sleep(delay)
+            delay *= 2
+        except (OSError, RuntimeError, ValueError, KeyError, TypeError):
+            if attempt == READ_RETRIES:
+                raise
+            time.sleep(delay)
+            delay *= 2
+    raise AssertionError("unreachable")  # pragma: no cover
 
 
 def load(path: str | Path) -> pd.DataFrame:
+    """The per-point table as a DataFrame: one row per stored point (see :func:`_load`);
+    a read that fails while a live writer commits is tried again."""
+    try:
+        return _retried(lambda: _load(path))
+    except KeyError as exc:
+        raise StoreError(f"{path}: cannot read the store: {exc}") from None
+
+
+def _load(path: str | Path) -> pd.DataFrame:
     """The per-point table as a DataFrame: one row per stored point.
 
     Columns are those of :data:`sweep.schema.COLUMNS` (swept values, status, message,
@@ -83,7 +153,7 @@ def load_xarray(path: str | Path) -> xr.Dataset:
     coords = {d: np.asarray(sorted(campaign["sweep"][d])) for d in dims}
     keep = [c.name for c in COLUMNS if c.name not in _NOT_RESULTS and c.name not in dims
             and c.name not in ("L_x", "T", "a0", "C_sd", "eps", "d_f", "dispersion")]
-    bad = df["status"].isin(["failed", "invalid"])
+    bad = df["status"].isin(["failed", "invalid", "crashed", "timeout"])
     values = df[dims + keep].copy()
     for name in keep:
         if column(name).kind != "str":
@@ -119,14 +189,20 @@ def load_profile(path: str | Path, hash: str) -> xr.Dataset:
     Reads only that point's group. ``hash`` may be a unique prefix (the short hash).
     """
     h = hash if len(hash) == 64 else resolve_hash(path, hash)
-    with _open(path) as f:
-        name = profile_path(h)
-        if name not in f:
-            raise KeyError(f"{path}: no profiles stored for point {h[:12]} (missing, failed"
-                           " or invalid)")
-        g = f[name]
-        data = {k: g[k][()] for k in PROFILE_VARS}
-        history = g[HISTORY_VAR[0]][()]
+
+    def read() -> tuple[dict[str, Any], Any] | None:
+        with _open(path) as f:
+            name = profile_path(h)
+            if name not in f:
+                return None
+            g = f[name]
+            return {k: g[k][()] for k in PROFILE_VARS}, g[HISTORY_VAR[0]][()]
+
+    got = _retried(read)
+    if got is None:
+        raise KeyError(f"{path}: no profiles stored for point {h[:12]} (missing, failed"
+                       " or invalid)")
+    data, history = got
     n = len(data["a"])
     ds = xr.Dataset({k: ("floe", v) for k, v in data.items()},
                     coords={"floe": np.arange(n)})

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import signal
 import sys
 import time
 import traceback
@@ -15,7 +17,6 @@ from pathlib import Path
 from typing import Any
 
 from .errors import EXIT_CONFIG, EXIT_INTERNAL, EXIT_OK, EXIT_STORE, ConfigError, SweepError
-from .executor import DEFAULT_COMPUTE
 
 __all__ = ["main", "build_parser"]
 
@@ -30,8 +31,40 @@ def _shard(text: str) -> tuple[int, int]:
     return k, n
 
 
+def _seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected seconds") from None
+    if not (0 <= value <= 3.2e7):
+        raise argparse.ArgumentTypeError(f"{text!r}: expected 0 to 3.2e7 seconds")
+    return value
+
+
+def _positive(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a number") from None
+    if not (value > 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"{text!r}: must be a positive number")
+    return value
+
+
+def _count(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected an integer") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: must be 0 or more")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (documented in sweep/README.md)."""
+    from .executor import DEFAULT_COMPUTE
+
     p = argparse.ArgumentParser(prog="sweep", description="Run and analyse floewave"
                                 " parameter campaigns (MPI master/worker, one HDF5 store).")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
@@ -47,20 +80,23 @@ def build_parser() -> argparse.ArgumentParser:
                    " (points whose hash mod N is K), for Slurm job arrays")
     r.add_argument("--compute", default=DEFAULT_COMPUTE, metavar="MODULE:FUNC",
                    help="compute function (tests/benchmarks; default floewave:run_point)")
+    r.add_argument("--point-timeout", type=_seconds, metavar="SECONDS",
+                   help="store a point that runs longer as 'timeout' (overrides [run]"
+                   " point_timeout; 0: no limit)")
     r.add_argument("--no-bar", action="store_true", help="log lines even on a terminal")
     r.add_argument("--ignore-slurm-ntasks", action="store_true",
                    help="skip the check that the MPI size equals SLURM_NTASKS")
 
     pl = sub.add_parser("plan", help="count points and estimate the cost; writes nothing")
     pl.add_argument("config", type=Path)
-    pl.add_argument("--rate", type=float, metavar="FLOE_STEPS_PER_S",
+    pl.add_argument("--rate", type=_positive, metavar="FLOE_STEPS_PER_S",
                     help="kernel speed to assume instead of a calibration run")
     pl.add_argument("--json", action="store_true", help="machine-readable output")
 
     s = sub.add_parser("status", help="counts by status, failures, slowest points")
     s.add_argument("store", type=Path)
     s.add_argument("--json", action="store_true", help="machine-readable output")
-    s.add_argument("--slowest", type=int, default=5, metavar="N")
+    s.add_argument("--slowest", type=_count, default=5, metavar="N")
 
     e = sub.add_parser("export", help="write the per-point table as CSV or Parquet")
     e.add_argument("store", type=Path)
@@ -92,6 +128,32 @@ def _err(message: str) -> None:
 
 
 # ---------------------------------------------------------------------- commands
+def _stop_during_start_up(signum: int, frame: Any) -> None:
+    from .errors import Interrupted
+
+    raise Interrupted(f"stopped by {signal.Signals(signum).name} during start-up, before"
+                      " the store was opened; nothing was changed — the campaign is resumable: run"
+                      " the same command again")
+
+
+#: Variables an MPI launcher sets (as :data:`sweep.executor._LAUNCHER_VARS`; kept here
+#: so that the check needs no heavy import).
+_LAUNCHER_VARS = ("PMI_RANK", "PMI_SIZE", "PMIX_RANK", "OMPI_COMM_WORLD_SIZE",
+                  "MPI_LOCALNRANKS", "HYDRA_CONTROL_FD", "PMI_FD")
+
+
+def _catch_stops_at_start_up(argv: Sequence[str]) -> None:
+    """``run`` and ``merge``: a stop signal before the store is opened ends the command
+    with status 6 (nothing was changed). Not under an MPI launcher: there rank 0 alone
+    leaving would leave the workers waiting; the default action ends the job."""
+    if not argv or argv[0] not in ("run", "merge"):
+        return
+    if any(v in os.environ for v in _LAUNCHER_VARS):
+        return
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1):
+        signal.signal(sig, _stop_during_start_up)
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     from .config import load_campaign
     from .executor import check_launch, mpi_world, run_campaign
@@ -108,7 +170,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         summary = run_campaign(campaign, str(args.store), compute=args.compute,
                                retry_failed=args.retry_failed, extend=args.extend, comm=comm,
                                progress_bar=False if args.no_bar else None,
-                               command=" ".join(sys.argv))
+                               command=" ".join(sys.argv), point_timeout=args.point_timeout)
     except SweepError as exc:
         if rank == 0:
             _err(str(exc))
@@ -204,9 +266,10 @@ def cmd_plan(args: argparse.Namespace) -> int:
 
 def status_report(path: Path, slowest: int = 5) -> dict[str, Any]:
     """The data behind ``sweep status``."""
-    from .analysis import load, store_attrs
+    from .analysis import journal_points, load, store_attrs
 
     df = load(path)
+    journaled = journal_points(path)
     attrs = store_attrs(path)
     campaign = json.loads(attrs["campaign_json"])
     total = 1
@@ -216,9 +279,11 @@ def status_report(path: Path, slowest: int = 5) -> dict[str, Any]:
     failures = [{"hash": r.hash[:12], "status": r.status, "swept": {k: getattr(r, k) for k in
                                                                      campaign["sweep"]},
                  "message": r.message.splitlines()[0] if r.message else ""}
-                for r in df[df["status"].isin(["failed", "invalid"])].itertuples()]
+                for r in df[df["status"].isin(["failed", "invalid", "crashed",
+                                               "timeout"])].itertuples()]
     slow = df.sort_values("wall_time", ascending=False).head(slowest)
     return {"store": str(path), "grid_points": total, "stored": len(df),
+            "journaled": journaled,
             "remaining": max(total - len(df), 0), "counts": counts, "failures": failures,
             "slowest": [{"hash": r.hash[:12], "wall_time": float(r.wall_time),
                          "status": r.status, "host": r.host, "rank": int(r.rank)}
@@ -233,6 +298,10 @@ def cmd_status(args: argparse.Namespace) -> int:
         return EXIT_OK
     print(f"{rep['store']}: {rep['stored']}/{rep['grid_points']} points stored,"
           f" {rep['remaining']} remaining; point wall time {rep['total_wall_time']:.1f} s")
+    if rep["journaled"] is not None and rep["journaled"] > rep["stored"]:
+        print(f"  the journal holds {rep['journaled']} points: {rep['journaled'] - rep['stored']}"
+              " more than the file (a live run mid-commit, or a killed one: its next run"
+              " writes them)")
     for k, v in sorted(rep["counts"].items()):
         print(f"  {k:16s} {v}")
     if rep["failures"]:
@@ -250,6 +319,9 @@ def cmd_status(args: argparse.Namespace) -> int:
 def cmd_export(args: argparse.Namespace) -> int:
     from .analysis import load
 
+    if not args.output.parent.is_dir():
+        _err(f"--output {args.output}: directory {args.output.parent} does not exist")
+        return EXIT_CONFIG
     df = load(args.store)
     suffix = args.output.suffix.lower()
     if suffix == ".csv":
@@ -308,7 +380,12 @@ _COMMANDS = {"run": cmd_run, "plan": cmd_plan, "status": cmd_status, "export": c
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``sweep`` console script; returns the exit status."""
-    args = build_parser().parse_args(argv)
+    _catch_stops_at_start_up(list(sys.argv[1:] if argv is None else argv))
+    try:
+        args = build_parser().parse_args(argv)
+    except SweepError as exc:  # a stop during the parser's imports
+        _err(str(exc))
+        return exc.exit_status
     try:
         return _COMMANDS[args.command](args)
     except SweepError as exc:  # ConfigError, StoreError, ...: each carries its exit status

@@ -38,6 +38,10 @@ __all__ = ["Campaign", "Point", "RunOptions", "load_campaign", "parse_campaign",
 #: (collisional, high eps and C_sd) run to max_iterations = 100, a heavy tail that makes
 #: small samples scatter (means of 11, 22, 23 and 28 for the four samples).
 DEFAULT_EXPECTED_ITERATIONS = 22
+#: Most floes accepted in a sheet (L_sheet / L_x); the paper's largest is a few hundred.
+MAX_FLOES = 1_000_000
+#: Longest time [s] accepted for a ``[run]`` duration (a year).
+MAX_SECONDS = 3.2e7
 
 
 @dataclass(frozen=True)
@@ -52,6 +56,12 @@ class RunOptions:
     grace_period : seconds the master waits for running points after a stop signal.
     expected_iterations : iterations per point assumed by cost estimates (0: the
         default, ``min(max_iterations, DEFAULT_EXPECTED_ITERATIONS)``).
+    max_attempts : a point whose worker (or the whole job) died while computing it this
+        many times is stored as ``crashed`` instead of being handed out again (0: never).
+    max_points : the largest grid accepted (a guard against a typo that would expand
+        billions of points).
+    point_timeout : seconds a point may run; one that runs longer is stored as
+        ``timeout`` (0: no limit; ``--point-timeout`` overrides it).
     """
 
     name: str = ""
@@ -59,6 +69,9 @@ class RunOptions:
     progress_interval: float = 30.0
     grace_period: float = 60.0
     expected_iterations: int = 0
+    max_attempts: int = 3
+    max_points: int = 1_000_000
+    point_timeout: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -177,6 +190,8 @@ def parse_campaign(text: str, source: str = "<string>") -> Campaign:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{source}: not valid TOML: {exc}") from None
+    except RecursionError:
+        raise ConfigError(f"{source}: not valid TOML: nested too deeply") from None
     errors: list[str] = []
     for key in sorted(set(data) - {"base", "sweep", "run"}):
         errors.append(f"{source}: unknown table or key [{key}] (allowed: [base], [sweep], [run])")
@@ -192,8 +207,21 @@ def parse_campaign(text: str, source: str = "<string>") -> Campaign:
     if errors:
         raise ConfigError(errors)
     assert base is not None
+    if not sweep:
+        raise ConfigError(f"{source}: [sweep] is empty: list the values of at least one"
+                          f" swept dimension ({', '.join(floewave.SWEPT_FIELDS)})")
+    size = math.prod(len(v) for v in sweep.values())
+    if size > run.max_points:
+        raise ConfigError(f"{source}: the grid has {size:,} points, more than [run]"
+                          f" max_points = {run.max_points:,}; raise max_points if that is"
+                          " intended")
     campaign = Campaign(base=base, sweep=sweep, run=run, text=text, source=source)
-    _check_physics(campaign, source)
+    try:
+        _check_physics(campaign, source)
+    except (OverflowError, ZeroDivisionError, RecursionError) as exc:
+        raise ConfigError(f"{source}: a value is out of range ({type(exc).__name__}: {exc});"
+                          " check the [base] and [sweep] lengths, periods and time steps"
+                          ) from None
     return campaign
 
 
@@ -284,12 +312,32 @@ def _parse_run(table: dict[str, Any], source: str, errors: list[str]) -> RunOpti
             ok[key] = float(value) if kind == "float" else value
     if ok.get("progress_interval") == 0:
         errors.append(f"{source}: [run] progress_interval = 0: must be > 0")
+    for key in ("progress_interval", "grace_period", "point_timeout"):
+        if ok.get(key, 0) > MAX_SECONDS:
+            errors.append(f"{source}: [run] {key} = {table[key]!r}: at most {MAX_SECONDS:g}"
+                          " s (a year)")
+            ok.pop(key)
     return RunOptions(**ok)
 
 
 def _check_physics(campaign: Campaign, source: str) -> None:
-    """Refuse swept values (or a base) for which every point is physically impossible."""
+    """Refuse swept values (or a base) for which every point is physically impossible,
+    sheets of more than :data:`MAX_FLOES` floes, and periods that give the same number of
+    time steps per period (the same physics under two hashes)."""
     points = campaign.points()
+    big = max(points, key=lambda p: p.config.n_floes)
+    if big.config.n_floes > MAX_FLOES:
+        raise ConfigError(f"{source}: {big.swept}: L_sheet / L_x = {big.config.n_floes:,}"
+                          f" floes, more than {MAX_FLOES:,}: check L_sheet and L_x")
+    if "T" in campaign.sweep:
+        steps: dict[int, float] = {}
+        for T in campaign.sweep["T"]:
+            n_t = campaign.base.replace(T=T).n_t
+            if n_t in steps:
+                raise ConfigError(f"{source}: [sweep] T = {T!r}: the same {n_t} time steps"
+                                  f" per period as T = {steps[n_t]!r} (dt ="
+                                  f" {campaign.base.dt!r}): the same point twice")
+            steps[n_t] = T
     invalid = [p for p in points if p.invalid]
     if not invalid:
         return

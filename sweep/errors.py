@@ -10,11 +10,13 @@ Exit statuses of the ``sweep`` command (documented in ``sweep/README.md``):
 0    success (a campaign whose points failed still succeeds: failures are data)
 1    unexpected internal error (a bug: the traceback is printed)
 2    bad input: campaign file, command-line arguments (:class:`ConfigError`)
-3    store problem: locked, other campaign, newer schema, unreadable, invalid
+3    store problem: locked, other campaign (file or journal), newer schema, not a sweep
+     store, damaged with no journal, in use, disk full, invalid
      (:class:`StoreError` and subclasses)
 4    MPI launch problem, e.g. size differs from ``SLURM_NTASKS`` (:class:`LaunchError`)
 5    a worker process failed outside a point (:class:`WorkerError`)
-6    interrupted by a signal; everything finished is stored and the campaign is
+6    interrupted by a signal (during start-up, the store's open or rebuild, the
+     campaign or a merge); everything finished is stored and the campaign is
      resumable by running the same command again (:class:`Interrupted`)
 ==== ==========================================================================
 """

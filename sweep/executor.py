@@ -43,12 +43,12 @@ import floewave
 from floewave import ModelConfig
 
 from .config import Campaign, Point
-from .errors import Interrupted, LaunchError, SweepError, WorkerError
+from .errors import ConfigError, Interrupted, LaunchError, SweepError, WorkerError
 from .identity import canonical_json
 from .progress import Progress
 from .provenance import environment, host
 from .schema import PROFILE_VARS, column
-from .store import Store, _jsonable, utc_now
+from .store import Store, Unstorable, _jsonable, utc_now
 
 __all__ = ["run_campaign", "compute_point", "worker_loop", "Master", "InProcessTransport",
            "MPITransport", "RunSummary", "resolve_compute", "mpi_world", "check_launch",
@@ -57,6 +57,8 @@ __all__ = ["run_campaign", "compute_point", "worker_loop", "Master", "InProcessT
 DEFAULT_COMPUTE = "floewave:run_point"
 MODEL_STATUSES = floewave.results.STATUSES
 _TAG_TASK, _TAG_RESULT = 1, 2
+#: Stored statuses that ``--retry-failed`` computes again.
+_RETRIED = ("failed", "crashed", "timeout")
 _POLL_MIN, _POLL_MAX = 0.0005, 0.005  # [s] backoff of the waiting loops
 #: MPICH's Iprobe makes progress on one call and sees the message on the next, so each
 #: wake-up probes a few times (measured: 1 probe per wake-up waits ~3 backoff periods).
@@ -68,6 +70,8 @@ _MAX_BATCH, _BATCH_WINDOW = 512, 0.2
 #: 1 for points much longer than a commit, more for quick points, so that commits cost
 #: the workers at most about ``_COMMIT_SHARE`` of their time.
 _MAX_DEPTH, _COMMIT_SHARE = 64, 0.1
+#: Longest interval [s] given to ``setitimer`` (larger values overflow it).
+_MAX_TIMER = 1e7
 
 
 def _probe(comm: Any, source: int, tag: int, status: Any = None) -> bool:
@@ -79,17 +83,76 @@ class _GraceExpired(BaseException):
     """Raised in-process when the grace period after a stop signal runs out."""
 
 
+class _PointTimeout(BaseException):
+    """Raised in the computing thread when a point runs past its ``point_timeout``."""
+
+
+#: The hard limit of a point stuck in native code: ``point_timeout`` plus this much
+#: (at least ``_HARD_MIN`` s) later the process ends (``faulthandler``; exit 1 and a
+#: traceback; under MPI the job ends with it) and the point counts as an attempt.
+_HARD_FACTOR, _HARD_MIN = 1.0, 30.0
+_TIMEOUT_SIGNAL = signal.SIGUSR2
+
+
+class _Deadline:
+    """``point_timeout`` for the computation in the main thread.
+
+    Soft: a timer thread sends SIGUSR2 to the main thread at the limit and its handler
+    raises :class:`_PointTimeout` (between bytecodes: at once in Python code or a sleep,
+    when a numba kernel call returns). Hard: ``faulthandler`` ends the process a margin
+    later if the point is stuck in native code.
+    """
+
+    def __init__(self, seconds: float) -> None:
+        self.seconds = seconds
+        self._timer: Any = None
+        self._old: Any = None
+
+    def _raise(self, signum: int, frame: Any) -> None:
+        raise _PointTimeout(f"ran longer than point_timeout = {self.seconds:g} s")
+
+    def __enter__(self) -> _Deadline:
+        import faulthandler
+        import threading
+
+        if threading.current_thread() is not threading.main_thread():
+            return self
+        self._old = signal.signal(_TIMEOUT_SIGNAL, self._raise)
+        main = threading.main_thread().ident
+        self._timer = threading.Timer(self.seconds, signal.pthread_kill,
+                                      args=(main, _TIMEOUT_SIGNAL))
+        self._timer.daemon = True
+        self._timer.start()
+        hard = self.seconds + max(_HARD_MIN, _HARD_FACTOR * self.seconds)
+        faulthandler.dump_traceback_later(min(hard, _MAX_TIMER), exit=True)
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        import faulthandler
+
+        if self._timer is None:
+            return
+        self._timer.cancel()
+        faulthandler.cancel_dump_traceback_later()
+        signal.signal(_TIMEOUT_SIGNAL, self._old)
+        self._timer = None
+
+
 # ---------------------------------------------------------------------- worker side
 def resolve_compute(spec: str) -> Callable[[ModelConfig], Any]:
     """Import ``"module:function"``."""
     module, _, name = spec.partition(":")
     if not module or not name:
-        raise ValueError(f"compute function {spec!r}: expected 'module:function'")
-    fn = importlib.import_module(module)
-    for part in name.split("."):
-        fn = getattr(fn, part)
+        raise ConfigError(f"--compute {spec!r}: expected 'module:function'")
+    try:
+        fn = importlib.import_module(module)
+        for part in name.split("."):
+            fn = getattr(fn, part)
+    except Exception as exc:  # noqa: BLE001 - ImportError, AttributeError, its own errors
+        raise ConfigError(f"--compute {spec!r}: cannot import it: {type(exc).__name__}:"
+                          f" {exc}") from None
     if not callable(fn):
-        raise ValueError(f"compute function {spec!r} is not callable")
+        raise ConfigError(f"--compute {spec!r} is not callable")
     return fn  # type: ignore[return-value]
 
 
@@ -107,7 +170,12 @@ def compute_point(task: dict[str, Any], fn: Callable[[ModelConfig], Any],
     try:
         cfg = ModelConfig.from_dict(task["config"])
         cfg.check_physics()
-        result = fn(cfg)
+        limit = float(task.get("timeout") or 0.0)
+        if limit > 0:
+            with _Deadline(limit):
+                result = fn(cfg)
+        else:
+            result = fn(cfg)
         data = result.to_dict() if hasattr(result, "to_dict") else dict(result)
         profiles = {k: np.asarray(data[k], dtype=np.float64) for k in PROFILE_VARS
                     if k in data}
@@ -131,8 +199,18 @@ def compute_point(task: dict[str, Any], fn: Callable[[ModelConfig], Any],
     except floewave.InvalidPointError as exc:
         out["status"] = "invalid"
         out["message"] = f"{type(exc).__name__}: {exc}"
-    except Exception as exc:  # noqa: BLE001 - a point's failure is data, not a crash
+    except _GraceExpired:
+        raise  # the in-process grace period ran out: the master stops
+    except _PointTimeout as exc:
+        out["status"] = "timeout"
+        out["scalars"], out["profiles"] = {}, {}
+        out["residual_history"] = np.zeros(0)
+        out["message"] = f"{exc} (rank {rank}, host {host()}, pid {os.getpid()})"
+    except BaseException as exc:  # noqa: BLE001 - a point's failure is data, not a crash
+        # SystemExit and KeyboardInterrupt raised by a point are its failure too
         out["status"] = "failed"
+        out["scalars"], out["profiles"] = {}, {}
+        out["residual_history"] = np.zeros(0)
         out["message"] = (f"{type(exc).__name__}: {exc} (rank {rank}, host {host()},"
                           f" pid {os.getpid()})\n{traceback.format_exc()}")
     out.update(host=host(), rank=rank, pid=os.getpid(), start_time=start_wall,
@@ -165,8 +243,11 @@ def worker_loop(comm: Any, compute: str = DEFAULT_COMPUTE) -> None:
         fn = resolve_compute(compute)
         env = environment(with_git=False, with_mpi=True)
     except Exception as exc:  # noqa: BLE001 - reported to the master, which stops
-        comm.send(("error", {"rank": rank, "host": host(), "message": f"{exc!r}",
-                             "traceback": traceback.format_exc()}), dest=0, tag=_TAG_RESULT)
+        plain = isinstance(exc, SweepError)  # its message says it all
+        comm.send(("error", {"rank": rank, "host": host(),
+                             "message": str(exc) if plain else f"{exc!r}",
+                             "traceback": "" if plain else traceback.format_exc()}),
+                  dest=0, tag=_TAG_RESULT)
         fn, env = None, {}
     else:
         comm.send(("ready", env), dest=0, tag=_TAG_RESULT)
@@ -247,7 +328,8 @@ class MPITransport:
         if errors:
             e = errors[0]
             raise WorkerError(f"worker rank {e['rank']} on {e['host']} failed to start:"
-                              f" {e['message']}\n{e['traceback']}")
+                              f" {e['message']}" + (f"\n{e['traceback']}" if e["traceback"]
+                                                    else ""))
 
     def send(self, worker: int, task: dict[str, Any]) -> None:
         self.comm.send(task, dest=worker, tag=_TAG_TASK)
@@ -310,6 +392,7 @@ class _StopSignals:
         self.requested = ""
         self.grace = grace
         self.in_process = in_process
+        self.active = True
         self._old: dict[int, Any] = {}
 
     def __enter__(self) -> _StopSignals:
@@ -321,8 +404,18 @@ class _StopSignals:
                 self._old[signal.SIGALRM] = signal.signal(signal.SIGALRM, self._expire)
         return self
 
+    def quiet(self) -> None:
+        """From now on only record signals (no grace timer, nothing raised)."""
+        self.active = False
+        if self.in_process:
+            with contextlib.suppress(ValueError):
+                signal.setitimer(signal.ITIMER_REAL, 0)
+
     def _handle(self, signum: int, frame: Any) -> None:
         name = signal.Signals(signum).name
+        if not self.active:
+            self.requested = self.requested or name
+            return
         if self.requested and self.in_process:
             raise _GraceExpired(name)
         if not self.requested:
@@ -330,10 +423,11 @@ class _StopSignals:
                   f" {self.grace:g} s for running ones", file=sys.stderr, flush=True)
         self.requested = self.requested or name
         if self.in_process:
-            signal.setitimer(signal.ITIMER_REAL, max(self.grace, 1e-3))
+            signal.setitimer(signal.ITIMER_REAL, min(max(self.grace, 1e-3), _MAX_TIMER))
 
     def _expire(self, signum: int, frame: Any) -> None:
-        raise _GraceExpired("grace period")
+        if self.active:
+            raise _GraceExpired("grace period")
 
     def __exit__(self, *exc: Any) -> None:
         if self.in_process:
@@ -355,12 +449,18 @@ class Master:
     """
 
     def __init__(self, store: Store, transport: Transport, compute: str = DEFAULT_COMPUTE,
-                 git: dict[str, Any] | None = None) -> None:
+                 git: dict[str, Any] | None = None, point_timeout: float = 0.0) -> None:
         self.store = store
+        self.point_timeout = point_timeout
         self.transport = transport
         self.compute = compute
         self.git = git or {}
         self._provenance: dict[tuple[int, str], str] = {}
+        self.outstanding = 0  # tasks handed out and not yet stored
+        #: points in flight when an earlier run died: each is computed alone, so that a
+        #: death while it runs is its attempt (``[run] max_attempts``)
+        self.suspects: set[str] = set()
+        self._queues: dict[int, collections.deque[tuple[Point, dict[str, Any]]]] = {}
         self.point_time = math.nan  # [s] moving average of a point's compute time
         self.commit_time = math.nan  # [s] moving average of a batch's store time
 
@@ -378,6 +478,7 @@ class Master:
         row: dict[str, Any] = {name: getattr(point.config, name)
                                for name in floewave.SWEPT_FIELDS}
         scalars = out.get("scalars", {})
+        unusable = []
         for name, value in scalars.items():
             if name in ("status", "wall_time"):
                 continue
@@ -385,13 +486,24 @@ class Master:
                 kind = column(name).kind
             except KeyError:
                 continue
-            if kind == "str":
-                row[name] = str(value)
-            elif kind == "int":
-                row[name] = int(value) if value is not None and math.isfinite(value) else -1
-            else:
-                row[name] = float(value) if value is not None else math.nan
-        row["model_wall_time"] = float(scalars.get("wall_time", math.nan))
+            try:
+                if kind == "str":
+                    row[name] = str(value)
+                elif kind == "int":
+                    row[name] = (int(value) if value is not None and math.isfinite(value)
+                                 else -1)
+                else:
+                    row[name] = float(value) if value is not None else math.nan
+            except (TypeError, ValueError, OverflowError):
+                unusable.append(f"{name} = {str(value)[:40]!r}")
+        try:
+            row["model_wall_time"] = float(scalars.get("wall_time", math.nan))
+        except (TypeError, ValueError):
+            unusable.append(f"wall_time = {str(scalars.get('wall_time'))[:40]!r}")
+        if unusable:  # the schema cannot hold the result: a failed point, with the reason
+            out = dict(out, status="failed", profiles={}, residual_history=np.zeros(0),
+                       message="the result does not fit the schema: " + ", ".join(unusable))
+            row = {name: getattr(point.config, name) for name in floewave.SWEPT_FIELDS}
         row.update(hash=point.hash, status=out["status"], message=out["message"],
                    host=out["host"], rank=int(out["rank"]), pid=int(out["pid"]),
                    start_time=out["start_time"], end_time=out["end_time"],
@@ -417,30 +529,50 @@ class Master:
         :data:`_BATCH_WINDOW`), are staged and committed together; only then are they
         counted as stored and are their workers given new tasks.
         """
-        pending = sorted(todo, key=lambda p: (-p.cost, p.index))
+        suspects = sorted((p for p in todo if p.hash in self.suspects),
+                          key=lambda p: (-p.cost, p.index), reverse=True)
+        pending = sorted((p for p in todo if p.hash not in self.suspects),
+                         key=lambda p: (-p.cost, p.index))
         pending.reverse()  # pop() from the end takes the costliest
         # per worker, its tasks in the order sent (MPI keeps the order of one sender)
         queues: dict[int, collections.deque[tuple[Point, dict[str, Any]]]] = {
             w: collections.deque() for w in self.transport.workers}
-        outstanding = 0
+        self._queues = queues
+        self.outstanding = 0
         stop_at = math.inf
         try:
-            while pending or outstanding:
+            while pending or suspects or self.outstanding:
                 if signals.requested and stop_at == math.inf:
                     stop_at = time.monotonic() + signals.grace
                     summary.interrupted = signals.requested
-                if not signals.requested:
+                    pending += suspects  # not started: counted as not started
+                    suspects = []
+                if not signals.requested and suspects and not self.outstanding:
+                    point = suspects.pop()  # alone: nothing else is in flight
+                    worker = self.transport.workers[0]
+                    queues[worker].append((point, point.config.to_dict()))
+                    self.store.handout([(point.hash, worker)], alone=True)
+                    self.outstanding += 1
+                    self.transport.send(worker, {"hash": point.hash, "compute": self.compute,
+                                                 "config": queues[worker][-1][1],
+                                                 "timeout": self.point_timeout})
+                elif not signals.requested and not suspects:
                     depth = self.depth
+                    sent: list[tuple[Point, dict[str, Any], int]] = []
                     for worker, queue in queues.items():
                         while len(queue) < depth and pending:
                             point = pending.pop()
-                            config = point.config.to_dict()
-                            queue.append((point, config))
-                            outstanding += 1
-                            self.transport.send(worker, {"hash": point.hash,
-                                                         "compute": self.compute,
-                                                         "config": config})
-                if not outstanding:
+                            sent.append((point, point.config.to_dict(), worker))
+                            queue.append(sent[-1][:2])
+                    # journaled before they go out: a point whose worker dies is counted
+                    self.store.handout([(p.hash, w) for p, _, w in sent])
+                    for point, config, worker in sent:
+                        self.outstanding += 1
+                        self.transport.send(worker, {"hash": point.hash,
+                                                     "compute": self.compute,
+                                                     "config": config,
+                                                     "timeout": self.point_timeout})
+                if not self.outstanding:
                     break
                 if time.monotonic() > stop_at:
                     break
@@ -450,22 +582,28 @@ class Master:
                     continue
                 batch = [msg]
                 window_end = time.monotonic() + _BATCH_WINDOW
-                while len(batch) < min(outstanding, _MAX_BATCH) and \
+                while len(batch) < min(self.outstanding, _MAX_BATCH) and \
                         batch[-1][1] != "error" and time.monotonic() < window_end:
                     more = self.transport.poll(0.0)
                     if more is None:
                         break
                     batch.append(more)
-                outstanding -= self._store_batch(batch, queues, progress, summary)
+                self.outstanding -= self._store_batch(batch, queues, progress, summary)
         except _GraceExpired:
             summary.interrupted = summary.interrupted or "signal"
         if summary.interrupted:
-            summary.abandoned = abandoned = outstanding
+            summary.abandoned = abandoned = self.outstanding
             raise Interrupted(
                 f"campaign stopped by {summary.interrupted}: {summary.computed} points stored"
                 f" in this run, {abandoned} running point(s) abandoned, {len(pending)} not"
                 " started; the store is closed and consistent — the campaign is resumable:"
                 " run the same command again")
+
+    def release_abandoned(self) -> None:
+        """Journal that the points still handed out were abandoned by a stop (they did
+        not kill their worker: no attempt is counted)."""
+        hashes = [p.hash for q in self._queues.values() for p, _ in q]
+        self.store.release(hashes)
 
     def _store_batch(self, batch: list[tuple[int, str, Any]],
                      queues: dict[int, collections.deque[tuple[Point, dict[str, Any]]]],
@@ -488,7 +626,13 @@ class Master:
                 raise WorkerError(f"worker rank {worker} returned point"
                                   f" {str(payload.get('hash'))[:12]}, expected"
                                   f" {point.hash[:12]} (protocol error)")
-            self.store.add(self.record(point, payload, config))
+            try:
+                self.store.add(self.record(point, payload, config))
+            except Unstorable as exc:  # the record cannot be stored: a failed point
+                payload = dict(payload, status="failed", scalars={}, profiles={},
+                               residual_history=np.zeros(0),
+                               message=f"the result cannot be stored: {exc}")
+                self.store.add(self.record(point, payload, config))
             statuses.append(payload["status"])
             wall += float(payload.get("wall_time", 0.0))
         self.store.commit()  # now they are stored: count them
@@ -511,8 +655,7 @@ def _average(old: float, new: float, weight: float = 0.3) -> float:
 
 
 # ---------------------------------------------------------------------- entry points
-_LAUNCHER_VARS = ("PMI_RANK", "PMI_SIZE", "PMIX_RANK", "OMPI_COMM_WORLD_SIZE",
-                  "MPI_LOCALNRANKS", "HYDRA_CONTROL_FD", "PMI_FD")
+from .cli import _LAUNCHER_VARS  # noqa: E402 - one list (the CLI checks it early)
 
 
 def mpi_world() -> Any:
@@ -545,96 +688,134 @@ def check_launch(size: int, environ: dict[str, str] | None = None) -> None:
 
 def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_COMPUTE,
                  retry_failed: bool = False, extend: bool = False, comm: Any = None,
-                 progress_bar: bool | None = None, command: str = "") -> RunSummary | None:
+                 progress_bar: bool | None = None, command: str = "",
+                 point_timeout: float | None = None) -> RunSummary | None:
     """Run (or resume) ``campaign`` into the store at ``store_path``.
 
     With ``comm`` (an MPI communicator of size > 1) rank 0 is the master and the other
     ranks are workers (they return ``None``); otherwise the campaign runs in-process.
+    ``point_timeout`` [s] overrides ``[run] point_timeout`` (0: none).
+    The workers' start-up is checked before the store is touched; stop signals are
+    caught from before the store is opened (a stop during the open or its rebuild is
+    honoured right after it: :class:`Interrupted`).
 
     Raises
     ------
-    StoreError, WorkerError, Interrupted
-        See :mod:`sweep.errors`; on an MPI run the master aborts the job on an error
-        when workers may still be busy.
+    ConfigError, StoreError, WorkerError, Interrupted
+        See :mod:`sweep.errors`. On an MPI run any failure of the master ends the job:
+        idle workers are told to stop, busy ones are aborted with the job.
     """
     if comm is not None and comm.Get_size() > 1 and comm.Get_rank() != 0:
         worker_loop(comm, compute)
         return None
     mpi = comm is not None and comm.Get_size() > 1
     t0 = time.monotonic()
-    info = environment(with_mpi=comm is not None)
-    info.update(mpi_size=comm.Get_size() if comm is not None else 1, command=command,
-                compute=compute)
     transport: Any = None
-    try:
-        transport = MPITransport(comm, compute) if mpi else InProcessTransport(compute)
-    except Exception as exc:
-        if mpi:
-            print(f"[sweep] cannot start: {exc}", file=sys.stderr, flush=True)
-            comm.Abort(1)
-        raise
-    try:
-        store = Store(store_path, campaign, extend=extend, run_info=info)
-    except SweepError as exc:
-        if mpi:
-            print(f"[sweep] {type(exc).__name__}: {exc}", file=sys.stderr, flush=True)
-            transport.shutdown()
-        raise
-    summary = RunSummary(total=campaign.size)
-    outcome = "complete"
+    master: Master | None = None
     try:
         if mpi:
-            transport.start()
-        points = campaign.points()
-        todo = []
-        for p in points:
-            if p.hash in store and not (retry_failed and store.status_of(p.hash) == "failed"):
-                summary.skipped += 1
-                continue
-            todo.append(p)
-        git = {"git_commit": info["git_commit"], "git_dirty": info["git_dirty"],
-               "sweep_version": info["sweep_version"]}
-        master = Master(store, transport, compute, git)
+            transport = MPITransport(comm, compute)
+            transport.start()  # every worker's hello (or its failure) before the store
+        else:
+            transport = InProcessTransport(compute)
+        info = environment(with_mpi=comm is not None)
+        info.update(mpi_size=comm.Get_size() if comm is not None else 1, command=command,
+                    compute=compute)
+        summary = RunSummary(total=campaign.size)
         with _StopSignals(campaign.run.grace_period, in_process=not mpi) as signals:
-            progress = Progress(len(todo), interval=campaign.run.progress_interval,
-                                bar=progress_bar, skipped=summary.skipped)
-            invalid = [p for p in todo if p.invalid]  # known impossible: no worker needed
-            for p in invalid:
-                now = utc_now()
-                out = {"hash": p.hash, "status": "invalid", "message": p.invalid, "host": host(),
-                       "rank": 0, "pid": os.getpid(), "start_time": now, "end_time": now,
-                       "wall_time": 0.0}
-                store.add(master.record(p, out))
-            store.commit()  # one group commit for all of them
-            for _ in invalid:
-                summary.computed += 1
-                summary.counts["invalid"] = summary.counts.get("invalid", 0) + 1
-                progress.update("invalid")
-            loop0, cpu0 = time.monotonic(), time.process_time()
+            store = Store(store_path, campaign, extend=extend, run_info=info)
+            outcome = "complete"
             try:
-                master.run([p for p in todo if not p.invalid], progress, signals, summary)
+                if signals.requested:
+                    signals.quiet()
+                    raise Interrupted(f"campaign stopped by {signals.requested} while the"
+                                      " store was being opened; nothing was lost — the"
+                                      " campaign is resumable: run the same command again")
+                git = {"git_commit": info["git_commit"], "git_dirty": info["git_dirty"],
+                       "sweep_version": info["sweep_version"]}
+                limit = campaign.run.point_timeout if point_timeout is None else point_timeout
+                master = Master(store, transport, compute, git, limit)
+                _run_points(campaign, store, master, signals, summary, retry_failed,
+                            progress_bar)
+                summary.elapsed = time.monotonic() - t0
+            except Interrupted:
+                outcome = "interrupted (resumable)"
+                raise
+            except BaseException as exc:
+                outcome = f"error: {type(exc).__name__}: {exc}"
+                raise
             finally:
-                summary.loop_elapsed = time.monotonic() - loop0
-                summary.master_cpu = time.process_time() - cpu0
-                progress.close()
-        summary.elapsed = time.monotonic() - t0
-    except Interrupted:
-        outcome = "interrupted (resumable)"
-        raise
+                signals.quiet()
+                if master is not None:  # in flight at a stop or an error: no attempt
+                    with contextlib.suppress(Exception):
+                        master.release_abandoned()
+                store.close(outcome)
     except BaseException as exc:
-        outcome = f"error: {type(exc).__name__}: {exc}"
-        raise
-    finally:
-        store.close(outcome)
-        if mpi:
-            exc = sys.exc_info()[1]
-            if outcome == "complete" or (isinstance(exc, Interrupted)
-                                         and summary.abandoned == 0):
-                transport.shutdown()
+        if mpi and transport is not None:
+            busy = master is not None and master.outstanding > 0
+            if not busy:
+                with contextlib.suppress(Exception):
+                    transport.shutdown()
             else:
-                print(f"[sweep] {exc}" if isinstance(exc, Interrupted) else
-                      f"[sweep] {outcome}", file=sys.stderr, flush=True)
+                print(f"[sweep] {exc}" if isinstance(exc, SweepError) else
+                      f"[sweep] error: {type(exc).__name__}: {exc}", file=sys.stderr,
+                      flush=True)
                 print("[sweep] store closed; aborting the MPI job (workers still busy)",
                       file=sys.stderr, flush=True)
                 transport.abort(getattr(exc, "exit_status", 1))
+        raise
+    if mpi:
+        transport.shutdown()
     return summary
+
+
+def _run_points(campaign: Campaign, store: Store, master: Master, signals: _StopSignals,
+                summary: RunSummary, retry_failed: bool, progress_bar: bool | None) -> None:
+    """The campaign loop of :func:`run_campaign` (the store is open)."""
+    todo = []
+    for p in campaign.points():
+        if p.hash in store and not (retry_failed and
+                                    store.status_of(p.hash) in _RETRIED):
+            summary.skipped += 1
+            continue
+        todo.append(p)
+    progress = Progress(len(todo), interval=campaign.run.progress_interval,
+                        bar=progress_bar, skipped=summary.skipped)
+    try:
+        # known outcomes first: impossible points (no worker needed) and points that
+        # killed their worker max_attempts times
+        limit = campaign.run.max_attempts
+        known = []
+        for p in todo:
+            if p.invalid:
+                known.append((p, "invalid", p.invalid))
+                continue
+            tries = [t for t in store.handouts(p.hash) if t[2]]
+            if limit and len(tries) >= limit and not retry_failed:
+                where = ", ".join(sorted({f"rank {w}" for _, w, _ in tries}))
+                known.append((p, "crashed", f"the job died {len(tries)} times while this"
+                              f" point was the only one being computed ({where}); not tried"
+                              f" again ([run] max_attempts = {limit}); --retry-failed tries"
+                              " it again"))
+            elif store.handouts(p.hash):
+                master.suspects.add(p.hash)
+        for p, status, message in known:
+            now = utc_now()
+            out = {"hash": p.hash, "status": status, "message": message, "host": host(),
+                   "rank": 0, "pid": os.getpid(), "start_time": now, "end_time": now,
+                   "wall_time": 0.0}
+            store.add(master.record(p, out))
+        store.commit()  # one group commit for all of them
+        for _, status, _ in known:
+            summary.computed += 1
+            summary.counts[status] = summary.counts.get(status, 0) + 1
+            progress.update(status)
+        done = {p.hash for p, _, _ in known}
+        loop0, cpu0 = time.monotonic(), time.process_time()
+        try:
+            master.run([p for p in todo if p.hash not in done], progress, signals, summary)
+        finally:
+            summary.loop_elapsed = time.monotonic() - loop0
+            summary.master_cpu = time.process_time() - cpu0
+    finally:
+        progress.close()

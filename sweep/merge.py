@@ -1,6 +1,9 @@
 """``sweep merge``: combine shard stores of one campaign into one store, by hash."""
 from __future__ import annotations
 
+import contextlib
+import os
+import signal
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -8,9 +11,16 @@ from typing import Any
 import h5py
 
 from .config import parse_campaign
-from .errors import CampaignMismatchError, StoreError
+from .errors import CampaignMismatchError, Interrupted, StoreError
 from .provenance import environment
-from .schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, profile_path
+from .schema import (
+    COLUMNS,
+    HISTORY_VAR,
+    MIGRATIONS,
+    PROFILE_VARS,
+    SCHEMA_VERSION,
+    profile_path,
+)
 from .store import Store
 
 __all__ = ["merge", "iter_records"]
@@ -28,7 +38,9 @@ def iter_records(path: str | Path) -> Iterator[dict[str, Any]]:
     with h5py.File(path, "r", locking=False) as f:
         table = f["table"]
         n = int(table.attrs["n_rows"])
-        cols = {c.name: table[c.name][:n] for c in COLUMNS}
+        # a column an older (migratable) schema version lacks reads as its fill value
+        cols = {c.name: table[c.name][:n] if c.name in table else [c.fill] * n
+                for c in COLUMNS}
         for i in range(n):
             row = {name: _text(values[i]) for name, values in cols.items()}
             row = {k: (v.item() if hasattr(v, "item") else v) for k, v in row.items()}
@@ -39,6 +51,35 @@ def iter_records(path: str | Path) -> Iterator[dict[str, Any]]:
                 profiles = {k: f[name][k][()] for k in PROFILE_VARS}
                 history = f[name][HISTORY_VAR[0]][()]
             yield {"row": row, "profiles": profiles, "residual_history": history}
+
+
+class _Stop:
+    """SIGINT/SIGTERM/SIGUSR1 during a merge: finish the current commit, then stop
+    (:class:`Interrupted`, exit 6; the output is closed and consistent)."""
+
+    def __init__(self) -> None:
+        self.requested = ""
+        self._old: dict[int, Any] = {}
+
+    def __enter__(self) -> _Stop:
+        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1):
+            with contextlib.suppress(ValueError):  # not the main thread
+                self._old[sig] = signal.signal(sig, self._handle)
+        return self
+
+    def _handle(self, signum: int, frame: Any) -> None:
+        self.requested = self.requested or signal.Signals(signum).name
+
+    def check(self, merged: int) -> None:
+        if self.requested:
+            raise Interrupted(f"merge stopped by {self.requested} after {merged} points;"
+                              " the output store is closed and consistent — the merge is"
+                              " resumable: run the same command again")
+
+    def __exit__(self, *exc: Any) -> None:
+        for sig, old in self._old.items():
+            with contextlib.suppress(ValueError, TypeError):
+                signal.signal(sig, old)
 
 
 def merge(output: str | Path, inputs: list[str | Path]) -> str:
@@ -55,12 +96,29 @@ def merge(output: str | Path, inputs: list[str | Path]) -> str:
     """
     hashes, texts = [], []
     for path in inputs:
+        if Path(output).exists() and Path(path).exists() and \
+                os.path.samefile(output, path):
+            raise StoreError(f"{path}: is the output store itself; merge other stores"
+                             " into it")
         try:
             with h5py.File(path, "r", locking=False) as f:
+                version = f.attrs.get("schema_version")
+                try:
+                    number = int(version)
+                except (TypeError, ValueError):
+                    number = -1
+                if number > SCHEMA_VERSION or (number < SCHEMA_VERSION and
+                                               number not in MIGRATIONS):
+                    raise StoreError(f"{path}: schema version {version!r}: this sweep"
+                                     f" (schema version {SCHEMA_VERSION}) cannot merge it")
                 hashes.append(_text(f.attrs["campaign_hash"]))
                 texts.append(_text(f.attrs["campaign_toml"]))
-        except (OSError, KeyError) as exc:
+        except StoreError:
+            raise
+        except (OSError, KeyError, ValueError, RuntimeError, TypeError) as exc:
             raise StoreError(f"{path}: not a readable sweep store: {exc}") from None
+    if len(set(map(os.path.realpath, inputs))) != len(inputs):
+        raise StoreError("an input store is given twice")
     if len(set(hashes)) != 1:
         odd = [str(p) for p, h in zip(inputs, hashes, strict=False) if h != hashes[0]]
         raise CampaignMismatchError(f"cannot merge stores of different campaigns: "
@@ -72,7 +130,8 @@ def merge(output: str | Path, inputs: list[str | Path]) -> str:
     added = replaced = duplicates = 0
     info = environment()
     info["command"] = f"sweep merge {output} " + " ".join(map(str, inputs))
-    with Store(output, campaign, run_info=info) as store:
+    stop = _Stop()
+    with stop, Store(output, campaign, run_info=info) as store:
         for path in inputs:
             # group commits of _BATCH points within an input (a store holds each hash
             # once, so no staged record can shadow another) and at its end (the next
@@ -80,6 +139,7 @@ def merge(output: str | Path, inputs: list[str | Path]) -> str:
             for rec in iter_records(path):
                 if store.staged >= _BATCH:
                     store.commit()
+                    stop.check(added + replaced)
                 h = rec["row"]["hash"]
                 if h in store:
                     if store.status_of(h) == "failed" and rec["row"]["status"] != "failed":
@@ -91,6 +151,7 @@ def merge(output: str | Path, inputs: list[str | Path]) -> str:
                 store.add(rec)
                 added += 1
             store.commit()
+            stop.check(added + replaced)
         total = len(store)
     return (f"merged {len(inputs)} store(s) into {output}: {added} points added,"
             f" {replaced} failed points replaced, {duplicates} duplicates skipped;"

@@ -34,8 +34,10 @@ __all__ = ["SCHEMA_VERSION", "FORMAT", "Column", "COLUMNS", "PROFILE_VARS", "MIG
 SCHEMA_VERSION = 2
 FORMAT = "sweep-store"
 
-#: Point statuses: the model's three plus sweep's two.
-STATUSES = ("converged", "converged_noisy", "not_converged", "failed", "invalid")
+#: Point statuses: the model's three plus sweep's four (``crashed``: its worker died
+#: ``[run] max_attempts`` times computing it; ``timeout``: ran past ``point_timeout``).
+STATUSES = ("converged", "converged_noisy", "not_converged", "failed", "invalid", "crashed",
+            "timeout")
 
 
 @dataclass(frozen=True)
@@ -164,8 +166,9 @@ ROOT_ATTRS = {
                      "model_version)",
     "campaign_hash": "str: SHA-256 of campaign_json",
     "swept_fields": "str: JSON list of the swept dimensions, in grid order",
-    "writer_open": "bool: true while a writer has the store open; true on open means the "
-                   "last writer died, and the store is rebuilt from the journal",
+    "writer_open": "bool: true while a writer has the store open (set before it changes "
+                   "anything); true on open means the last writer died, and the store is "
+                   "rebuilt from the journal (atomically: temporary file, then rename)",
 }
 RUN_ATTRS = ("started", "ended", "host", "mpi_size", "sweep_version", "floewave_version",
              "model_version", "git_commit", "git_dirty", "python", "numpy", "numba",
@@ -208,11 +211,19 @@ def schema_document() -> dict[str, Any]:
                               "-0.0 written as 0.0, NaN/inf refused",
             "example": "see tests/test_sweep_identity.py for pinned values",
         },
-        "journal": "<store>.journal beside the store: one JSON line per stored point "
-                   "(seq, hash, row, profiles, residual_history), fsynced before the HDF5 "
-                   "write; replayed on open, and used to rebuild an unreadable store",
+        "journal": "<store>.journal beside the store: one JSON line per event, each ending "
+                   "in a CRC-32 member \"crc32\" of the line without it: a campaign line "
+                   "(journal: sweep-journal, version 2, campaign_hash, campaign_json) first "
+                   "and after each --extend, one line per stored point (row, profiles, "
+                   "residual_history), fsynced before the HDF5 write, and hand-out/release "
+                   "lines (attempt counting). Replayed on open and used to rebuild an "
+                   "unclean or damaged store; lines failing their checksum or hash re-check, "
+                   "and records that cannot be written, are moved to "
+                   "<store>.journal.rejected with their reason",
         "lock": "<store>.lock: flock-held by the live writer (pid, host, start); a lock "
-                "file whose flock is free is stale and is taken over",
+                "file whose flock is free is stale and is taken over; the writer also "
+                "holds an flock on the journal, so removing the lock file does not admit "
+                "a second writer",
         "migrations": {str(k): {"to": v[0], "description": v[1]}
                        for k, v in MIGRATIONS.items()},
     }
@@ -240,7 +251,10 @@ def validate(path: str | Path) -> list[str]:
             if key not in f.attrs:
                 problems.append(f"/: missing attribute {key!r}")
         version = f.attrs.get("schema_version")
-        version = SCHEMA_VERSION if version is None else int(version)
+        try:
+            version = SCHEMA_VERSION if version is None else int(version)
+        except (TypeError, ValueError):
+            return problems + [f"/: schema_version {version!r} is not a number"]
         if version > SCHEMA_VERSION:
             problems.append(f"/: schema_version {version} is newer than {SCHEMA_VERSION}")
         elif version < SCHEMA_VERSION and version not in MIGRATIONS:
@@ -281,7 +295,7 @@ def validate(path: str | Path) -> list[str]:
                 continue
             if s not in STATUSES:
                 problems.append(f"/table/status[{i}]: unknown status {s!r}")
-            if s in ("failed", "invalid"):
+            if s in ("failed", "invalid", "crashed", "timeout"):
                 continue
             name = profile_path(h)
             if name not in f:

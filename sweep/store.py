@@ -1,74 +1,84 @@
-"""The result store: one HDF5 file written only by the master, plus a journal and a lock.
+"""The result store: one HDF5 file written only by the master, a journal and a lock.
 
-Writing points (group commit): :meth:`Store.add` stages a point (nothing is written);
-:meth:`Store.commit` makes every staged point durable at once:
+The parts: :mod:`sweep.lock` (who may write), :mod:`sweep.journal` (the durable truth,
+checksummed lines), :mod:`sweep.writer` (the HDF5 file). :class:`Store` is the policy
+that ties them together.
 
-1. append one JSON line per point (the whole record) to ``<store>.journal`` and ``fsync``
-   it once;
-2. write each point's profile group ``/profiles/<hh>/<hash>`` (replacing a leftover), then
-   the table rows (one slice write per column; the datasets grow in chunks, so they may
-   be longer than ``n_rows``), then raise ``/table.attrs["n_rows"]`` (the commit);
-3. ``flush`` the HDF5 file and ``fsync`` it once.
+Writing points (group commit): :meth:`Store.add` stages a point (converted to the
+schema's kinds; nothing is written); :meth:`Store.commit` makes every staged point
+durable at once: (1) append one checksummed journal line per point and ``fsync`` the
+journal once; (2) write the profile groups and table rows, raise ``n_rows`` (the
+commit); (3) flush and ``fsync`` the HDF5 file. A point counts as stored only when
+:meth:`commit` has returned.
 
-A point counts as stored (acknowledged) only when :meth:`commit` has returned;
-:meth:`Store.put` is ``add`` + ``commit`` of one point. The journal format is one line per
-point, as before, whatever the batch size. On open, rows and profile groups beyond the
-last commit are removed, a torn last journal line (a writer killed inside its journal
-write; never acknowledged) is cut off so the next record starts on a line of its own, and
-journal records missing from the file are written again, so a
-point is either wholly present or absent after any crash; if HDF5 left the file
-unreadable (``kill -9`` during a metadata write) it is moved aside and rebuilt from the
-journal; so is a file whose ``writer_open`` flag shows its writer died (HDF5 may then
-hold metadata that opens but reads wrong). ``<store>.lock`` is held with ``flock`` by
-the live writer, so a second writer is refused and the lock of a killed writer (whose
-flock the kernel released) is taken over.
+Opening (all with stop signals deferred, so a stop can never interrupt it half-way):
+
+1. take the lock; cut a torn last journal line; scan the journal (checksums, hash
+   re-check; bad lines are set aside to ``<store>.journal.rejected`` with a message);
+2. inspect the file: absent, clean, *unclean* (its ``writer_open`` flag shows its writer
+   died), *damaged* (provably a sweep store that cannot be read: an empty file or one
+   with the HDF5 signature that HDF5 fails on), or not ours (not HDF5, a directory, no
+   permission, another format: refused, never touched);
+3. check the campaign against the file's identity *and* the journal's;
+4. an absent, unclean or damaged file is **rebuilt from the journal atomically**: into a
+   temporary file in the same directory, flushed, ``fsync``-ed, then ``os.replace``-d
+   over the store (a damaged file is first kept as ``<store>.damaged-<time>``, and the
+   message says so); a kill at any instant leaves the old file or the new one;
+5. open the file, set ``writer_open`` *before* changing anything, drop rows and profile
+   groups beyond the last commit, write journal records newer than the file (a record
+   that cannot be written is set aside once with its reason).
 """
 from __future__ import annotations
 
 import contextlib
 import datetime as _dt
-import fcntl
-import json
 import os
+import re
 import signal
-import socket
-from collections.abc import Iterator
+import stat
+import sys
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
-import h5py
 import numpy as np
-from h5py import h5a, h5d, h5g, h5s, h5t
 
-from .errors import CampaignMismatchError, SchemaVersionError, StoreError, StoreLockedError
-from .schema import (
-    COLUMNS,
-    FORMAT,
-    HISTORY_VAR,
-    MIGRATIONS,
-    PROFILE_VARS,
-    SCHEMA_VERSION,
-    profile_path,
+from .errors import CampaignMismatchError, SchemaVersionError, StoreError
+from .journal import BadLine, Journal, JournalScan, decode, encode, journal_path, rejected_path
+from .lock import Lock, lock_path
+from .schema import FORMAT, MIGRATIONS, SCHEMA_VERSION, STATUSES
+from .writer import (
+    HDF5_SIGNATURE,
+    H5Writer,
+    Unstorable,
+    fsync_dir,
+    fsync_path,
+    normalise_record,
+    set_campaign,
 )
 
-__all__ = ["Store", "Record", "journal_path", "lock_path", "utc_now", "read_journal"]
+__all__ = ["Store", "Record", "journal_path", "lock_path", "rejected_path", "utc_now",
+           "read_journal", "Unstorable"]
 
 Record = dict[str, Any]
 """A point record: ``{"row": {column: value}, "profiles": {name: array},
 "residual_history": array}``."""
 
-_STR = h5py.string_dtype("utf-8")
-_DTYPES = {"float": np.float64, "int": np.int64, "str": _STR}
-_NP_DTYPES = {"float": np.float64, "int": np.int64, "str": object}
-#: The table datasets grow by whole chunks (rows beyond ``n_rows`` are not committed).
-_TABLE_CHUNK = 1024
-#: Signals whose Python handlers must not run in the middle of a commit (the in-process
-#: grace timer raises from its handler); they are delivered when the commit is done.
+#: Signals whose Python handlers must not run in the middle of a commit, an open or a
+#: rebuild (the in-process grace timer raises from its handler; a default action would
+#: kill the process half-way): they are delivered when that is done.
 _DEFERRED_SIGNALS = {signal.SIGINT, signal.SIGTERM, signal.SIGUSR1, signal.SIGALRM}
+#: Errors h5py raises for a file it cannot read (besides OSError).
+_H5_ERRORS = (OSError, RuntimeError, ValueError, KeyError, TypeError, IndexError)
+#: HDF5 messages that mean "in use", not "damaged".
+_IN_USE = re.compile(r"lock|already open|temporarily unavailable|in use", re.I)
+#: Journal records written per batch while rebuilding or replaying.
+_REPLAY_BATCH = 256
 
 
 @contextlib.contextmanager
-def _signals_deferred() -> Iterator[None]:
+def signals_deferred() -> Iterator[None]:
+    """Block the stop signals (and SIGALRM) in this thread; pending ones arrive after."""
     try:
         old = signal.pthread_sigmask(signal.SIG_BLOCK, _DEFERRED_SIGNALS)
     except (AttributeError, OSError, ValueError):  # pragma: no cover - no pthread_sigmask
@@ -80,91 +90,12 @@ def _signals_deferred() -> Iterator[None]:
         signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
+_signals_deferred = signals_deferred  # the name used before the split
+
+
 def utc_now() -> str:
     """The current time, ISO 8601 UTC with microseconds."""
     return _dt.datetime.now(_dt.UTC).isoformat(timespec="microseconds")
-
-
-def journal_path(path: str | Path) -> Path:
-    """The journal kept beside a store."""
-    return Path(str(path) + ".journal")
-
-
-def lock_path(path: str | Path) -> Path:
-    """The lock file kept beside a store."""
-    return Path(str(path) + ".lock")
-
-
-def _fsync_dir(path: Path) -> None:
-    with contextlib.suppress(OSError):
-        fd = os.open(path.parent, os.O_RDONLY)
-        try:
-            os.fsync(fd)
-        finally:
-            os.close(fd)
-
-
-class _Lock:
-    """An flock-held lock file; a lock file nobody holds is stale and taken over."""
-
-    def __init__(self, path: Path) -> None:
-        self.path = path
-        self.fd: int | None = None
-        self.stale_owner = ""
-
-    def acquire(self) -> None:
-        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            owner = os.pread(fd, 4096, 0).decode(errors="replace").strip() or "owner unknown"
-            os.close(fd)
-            raise StoreLockedError(
-                f"{self.path}: the store is being written by a live campaign ({owner});"
-                " wait for it to finish or stop it first") from None
-        self.stale_owner = os.pread(fd, 4096, 0).decode(errors="replace").strip()
-        info = json.dumps({"pid": os.getpid(), "host": socket.gethostname(),
-                           "since": utc_now()})
-        os.ftruncate(fd, 0)
-        os.pwrite(fd, info.encode(), 0)
-        os.fsync(fd)
-        self.fd = fd
-
-    def release(self) -> None:
-        if self.fd is not None:
-            with contextlib.suppress(OSError):
-                os.unlink(self.path)
-            fcntl.flock(self.fd, fcntl.LOCK_UN)
-            os.close(self.fd)
-            self.fd = None
-
-
-def _journal_lines(path: Path) -> Iterator[dict[str, Any]]:
-    """The complete records of a journal as parsed JSON (a torn last line is skipped)."""
-    if not path.exists():
-        return
-    with open(path, "rb") as fh:
-        for line in fh:
-            if not line.endswith(b"\n"):
-                break  # torn write of a killed master: that point was never acknowledged
-            try:
-                yield json.loads(line)
-            except ValueError:
-                continue
-
-
-def _with_arrays(rec: dict[str, Any]) -> Record:
-    """A parsed journal record with its profiles and history as float64 arrays."""
-    rec["profiles"] = {k: np.asarray(v, dtype=np.float64)
-                       for k, v in rec.get("profiles", {}).items()}
-    rec["residual_history"] = np.asarray(rec.get("residual_history", []), dtype=np.float64)
-    return rec
-
-
-def read_journal(path: str | Path) -> Iterator[Record]:
-    """Yield the complete records of a journal (a torn last line is skipped)."""
-    for rec in _journal_lines(Path(path)):
-        yield _with_arrays(rec)
 
 
 def _jsonable(value: Any) -> Any:
@@ -179,35 +110,60 @@ def _text(value: Any) -> str:
     return value.decode() if isinstance(value, bytes) else str(value)
 
 
-def _cell(col: Any, row: dict[str, Any]) -> Any:
-    value = row.get(col.name, col.fill)
-    if value is None:
-        return col.fill
-    if isinstance(value, bytes):
-        return value.decode()
-    return value
+def _with_arrays(rec: dict[str, Any]) -> Record:
+    rec["profiles"] = {k: np.asarray(v, dtype=np.float64)
+                       for k, v in rec.get("profiles", {}).items()}
+    rec["residual_history"] = np.asarray(rec.get("residual_history", []), dtype=np.float64)
+    return rec
 
 
-_F64 = h5t.IEEE_F64LE
-_STR_TYPE = h5t.py_create(_STR, logical=True)
-_DCPL = h5py.h5p.create(h5py.h5p.DATASET_CREATE)
-_DCPL.set_obj_track_times(False)  # as h5py's create_dataset does by default
+def read_journal(path: str | Path) -> Iterator[Record]:
+    """Yield the point records of a journal (torn or unreadable lines skipped)."""
+    for rec in Journal(path).read():
+        try:
+            yield _with_arrays(rec)
+        except (TypeError, ValueError):
+            continue
 
 
-def _write_rows(dsid: Any, mtype: Any, start: int, values: np.ndarray) -> None:
-    """Write ``values`` to rows ``start, start + 1, ...`` of a 1-D dataset (low level)."""
-    fspace = dsid.get_space()
-    fspace.select_hyperslab((start,), (len(values),))
-    dsid.write(h5s.create_simple((len(values),)), fspace, values, mtype=mtype)
+def _stderr(message: str) -> None:
+    print(f"sweep: {message}", file=sys.stderr, flush=True)
 
 
-def _dataset(gid: Any, name: str, data: Any) -> None:
-    """A contiguous float64 dataset ``name`` in group ``gid`` holding ``data``."""
-    arr = np.ascontiguousarray(data, dtype=np.float64)
-    space = h5s.create_simple(arr.shape) if arr.ndim else h5s.create(h5s.SCALAR)
-    dset = h5d.create(gid, name.encode(), _F64, space, dcpl=_DCPL)
-    if arr.size:
-        dset.write(h5s.ALL, h5s.ALL, arr)
+def _oserror(path: Path, exc: BaseException, doing: str) -> StoreError:
+    """One clear line for an OS-level failure (disk full, permissions...)."""
+    errno_ = getattr(exc, "errno", None)
+    text = str(exc)
+    if errno_ == 28 or "No space left" in text or "errno = 28" in text:
+        return StoreError(f"{path}: no space left on the device while {doing}; nothing"
+                          " acknowledged was lost: free space and run the same command again")
+    return StoreError(f"{path}: {doing} failed: {getattr(exc, 'strerror', None) or text}")
+
+
+#: Free space [bytes] kept in reserve beyond what a write needs (HDF5 metadata, the
+#: journal's next lines): below it a write is refused with one clear line instead of
+#: failing half-way inside HDF5 (which can crash the process).
+_SPACE_RESERVE = 1 << 20
+
+
+def _check_space(path: Path, needed: int, doing: str) -> None:
+    """Refuse to start a write that the free space cannot hold (exit 3, one line)."""
+    try:
+        st = os.statvfs(path.parent)
+    except OSError:
+        return
+    free = st.f_bavail * st.f_frsize
+    if free < needed + _SPACE_RESERVE:
+        raise StoreError(f"{path}: no space left on the device for {doing} ({free >> 10}"
+                         f" KiB free, about {(needed + _SPACE_RESERVE) >> 10} KiB needed);"
+                         " nothing acknowledged was lost: free space and run the same"
+                         " command again")
+
+
+def _json(text: str) -> dict[str, Any]:
+    import json
+
+    return json.loads(text)
 
 
 class Store:
@@ -216,10 +172,14 @@ class Store:
     Parameters
     ----------
     path : the HDF5 file (created if missing).
-    campaign : the :class:`sweep.config.Campaign` being run; the store must belong to it
-        (same definition hash) unless ``extend`` is true.
+    campaign : the :class:`sweep.config.Campaign` being run; the store and its journal
+        must belong to it (same definition hash) unless ``extend`` is true.
     extend : accept a store of the same base whose swept values are a subset of the
         campaign's (new grid values are added; old points stay).
+    lock, journal : injectable parts (tests); default :class:`sweep.lock.Lock` of
+        ``<path>.lock`` and :class:`sweep.journal.Journal` of ``<path>.journal``.
+    report : called with one line per notable event of the open (set-aside lines,
+        rebuilds, damaged files kept aside); default: printed to stderr.
 
     Raises
     ------
@@ -227,159 +187,203 @@ class Store:
     """
 
     def __init__(self, path: str | Path, campaign: Any = None, *, extend: bool = False,
-                 run_info: dict[str, Any] | None = None) -> None:
+                 run_info: dict[str, Any] | None = None, lock: Any = None,
+                 journal: Journal | None = None,
+                 report: Callable[[str], None] | None = None) -> None:
         self.path = Path(path)
-        self.journal_path = journal_path(self.path)
-        self.journal_trimmed = 0  # bytes of a torn last journal line cut off on open
-        self._lock = _Lock(lock_path(self.path))
-        if not self.path.parent.is_dir():
-            raise StoreError(f"{self.path}: directory {self.path.parent} does not exist")
-        self._lock.acquire()
-        try:
-            self._trim_journal()
-            self._open(campaign, extend)
-            try:
-                self._repair()
-            except OSError as exc:
-                if isinstance(exc, StoreError) or not self.journal_path.exists() or \
-                        campaign is None:
-                    raise
-                self._close_file()  # reads fail: rebuild from the journal
-                os.replace(self.path, self.path.with_name(self.path.name + ".unclean"))
-                self.repaired_from_journal = True
-                self._create(campaign)
-                self._repair()
-            self.run_index = self._start_run(run_info or {})
-        except BaseException:
-            self._close_file()
-            self._lock.release()
-            raise
-        self._journal = open(self.journal_path, "ab")
+        self.journal = journal or Journal(journal_path(self.path), rejected_path(self.path))
+        self.journal_path = self.journal.path
+        self._lock = lock or Lock(lock_path(self.path))
+        self.report = report or _stderr
+        self.notes: list[str] = []
+        self.w: H5Writer | None = None
+        self.repaired_from_journal = False
+        self.replayed = self.orphans_removed = 0
+        self.set_aside: list[str] = []
+        self.damaged_kept = ""
+        self._broken = False
         self._staged: list[Record] = []
         self._lines: list[bytes] = []
+        self.scan = JournalScan()
+        parent = self.path.parent
+        if not parent.is_dir():
+            raise StoreError(f"{self.path}: directory {parent} does not exist")
+        if not os.access(parent, os.W_OK | os.X_OK):
+            raise StoreError(f"{self.path}: directory {parent} is not writable")
+        self._lock.acquire()
+        try:
+            with signals_deferred():
+                self._open(campaign, extend)
+                self.run_index = self._start_run(run_info or {})
+        except BaseException:
+            self._abandon()
+            raise
+
+    # ------------------------------------------------------------------ notes
+    def _note(self, message: str) -> None:
+        self.notes.append(message)
+        self.report(message)
 
     # ------------------------------------------------------------------ opening
-    def _trim_journal(self) -> None:
-        """Cut a torn last line (a writer killed inside its journal write) from the journal.
-
-        That point was never acknowledged; left in place, the next record appended would
-        be glued to it, unreadable, and lost if the store were ever rebuilt from the journal.
-        """
-        path = self.journal_path
-        if not path.exists():
-            return
-        with open(path, "rb+") as fh:
-            size = fh.seek(0, os.SEEK_END)
-            if size == 0:
-                return
-            fh.seek(size - 1)
-            if fh.read(1) == b"\n":
-                return
-            end = size  # find the last newline, reading backwards in blocks
-            while end > 0:
-                start = max(0, end - 65536)
-                fh.seek(start)
-                block = fh.read(end - start)
-                i = block.rfind(b"\n")
-                if i >= 0:
-                    end = start + i + 1
-                    break
-                end = start
-            fh.truncate(end)
-            fh.flush()
-            os.fsync(fh.fileno())
-        self.journal_trimmed = size - end
-
     def _open(self, campaign: Any, extend: bool) -> None:
-        self.repaired_from_journal = False
-        self.file: h5py.File | None = None
-        if self.path.exists():
+        import floewave
+
+        journal = self.journal
+        journal.trim_torn_tail()
+        self.journal_trimmed = journal.trimmed
+        if journal.exists():
+            journal.open_for_append()  # the second guard against two writers
+        self._remove_stale_temps()
+        self.model_version = (_json(campaign_json)["model_version"]
+                              if (campaign_json := self._campaign_json(campaign))
+                              else floewave.MODEL_VERSION)
+        scan = journal.scan(self.model_version, STATUSES)
+        state, info = self._inspect(scan)
+        if campaign is None and state != "ok":
+            raise StoreError(f"{self.path}: no usable store here")
+        # the campaign check, before anything is changed: the file and the journal
+        if campaign is not None:
+            if info.get("campaign_json"):
+                self._check_campaign(_json(info["campaign_json"]), campaign, extend, "store")
+            if scan.identity is not None:
+                self._check_campaign(_json(scan.identity["campaign_json"]), campaign, extend,
+                                     "journal")
+            elif scan.records and state != "ok":
+                self._check_legacy_journal(scan, campaign)
+        self.scan = scan
+        if scan.bad:
+            self._set_aside(scan.bad)
+            scan = self.scan
+        if state == "damaged" and not scan.records:
+            raise StoreError(f"{self.path}: damaged ({info['why']}) and its journal holds no"
+                             " record to rebuild it from; the file was left as it is")
+        if state != "ok":
+            self._rebuild(campaign, self.scan, state, info)
+        try:
+            self._open_in_place(campaign, extend)
+        except StoreError:
+            raise
+        except _H5_ERRORS as exc:
+            if not self.scan.records or campaign is None:
+                raise StoreError(f"{self.path}: cannot be read ({exc}) and there is no"
+                                 " journal to rebuild it from") from None
+            self._close_writer()
+            self._rebuild(campaign, self.scan, "damaged",
+                          {"why": f"{type(exc).__name__}: {exc}"})
+            self._open_in_place(campaign, extend)
+        scan = self.scan
+        if campaign is not None and (not journal.exists() or scan.identity is None or
+                                     scan.identity["campaign_hash"]
+                                     != campaign.definition_hash()):
+            journal.open_for_append()
             try:
-                self.file = h5py.File(self.path, "r+")
-            except OSError:
-                if not self.journal_path.exists():
-                    raise StoreError(f"{self.path}: not a readable HDF5 store and no journal"
-                                     f" {self.journal_path.name} to rebuild it from") from None
-                aside = self.path.with_name(f"{self.path.name}.corrupt-{os.getpid()}")
-                os.replace(self.path, aside)
-                self.file = None
-                self.repaired_from_journal = True
-            else:
-                self._check_version()
-                if bool(self.file.attrs.get("writer_open", False)) and \
-                        self.journal_path.exists():
-                    # the last writer died without closing: HDF5 may hold half-written
-                    # metadata that opens but reads wrong, so rebuild from the journal
-                    self._close_file()
-                    os.replace(self.path, self.path.with_name(self.path.name + ".unclean"))
-                    self.repaired_from_journal = True
-        if self.file is None:
-            if campaign is None:
-                raise StoreError(f"{self.path}: no store here")
-            self._create(campaign)
-        elif campaign is not None:
-            self._check_campaign(campaign, extend)
-            self._migrate()
-
-    def _check_version(self) -> None:
-        assert self.file is not None
-        fmt = _text(self.file.attrs.get("format", ""))
-        if fmt != FORMAT:
-            raise StoreError(f"{self.path}: not a sweep store (format {fmt!r})")
-        version = int(self.file.attrs.get("schema_version", 0))
-        if version > SCHEMA_VERSION:
-            raise SchemaVersionError(
-                f"{self.path}: store schema version {version} is newer than this sweep's"
-                f" schema version {SCHEMA_VERSION}; upgrade sweep to use it")
-        while version < SCHEMA_VERSION:
-            if version not in MIGRATIONS:
-                raise SchemaVersionError(f"{self.path}: no migration from schema version"
-                                         f" {version} to {SCHEMA_VERSION}")
-            version = MIGRATIONS[version][0]
-
-    def _migrate(self) -> None:
-        """Migrate an older store step by step (only once the campaign check passed: a
-        refused store is left as it was)."""
-        assert self.file is not None
-        version = int(self.file.attrs.get("schema_version", 0))
-        while version < SCHEMA_VERSION:
-            version, _, migrate = MIGRATIONS[version]
-            migrate(self.file)
-            self.file.attrs["schema_version"] = version
-            self.file.flush()
-
-    def _create(self, campaign: Any) -> None:
-        f = h5py.File(self.path, "w")
-        f.attrs["schema_version"] = SCHEMA_VERSION
-        f.attrs["format"] = FORMAT
-        f.attrs["created"] = utc_now()
-        self._set_campaign(f, campaign)
-        table = f.create_group("table")
-        table.attrs["n_rows"] = 0
-        for col in COLUMNS:
-            table.create_dataset(col.name, shape=(0,), maxshape=(None,), chunks=(_TABLE_CHUNK,),
-                                 dtype=_DTYPES[col.kind])
-        f.create_group("profiles")
-        f.create_group("runs")
-        f.flush()
-        self.file = f
-        _fsync_dir(self.path)
+                journal.write_header(campaign.definition_hash(), self._campaign_json(campaign))
+            except OSError as exc:
+                raise _oserror(journal.path, exc, "writing the journal") from None
 
     @staticmethod
-    def _set_campaign(f: h5py.File, campaign: Any) -> None:
+    def _campaign_json(campaign: Any) -> str:
+        if campaign is None:
+            return ""
         from .identity import canonical_json
 
-        f.attrs["campaign_toml"] = campaign.text
-        f.attrs["campaign_json"] = canonical_json(campaign.definition())
-        f.attrs["campaign_hash"] = campaign.definition_hash()
-        f.attrs["swept_fields"] = json.dumps(list(campaign.swept_fields))
+        return canonical_json(campaign.definition())
 
-    def _check_campaign(self, campaign: Any, extend: bool) -> None:
-        assert self.file is not None
-        stored_hash = _text(self.file.attrs.get("campaign_hash", ""))
-        if stored_hash == campaign.definition_hash():
+    def _remove_stale_temps(self) -> None:
+        """Temporary files of a rebuild or journal rewrite killed half-way (we hold the
+        lock, so nobody else is writing them)."""
+        for pattern in (f".{self.path.name}.rebuild-*.tmp",
+                        f".{self.journal.path.name}.rewrite-*.tmp"):
+            for tmp in self.path.parent.glob(pattern):
+                with contextlib.suppress(OSError):
+                    tmp.unlink()
+
+    def _inspect(self, scan: JournalScan) -> tuple[str, dict[str, Any]]:
+        """The file's state: ``absent``, ``ok``, ``unclean`` or ``damaged``.
+
+        Raises :class:`StoreError` for a path that is not (provably) a sweep store.
+        """
+        import h5py
+
+        p = self.path
+        try:
+            st = os.stat(p)
+        except FileNotFoundError:
+            if os.path.islink(p):
+                raise StoreError(f"{p}: a symbolic link to nothing; remove it or use"
+                                 " another --store") from None
+            return "absent", {}
+        except OSError as exc:
+            raise StoreError(f"{p}: cannot use this path: {exc.strerror or exc}") from None
+        if stat.S_ISDIR(st.st_mode):
+            raise StoreError(f"{p}: is a directory, not a store file")
+        if not stat.S_ISREG(st.st_mode):
+            raise StoreError(f"{p}: not a regular file")
+        if not os.access(p, os.R_OK | os.W_OK):
+            raise StoreError(f"{p}: cannot open the store: permission denied")
+        ours = bool(scan.records or scan.identity)
+        if st.st_size == 0:
+            if not ours:
+                raise StoreError(f"{p}: an empty file and no journal beside it: not a sweep"
+                                 " store; remove it or use another --store")
+            return "damaged", {"why": "empty file"}
+        with open(p, "rb") as fh:
+            head = fh.read(8)
+        if head != HDF5_SIGNATURE:
+            raise StoreError(f"{p}: not an HDF5 file; it was left untouched (use another"
+                             " --store)")
+        info: dict[str, Any] = {}
+        try:
+            with h5py.File(p, "r", locking=False) as f:
+                fmt = _text(f.attrs.get("format", ""))
+                if fmt != FORMAT:
+                    if fmt or not ours:
+                        raise StoreError(f"{p}: an HDF5 file but not a sweep store (format"
+                                         f" {fmt!r}); it was left untouched")
+                    return "damaged", {"why": "no format attribute (creation interrupted)"}
+                raw = f.attrs.get("schema_version", 0)
+                try:
+                    version = int(raw)
+                except (TypeError, ValueError):
+                    raise StoreError(f"{p}: schema_version {_text(raw)!r} is not a version"
+                                     " number; it was left untouched") from None
+                if version > SCHEMA_VERSION:
+                    raise SchemaVersionError(
+                        f"{p}: store schema version {version} is newer than this sweep's"
+                        f" schema version {SCHEMA_VERSION}; upgrade sweep to use it")
+                step = version
+                while step < SCHEMA_VERSION:  # a migration path, checked before changes
+                    if step not in MIGRATIONS:
+                        raise SchemaVersionError(f"{p}: no migration from schema version"
+                                                 f" {step} to {SCHEMA_VERSION}")
+                    step = MIGRATIONS[step][0]
+                info["campaign_json"] = _text(f.attrs.get("campaign_json", ""))
+                table = f["table"]
+                n = int(table.attrs["n_rows"])
+                len(table["hash"][:n])  # readable?
+                unclean = bool(f.attrs.get("writer_open", False))
+        except StoreError:
+            raise
+        except _H5_ERRORS as exc:
+            if _IN_USE.search(str(exc)):
+                raise StoreError(f"{p}: cannot open the store, it is in use ({exc}); close"
+                                 " the program holding it and run again") from None
+            if not ours:
+                raise StoreError(f"{p}: cannot be read ({type(exc).__name__}: {exc}) and"
+                                 " there is no journal to rebuild it from; it was left as"
+                                 " it is") from None
+            return "damaged", {"why": f"{type(exc).__name__}: {exc}"}
+        if unclean and ours:
+            return "unclean", info
+        return "ok", info
+
+    def _check_campaign(self, old: dict[str, Any], campaign: Any, extend: bool,
+                        where: str) -> None:
+        """Refuse a campaign that is not the one of the store's file or journal."""
+        from .identity import canonical_json, sha256_hex
+
+        if sha256_hex(canonical_json(old)) == campaign.definition_hash():
             return
-        old = json.loads(_text(self.file.attrs["campaign_json"]))
         new = campaign.definition()
         if not extend:
             diff = sorted(k for k in set(old["base"]) | set(new["base"])
@@ -389,8 +393,8 @@ class Store:
             what = ", ".join([f"[base] {k}" for k in diff] + [f"[sweep] {k}" for k in
                                                               sweep_diff]) or "model_version"
             raise CampaignMismatchError(
-                f"{self.path}: the store belongs to a different campaign (differs in {what});"
-                " use another --store, or --extend to add grid values to this one")
+                f"{self.path}: the {where} belongs to a different campaign (differs in"
+                f" {what}); use another --store, or --extend to add grid values to this one")
         problems = []
         if old["base"] != new["base"] or old["model_version"] != new["model_version"]:
             problems.append("its [base] (or model version) differs")
@@ -402,61 +406,183 @@ class Store:
                 if missing:
                     problems.append(f"[sweep] {k} drops {missing}")
         if problems:
-            raise CampaignMismatchError(f"{self.path}: cannot --extend this store: "
+            raise CampaignMismatchError(f"{self.path}: cannot --extend this {where}: "
                                         + "; ".join(problems))
-        hist = self.file.require_group("campaign_history")
-        hist.create_dataset(str(len(hist)), data=_text(self.file.attrs["campaign_toml"]),
-                            dtype=_STR)
-        self._set_campaign(self.file, campaign)
-        self.file.flush()
 
-    def _repair(self) -> None:
-        """Drop uncommitted rows/groups, then write journal records the file lacks."""
-        f = self.file
-        assert f is not None
-        self._parents: dict[str, Any] = {}  # /profiles/<hh> group ids, by hh
-        table = f["table"]
+    def _check_legacy_journal(self, scan: JournalScan, campaign: Any) -> None:
+        """A journal without a campaign line (written before version 2) is used to
+        rebuild only if every point it holds belongs to the campaign's grid."""
+        grid = {p.hash for p in campaign.points()}
+        foreign = [h for h in scan.latest if h not in grid]
+        if foreign:
+            raise CampaignMismatchError(
+                f"{self.journal.path}: holds {len(foreign)} point(s) that are not in this"
+                f" campaign's grid (e.g. {foreign[0][:12]}): it belongs to another campaign;"
+                " use another --store, or move the journal away")
+
+    def _set_aside(self, bad: list[tuple[int, int, str]]) -> None:
+        try:
+            self.journal.set_aside(bad)
+        except OSError as exc:
+            raise _oserror(self.journal.path, exc, "setting journal lines aside") from None
+        self.scan = self.journal.scan(self.model_version, STATUSES)  # offsets moved
+        reasons: dict[str, int] = {}
+        for _, _, reason in bad:
+            reasons[reason] = reasons.get(reason, 0) + 1
+        detail = "; ".join(f"{n} x {r}" for r, n in reasons.items())
+        self.set_aside.extend(r for _, _, r in bad)
+        self._note(f"{self.journal.path}: {len(bad)} journal line(s) set aside to"
+                   f" {self.journal.rejected} ({detail}); their points are computed again")
+
+    def _rebuild(self, campaign: Any, scan: JournalScan, state: str,
+                 info: dict[str, Any]) -> None:
+        """Build the store from the journal into a temporary file, then replace."""
+        tmp = self.path.with_name(f".{self.path.name}.rebuild-{os.getpid()}.tmp")
+        size = self.path.stat().st_size if self.path.exists() else 0
+        _check_space(self.path, max(size, self.journal.size() // 2), "rebuilding the store")
+        w: H5Writer | None = None
+        try:
+            w = H5Writer.create(tmp, campaign)
+            w.prepare()
+            quarantined = self._write_records(w, {off for _, off, _ in scan.latest.values()})
+            w.trim()
+            w.file.attrs["rebuilt_from_journal"] = utc_now()
+            w.durable()
+            w.close()
+            w = None
+            fsync_path(tmp)
+            if state == "damaged":
+                stamp = _dt.datetime.now(_dt.UTC).strftime("%Y%m%dT%H%M%S")
+                aside = self.path.with_name(f"{self.path.name}.damaged-{stamp}-{os.getpid()}")
+                try:
+                    os.link(self.path, aside)  # the damaged file stays where it is too
+                except OSError:
+                    os.replace(self.path, aside)
+                self.damaged_kept = str(aside)
+            os.replace(tmp, self.path)
+            fsync_dir(self.path)
+        except BaseException as exc:
+            if w is not None:
+                w.close()
+            with contextlib.suppress(OSError):
+                tmp.unlink()
+            if isinstance(exc, OSError) and not isinstance(exc, StoreError):
+                raise _oserror(self.path, exc, "rebuilding the store from its journal"
+                               ) from None
+            raise
+        self.repaired_from_journal = True
+        n = len(scan.latest) - quarantined
+        if state == "damaged":
+            self._note(f"{self.path}: damaged ({info.get('why', '?')}); kept as"
+                       f" {self.damaged_kept}; rebuilt from the journal ({n} points)")
+        elif state == "unclean":
+            self._note(f"{self.path}: its last writer did not close it (killed?); rebuilt"
+                       f" from the journal ({n} points)")
+        elif n:
+            self._note(f"{self.path}: missing; rebuilt from the journal ({n} points)")
+
+    def _write_records(self, w: H5Writer, offsets: set[int]) -> int:
+        """Write the journal records at ``offsets``; set aside those that cannot be
+        written (once, with the reason). Returns how many were set aside."""
+        bad: list[tuple[int, int, str]] = []
+        batch: list[Record] = []
+        if not offsets:
+            return 0
+        for offset, line in self.journal.lines():
+            if offset not in offsets:
+                continue
+            try:
+                obj, _ = decode(line, require_checksum=False)
+                batch.append(normalise_record(obj))
+            except (BadLine, Unstorable) as exc:
+                bad.append((offset, len(line), f"cannot be written to HDF5: {exc}"))
+                continue
+            if len(batch) >= _REPLAY_BATCH:
+                w.write_many(batch)
+                batch = []
+        w.write_many(batch)
+        if bad:
+            self._set_aside(bad)
+        return len(bad)
+
+    def _open_in_place(self, campaign: Any, extend: bool) -> None:
+        if not self.path.exists():
+            tmp = self.path.with_name(f".{self.path.name}.rebuild-{os.getpid()}.tmp")
+            H5Writer.create(tmp, campaign).close()
+            fsync_path(tmp)
+            os.replace(tmp, self.path)
+            fsync_dir(self.path)
+        _check_space(self.path, 0, "opening the store")
+        self.w = w = H5Writer.open(self.path)
+        f = w.file
+        f.attrs["writer_open"] = True  # before anything in the file changes
+        w.durable()
+        self._migrate(f)
+        if campaign is not None and _text(f.attrs.get("campaign_hash", "")) != \
+                campaign.definition_hash():  # --extend (checked above)
+            hist = f.require_group("campaign_history")
+            import h5py
+
+            hist.create_dataset(str(len(hist)), data=_text(f.attrs["campaign_toml"]),
+                                dtype=h5py.string_dtype("utf-8"))
+            set_campaign(f, campaign)
+        self.orphans_removed = w.prepare()
+        newer = {off for h, (seq, off, _) in self.scan.latest.items()
+                 if seq > w.seq_of.get(h, -1)}
+        quarantined = self._write_records(w, newer)
+        self.replayed = len(newer) - quarantined
+        self.next_seq = max(max(w.seq_of.values(), default=-1), self.scan.max_seq) + 1
+        w.durable()
+        self._backfill_journal(w)
+
+    def _backfill_journal(self, w: H5Writer) -> None:
+        """Journal the committed rows the journal lacks (it was deleted, or predates
+        them): the journal is what a rebuild uses, so it must hold every stored point."""
+        missing = [h for h in w.rows if h not in self.scan.latest]
+        if not missing:
+            return
+        from .schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, profile_path
+
+        table = w.file["table"]
         n = int(table.attrs["n_rows"])
-        for col in COLUMNS:
-            if table[col.name].shape[0] != n:
-                table[col.name].resize((n,))
-        # low-level ids of the table columns with their memory types (h5py's high-level
-        # indexing costs ~50 us per write; ~10 us this way)
-        self._columns = [(col, table[col.name].id, _NP_DTYPES[col.kind],
-                          h5t.py_create(np.dtype(_DTYPES[col.kind]) if col.kind != "str"
-                                        else _STR))
-                         for col in COLUMNS]
-        hashes = [_text(h) for h in table["hash"][:n]]
-        self.rows: dict[str, int] = {h: i for i, h in enumerate(hashes)}
-        seqs = table["seq"][:n]
-        seq_of = {h: int(s) for h, s in zip(hashes, seqs, strict=False)}
-        removed = []
-        for hh in list(f["profiles"]):
-            for h in list(f["profiles"][hh]):
-                if h not in self.rows:
-                    del f["profiles"][hh][h]
-                    removed.append(h)
-        self.next_seq = max(seq_of.values(), default=-1) + 1
-        # the last journal record of each hash, kept only while it is newer than the
-        # table's row (streamed: the already committed records are not held in memory)
-        latest: dict[str, dict[str, Any]] = {}
-        for rec in _journal_lines(self.journal_path):
-            h, seq = rec["row"]["hash"], int(rec["row"]["seq"])
-            self.next_seq = max(self.next_seq, seq + 1)
-            if seq > seq_of.get(h, -1):
-                latest[h] = rec
-            else:
-                latest.pop(h, None)
-        missing = [_with_arrays(rec) for rec in latest.values()]
-        self._write_many(missing)
-        self.replayed = len(missing)
-        self.orphans_removed = len(removed)
-        f.flush()
+        cols = {c.name: table[c.name][:n] for c in COLUMNS}
+        lines = []
+        for h in missing:
+            i = w.rows[h]
+            row = {name: (_text(v[i]) if isinstance(v[i], (bytes, str)) else v[i].item())
+                   for name, v in cols.items()}
+            name = profile_path(h)
+            profiles, history = {}, []
+            if name in w.file:
+                profiles = {k: w.file[name][k][()].tolist() for k in PROFILE_VARS
+                            if k in w.file[name]}
+                history = w.file[name][HISTORY_VAR[0]][()].tolist()
+            lines.append(encode({"row": row, "profiles": profiles,
+                                 "residual_history": history}))
+        self.journal.open_for_append()
+        _check_space(self.journal.path, 2 * sum(map(len, lines)), "journaling stored points")
+        try:
+            self.journal.append(lines)
+        except OSError as exc:
+            raise _oserror(self.journal.path, exc, "writing the journal") from None
+        self._note(f"{self.journal.path}: {len(missing)} stored point(s) were not in the"
+                   " journal (removed or older than it); journaled again from the store")
+        self.scan = self.journal.scan(self.model_version, STATUSES)
+
+    def _migrate(self, f: Any) -> None:
+        version = int(f.attrs.get("schema_version", 0))
+        while version < SCHEMA_VERSION:
+            if version not in MIGRATIONS:
+                raise SchemaVersionError(f"{self.path}: no migration from schema version"
+                                         f" {version} to {SCHEMA_VERSION}")
+            version, _, migrate = MIGRATIONS[version]
+            migrate(f)
+            f.attrs["schema_version"] = version
+            f.flush()
 
     def _start_run(self, info: dict[str, Any]) -> int:
-        assert self.file is not None
-        self.file.attrs["writer_open"] = True
-        runs = self.file.require_group("runs")
+        assert self.w is not None
+        runs = self.w.file.require_group("runs")
         index = len(runs)
         g = runs.create_group(str(index))
         g.attrs["started"] = utc_now()
@@ -465,23 +591,41 @@ class Store:
             g.attrs[k] = v if isinstance(v, (int, float, bool)) else str(v)
         if self._lock.stale_owner:
             g.attrs["took_over_stale_lock"] = self._lock.stale_owner
-        if self.repaired_from_journal or self.replayed or self.journal_trimmed:
+        if self.repaired_from_journal or self.replayed or self.journal_trimmed or \
+                self.set_aside:
             g.attrs["repaired"] = (f"rebuilt from journal: {self.repaired_from_journal};"
                                    f" records replayed: {self.replayed}; torn journal"
-                                   f" tail cut: {self.journal_trimmed} bytes")
-        self._durable()
+                                   f" tail cut: {self.journal_trimmed} bytes; journal lines"
+                                   f" set aside: {len(self.set_aside)}")
+        self.w.durable()
         return index
 
     # ------------------------------------------------------------------ queries
+    @property
+    def rows(self) -> dict[str, int]:
+        """Row index per stored hash."""
+        return self.w.rows if self.w is not None else {}
+
+    @property
+    def file(self) -> Any:
+        """The open ``h5py.File`` (``None`` once closed)."""
+        return self.w.file if self.w is not None else None
+
     def __contains__(self, h: str) -> bool:
         return h in self.rows
 
     def status_of(self, h: str) -> str:
         """The stored status of point ``h``."""
-        return _text(self.file["table"]["status"][self.rows[h]])
+        assert self.w is not None
+        return self.w.status_of(h)
 
     def __len__(self) -> int:
         return len(self.rows)
+
+    def handouts(self, h: str) -> list[tuple[int, int, bool]]:
+        """Hand-outs of point ``h`` since its last record (each an attempt that ended
+        without a result: its worker or the whole job died)."""
+        return self.scan.handouts.get(h, [])
 
     # ------------------------------------------------------------------ writing
     def put(self, record: Record) -> None:
@@ -492,23 +636,44 @@ class Store:
     def add(self, record: Record) -> None:
         """Stage one point for the next :meth:`commit` (nothing is written yet).
 
-        A staged point is not stored: it is not in the store (``in``, ``len``) and a
-        crash or :meth:`close` before :meth:`commit` loses it (it was never
-        acknowledged).
+        The record is converted to the schema's kinds first (:class:`Unstorable` if a
+        value cannot be; nothing is staged then). A staged point is not stored: a crash
+        or :meth:`close` before :meth:`commit` loses it (it was never acknowledged).
         """
-        row = dict(record["row"])
+        rec = normalise_record(record)
+        row = rec["row"]
+        if "hash" not in row:
+            raise Unstorable("no 'hash'")
         row["seq"] = self.next_seq
         row["run"] = self.run_index
-        record = {"row": row, "profiles": record.get("profiles") or {},
-                  "residual_history": record.get("residual_history", np.zeros(0))}
-        line = json.dumps({"row": {k: _jsonable(v) for k, v in row.items()},
-                           "profiles": {k: _jsonable(v) for k, v in
-                                        record["profiles"].items()},
-                           "residual_history": _jsonable(record["residual_history"])},
-                          separators=(",", ":"))
+        line = encode({"row": row,
+                       "profiles": {k: v.tolist() for k, v in rec["profiles"].items()},
+                       "residual_history": rec["residual_history"].tolist()})
         self.next_seq += 1
-        self._lines.append(line.encode() + b"\n")
-        self._staged.append(record)
+        self._lines.append(line)
+        self._staged.append(rec)
+
+    def handout(self, hashes: list[tuple[str, int]], alone: bool = False) -> None:
+        """Journal that points were handed to workers ``[(hash, worker), ...]`` (written,
+        not fsynced: a process kill keeps them, only a machine crash may not); ``alone``:
+        the only point in flight (a death then counts as its attempt)."""
+        if not hashes or self._broken:
+            return
+        lines = [encode({"handout": h, "run": self.run_index, "worker": worker,
+                         "alone": alone}) for h, worker in hashes]
+        with signals_deferred():
+            try:
+                self.journal.append(lines, sync=False)
+            except OSError as exc:
+                self._broken = True
+                raise _oserror(self.journal.path, exc, "writing the journal") from None
+
+    def release(self, hashes: list[str]) -> None:
+        """Journal that handed-out points were abandoned by a clean stop (no attempt)."""
+        if not hashes or self._broken:
+            return
+        with signals_deferred(), contextlib.suppress(OSError):
+            self.journal.append([encode({"release": h}) for h in hashes], sync=False)
 
     @property
     def staged(self) -> int:
@@ -525,123 +690,66 @@ class Store:
         """
         if not self._staged:
             return 0
+        if self._broken:
+            raise StoreError(f"{self.path}: an earlier write failed; nothing more is stored")
         staged, lines = self._staged, self._lines
         self._staged, self._lines = [], []
-        with _signals_deferred():
-            self._journal.write(b"".join(lines))
-            self._journal.flush()
-            os.fsync(self._journal.fileno())
-            self._write_many(staged)
-            self._durable()
+        assert self.w is not None
+        _check_space(self.path, 2 * sum(map(len, lines)), "storing points")
+        with signals_deferred():
+            try:
+                self.journal.append(lines)
+            except OSError as exc:
+                self._broken = True
+                raise _oserror(self.journal.path, exc, "writing the journal") from None
+            try:
+                self.w.write_many(staged)
+                self.w.durable()
+            except _H5_ERRORS as exc:
+                # journaled: the next open rebuilds the file from the journal
+                self._broken = True
+                raise _oserror(self.path, exc, "writing the store") from None
         return len(staged)
 
-    def _write_many(self, records: list[Record]) -> None:
-        """Write records to the HDF5 file (profiles, then rows, then ``n_rows``); no sync."""
-        if not records:
-            return
-        f = self.file
-        assert f is not None
-        table = f["table"]
-        n = int(table.attrs["n_rows"])
-        new_rows: list[dict[str, Any]] = []  # appended at n, n + 1, ...
-        old_rows: dict[int, dict[str, Any]] = {}  # committed rows written again
-        index_of: dict[str, int] = {}
-        for rec in records:
-            row = rec["row"]
-            h = row["hash"]
-            index = index_of.get(h, self.rows.get(h))
-            self._write_profiles(rec, replace=index is not None)
-            if index is None:
-                index = n + len(new_rows)
-                new_rows.append(row)
-            elif index >= n:
-                new_rows[index - n] = row
-            else:
-                old_rows[index] = row
-            index_of[h] = index
-        k = len(new_rows)
-        for col, dsid, dtype, mtype in self._columns:
-            if k:
-                if dsid.shape[0] < n + k:
-                    dsid.set_extent((-(-(n + k) // _TABLE_CHUNK) * _TABLE_CHUNK,))
-                _write_rows(dsid, mtype, n, np.array([_cell(col, row) for row in new_rows],
-                                                     dtype=dtype))
-            for index, row in old_rows.items():
-                _write_rows(dsid, mtype, index, np.array([_cell(col, row)], dtype=dtype))
-        if k:
-            table.attrs["n_rows"] = n + k  # the commit point of the rows
-        for rec in records:
-            h = rec["row"]["hash"]
-            self.rows[h] = index_of[h]
-
-    def _write_profiles(self, record: Record, replace: bool) -> None:
-        """Write ``/profiles/<hh>/<hash>`` (low-level h5py: ~2x faster per point)."""
-        f = self.file
-        assert f is not None
-        h = record["row"]["hash"]
-        if replace:
-            name = profile_path(h)
-            if name in f:
-                del f[name]
-        profiles = record.get("profiles") or {}
-        if not profiles:
-            return
-        parent = self._parents.get(h[:2])
-        if parent is None:
-            group = f["profiles"].get(h[:2])
-            if group is None:
-                group = f["profiles"].create_group(h[:2])
-            parent = self._parents[h[:2]] = group.id
-        try:
-            gid = h5g.create(parent, h.encode())
-        except ValueError:  # a leftover of a failed commit
-            parent.unlink(h.encode())
-            gid = h5g.create(parent, h.encode())
-        attr = h5a.create(gid, b"hash", _STR_TYPE, h5s.create(h5s.SCALAR))
-        attr.write(np.array(h, dtype=_STR))  # as h5py's attrs["hash"] = h writes it
-        for name in PROFILE_VARS:
-            _dataset(gid, name, profiles.get(name, ()))
-        _dataset(gid, HISTORY_VAR[0], record.get("residual_history", ()))
-
-    def _durable(self) -> None:
-        assert self.file is not None
-        self.file.flush()
-        with contextlib.suppress(Exception):
-            os.fsync(self.file.id.get_vfd_handle())
-
     # ------------------------------------------------------------------ closing
-    def _close_file(self) -> None:
-        f = getattr(self, "file", None)
-        if f is not None:
-            with contextlib.suppress(Exception):
-                f.close()
-            self.file = None
+    def _close_writer(self) -> None:
+        if self.w is not None:
+            self.w.close()
+            self.w = None
+
+    def _abandon(self) -> None:
+        """Close everything without marking the file clean (an error on open)."""
+        self._close_writer()
+        self.journal.close()
+        self._lock.release()
 
     def close(self, outcome: str = "complete") -> None:
         """Record the run's end and outcome, close the file, release the lock.
 
         Points staged but not committed are dropped (they were never acknowledged).
+        After a failed write the file is closed without being marked clean, so the
+        next open rebuilds it from the journal.
         """
         self._staged, self._lines = [], []
-        if self.file is not None:
-            table = self.file["table"]
-            n = int(table.attrs["n_rows"])
-            for col in COLUMNS:  # trim the chunk-sized growth
-                if table[col.name].shape[0] != n:
-                    table[col.name].resize((n,))
-            g = self.file["runs"][str(self.run_index)]
-            g.attrs["ended"] = utc_now()
-            g.attrs["outcome"] = outcome
-            self.file.attrs["writer_open"] = False
-            self._durable()
-            self._close_file()
-        if not self._journal.closed:
-            self._journal.close()
-        self._lock.release()
+        with signals_deferred():
+            if self.w is not None:
+                if not self._broken:
+                    try:
+                        self.w.trim()
+                        g = self.w.file["runs"][str(self.run_index)]
+                        g.attrs["ended"] = utc_now()
+                        g.attrs["outcome"] = outcome
+                        self.w.file.attrs["writer_open"] = False
+                        self.w.durable()
+                    except _H5_ERRORS:
+                        pass  # left unclean: rebuilt from the journal next time
+                self._close_writer()
+            self.journal.close()
+            self._lock.release()
 
     def __enter__(self) -> Store:
         return self
 
     def __exit__(self, exc_type: Any, exc: Any, tb: Any) -> None:
-        if self.file is not None:
+        if self.w is not None:
             self.close("complete" if exc_type is None else f"error: {exc_type.__name__}")

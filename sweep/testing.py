@@ -18,7 +18,8 @@ import numpy as np
 from floewave import ModelConfig
 
 __all__ = ["fake_point", "raising_point", "nan_point", "trivial_point", "sleepy_point",
-           "power_point", "POWER_M"]
+           "power_point", "faulty_point", "crashing_point", "stuck_point",
+           "sleepy_trivial_point", "POWER_M"]
 
 
 def fake_point(cfg: ModelConfig) -> dict[str, Any]:
@@ -141,3 +142,52 @@ def find_mpiexec() -> str | None:
     if beside.exists():
         return str(beside)
     return shutil.which("mpiexec")
+
+
+def faulty_point(cfg: ModelConfig) -> dict[str, Any]:
+    """:func:`fake_point`, but faulty by eps: 0.1 ``sys.exit(0)``, 0.2 raises
+    ``KeyboardInterrupt``, 0.3 returns ``W_c = "wide"``, 0.4 ``iterations = 1e20``, 0.5
+    raises with a lone surrogate in its message (``os.fsdecode`` of a non-UTF-8 name)."""
+    import os
+    import sys
+
+    if cfg.eps == 0.1:
+        sys.exit(0)
+    if cfg.eps == 0.2:
+        raise KeyboardInterrupt
+    out = fake_point(cfg)
+    if cfg.eps == 0.3:
+        out["W_c"] = "wide"
+    elif cfg.eps == 0.4:
+        out["iterations"] = 1e20
+    elif cfg.eps == 0.5:
+        name = os.fsdecode(b"data-\xff.bin")
+        raise FileNotFoundError(f"no such file: {name}")
+    return out
+
+
+def crashing_point(cfg: ModelConfig) -> dict[str, Any]:
+    """:func:`fake_point`, but the process dies (``os._exit(3)``) for eps = 0.4, as a
+    segfault would."""
+    import os
+
+    if cfg.eps == 0.4:
+        os._exit(3)
+    return fake_point(cfg)
+
+
+def stuck_point(cfg: ModelConfig) -> dict[str, Any]:
+    """:func:`fake_point`, but eps = 0.4 never returns (a Python loop) and eps = 0.6
+    sleeps for an hour (a blocking call)."""
+    if cfg.eps == 0.4:
+        while True:
+            sum(range(1000))
+    if cfg.eps == 0.6:
+        time.sleep(3600)
+    return fake_point(cfg)
+
+
+def sleepy_trivial_point(cfg: ModelConfig) -> dict[str, Any]:
+    """:func:`trivial_point` after 2 ms (a steady stream of commits: reader tests)."""
+    time.sleep(0.002)
+    return trivial_point(cfg)

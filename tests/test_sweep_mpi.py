@@ -168,3 +168,65 @@ def test_grace_expiry_aborts_but_store_consistent(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert f"{n} already stored" in proc.stdout
     assert len(sweep.load(store)) == 32
+
+
+_RANK0_FAILS = """
+import errno, sys
+import sweep.cli, sweep.executor
+from mpi4py import MPI
+if MPI.COMM_WORLD.Get_rank() == 0 and sys.argv[1] == "open":
+    class Broken:
+        def __init__(self, *a, **k):
+            raise RuntimeError("Unable to get group info (addr overflow)")  # as h5py
+    sweep.executor.Store = Broken
+if MPI.COMM_WORLD.Get_rank() == 0 and sys.argv[1] == "full":
+    import sweep.journal
+    real = sweep.journal.Journal.append
+    calls = []
+    def append(self, lines, sync=True):  # the disk fills up at the third point commit
+        calls.append(sync and any(b'"row"' in line for line in lines))
+        if sum(calls) == 3:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real(self, lines, sync)
+    sweep.journal.Journal.append = append
+sys.exit(sweep.cli.main(sys.argv[2:]))
+"""
+
+
+@pytest.mark.parametrize("how", ["open", "full"])
+def test_any_master_failure_ends_the_job(tmp_path, how):
+    """Rank 0 failing with something else than a SweepError (opening the store), or a
+    full disk while workers are busy: the job ends within seconds, nothing hangs."""
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(FAKE_TOML)
+    store = tmp_path / "s.h5"
+    cmd = [MPIEXEC, "-n", "3", sys.executable, "-c", _RANK0_FAILS, how, "run", str(cfg),
+           "--store", str(store), "--compute", "sweep.testing:sleepy_point", "--no-bar"]
+    t0 = time.monotonic()
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=90, env=_env())
+    assert time.monotonic() - t0 < 60
+    assert proc.returncode != 0
+    if how == "open":
+        assert "addr overflow" in proc.stderr
+    else:
+        assert "no space left on the device" in proc.stderr
+        assert "Traceback" not in proc.stderr
+        assert sweep.validate(store) == []
+        done = len(sweep.load(store))
+        again = mpirun(3, "run", cfg, "--store", store, "--compute", "sweep.testing:fake_point")
+        assert again.returncode == 0, again.stderr
+        assert f"{done} already stored" in again.stdout and len(sweep.load(store)) == 32
+
+
+def test_mpi_point_timeout(tmp_path):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(FAKE_TOML.replace("[0.2, 0.4, 0.6, 0.8]", "[0.2, 0.4]").replace(
+        "d_f = [0.005, 0.01]", "d_f = [0.005]"))
+    store = tmp_path / "s.h5"
+    proc = mpirun(3, "run", cfg, "--store", store, "--compute", "sweep.testing:stuck_point",
+                  "--point-timeout", "1", timeout=90)
+    assert proc.returncode == 0, proc.stderr
+    df = sweep.load(store)
+    assert len(df) == 8
+    assert set(df[df["eps"] == 0.4]["status"]) == {"timeout"}
+    assert set(df[df["eps"] == 0.2]["status"]) == {"converged"}

@@ -152,8 +152,9 @@ def test_unreadable_store_rebuilt_from_journal(tmp_path, campaign):
     path = tmp_path / "s.h5"
     fill(campaign, path)
     ref = sweep.load(path).set_index("hash").sort_index()
-    with open(path, "r+b") as fh:  # destroy the superblock
-        fh.write(b"\0" * 4096)
+    with open(path, "r+b") as fh:  # destroy the superblock after the HDF5 signature
+        fh.seek(8)
+        fh.write(b"\0" * 4088)
     with open(tmp_path / "s.h5.journal", "ab") as fh:  # and a torn last journal line
         fh.write(b'{"row": {"hash": "abc"')
     s = run_campaign(campaign, str(path), compute="sweep.testing:raising_point")
@@ -161,16 +162,23 @@ def test_unreadable_store_rebuilt_from_journal(tmp_path, campaign):
     df = sweep.load(path).set_index("hash").sort_index()
     assert list(df.index) == list(ref.index)
     assert list(df["W_c"]) == list(ref["W_c"])
-    assert list(tmp_path.glob("s.h5.corrupt-*"))
+    kept = list(tmp_path.glob("s.h5.damaged-*"))
+    assert len(kept) == 1 and kept[0].read_bytes()[8:4096] == b"\0" * 4088
     assert sweep.validate(path) == []
 
 
 def test_unreadable_store_without_journal(tmp_path, campaign):
     path = tmp_path / "s.h5"
     path.write_bytes(b"not hdf5")
+    with pytest.raises(sweep.StoreError, match="not an HDF5 file; it was left untouched"):
+        fill(campaign, path)
+    assert path.read_bytes() == b"not hdf5"
+    assert main(["validate", str(path)]) == 3
+    path.write_bytes(b"\x89HDF\r\n\x1a\n" + b"\0" * 2000)  # HDF5, damaged, no journal
     with pytest.raises(sweep.StoreError, match="no journal"):
         fill(campaign, path)
-    assert main(["validate", str(path)]) == 3
+    assert path.read_bytes()[8:] == b"\0" * 2000
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.h5"]
 
 
 def test_store_in_missing_directory(tmp_path, campaign):
@@ -236,6 +244,7 @@ def test_kill_9_torture(tmp_path, campaign):
 _GROUP_SCRIPT = """
 import os, signal, sys
 import sweep
+from sweep.journal import Journal, journal_path
 from sweep.store import Store
 from sweep.testing import fake_point
 campaign = sweep.parse_campaign({toml!r})
@@ -250,19 +259,21 @@ def record(p, seq):
                      "n_floes": p.config.n_floes}},
              "profiles": prof, "residual_history": out["residual_history"]}}
 
-store = Store({path!r}, campaign)
-if kill_at == "mid_hdf5":  # die inside the second commit, after its journal fsync
-    calls = []
-    real = store._write_profiles
-    def write_profiles(rec, replace):
-        calls.append(1)
-        if len(calls) == {first} + 3:
+class DyingJournal(Journal):  # dies inside the second commit, before its journal write
+    armed = False
+    def append(self, lines, sync=True):
+        if DyingJournal.armed and any(b'"row"' in line for line in lines):
             os.kill(os.getpid(), signal.SIGKILL)
-        real(rec, replace)
-    store._write_profiles = write_profiles
-class DyingJournal:  # die inside the second commit, before its journal write
-    def write(self, data):
-        os.kill(os.getpid(), signal.SIGKILL)
+        super().append(lines, sync)
+store = Store({path!r}, campaign, journal=DyingJournal(journal_path({path!r})))
+if kill_at == "mid_hdf5":  # die inside the second commit, after its journal fsync
+    real = store.w.write_many
+    def write_many(records):
+        if len(records) > 1:  # the second batch: half of it reaches the file
+            real(records[:len(records) // 2])
+            os.kill(os.getpid(), signal.SIGKILL)
+        real(records)
+    store.w.write_many = write_many
 for p in points[:{first}]:
     store.add(record(p, 0))
 assert len(store) == 0 and store.staged == {first}
@@ -271,8 +282,7 @@ print("acknowledged", " ".join(p.hash for p in points[:{first}]), flush=True)
 for p in points[{first}:]:
     store.add(record(p, 0))
 if kill_at == "before_journal":
-    real_journal = store._journal  # kept referenced: no flush on garbage collection
-    store._journal = DyingJournal()
+    DyingJournal.armed = True
 store.commit()
 print("acknowledged", " ".join(p.hash for p in points[{first}:]), flush=True)
 os.kill(os.getpid(), signal.SIGKILL)  # never closed cleanly

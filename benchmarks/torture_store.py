@@ -1,0 +1,517 @@
+"""Torture of the store (issue 15): kills at random instants of run, resume-rebuild,
+retry, extend and merge; journal corruptions; compute faults; stops during start-up;
+reads during writes; hostile inputs. Prints one table.
+
+    python benchmarks/torture_store.py                    # ~200 kills, a few minutes
+    python benchmarks/torture_store.py --kills 40 --seed 3 --workdir /tmp/t
+
+Every phase ends by running the same command to completion and comparing the store,
+point by point, with an uninterrupted reference (hashes, every result column, every
+profile array; duplicates in table and journal; ``sweep validate``), using
+:func:`compare` of tests/test_sweep_torture.py. A store is *ruined* when the command
+that should finish it does not exit 0. Compute functions are the deterministic fakes of
+:mod:`sweep.testing` (the store is what is tortured, not the model).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import random
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from collections import Counter
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "tests"))
+
+import h5py  # noqa: E402
+from test_sweep_torture import MPIEXEC, compare  # noqa: E402
+
+import sweep  # noqa: E402
+from sweep.journal import decode, encode, journal_path  # noqa: E402
+
+PY = sys.executable
+EPS = ", ".join(repr(round(0.05 + 0.05 * i, 2)) for i in range(18))
+SMALL = f"[base]\nL_sheet = 6.0\n[sweep]\nL_x = [0.5, 1.5]\neps = [{EPS}]\n"
+BIG = SMALL.replace("[0.5, 1.5]", "[0.5, 1.0, 1.5]")
+SLEEPY = "sweep.testing:sleepy_point"  # 0.2 s a point: runs long enough to be hit
+FAKE = "sweep.testing:fake_point"
+
+
+def env() -> dict[str, str]:
+    e = dict(os.environ)
+    e.pop("SLURM_NTASKS", None)
+    return e
+
+
+class Tally:
+    def __init__(self) -> None:
+        self.rows: dict[str, Counter] = {}
+
+    def add(self, phase: str, **kw: int) -> None:
+        c = self.rows.setdefault(phase, Counter())
+        for k, v in kw.items():
+            c[k] += int(v)
+
+    def table(self) -> str:
+        cols = ["cases", "kills", "ruined", "lost", "duplicated", "wrong", "traceback"]
+        lines = ["| phase | " + " | ".join(cols) + " |",
+                 "|---|" + "---|" * len(cols)]
+        total = Counter()
+        for phase, c in self.rows.items():
+            total.update(c)
+            lines.append(f"| {phase} | " + " | ".join(str(c.get(k, 0)) for k in cols) + " |")
+        lines.append("| **total** | " + " | ".join(str(total.get(k, 0)) for k in cols) + " |")
+        return "\n".join(lines)
+
+
+def run_cmd(args: list[str], mpi: int = 0, **kw) -> subprocess.Popen:
+    cmd = [PY, "-m", "sweep", *args]
+    if mpi:
+        cmd = [MPIEXEC, "-n", str(mpi), *cmd]
+    return subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=env(), start_new_session=True, **kw)
+
+
+def finish(args: list[str], mpi: int = 0, timeout: float = 600) -> tuple[int, str]:
+    p = run_cmd(args, mpi)
+    try:
+        out, err = p.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(p.pid, signal.SIGKILL)
+        out, err = p.communicate()
+        return -999, "hung\n" + err
+    return p.returncode, out + err
+
+
+def judge(tally: Tally, phase: str, ref: Path, store: Path, rc: int, log: str,
+          problems: list[str], history: bool = False) -> None:
+    """Compare a finished store with the reference; ``history``: the journal may hold
+    several records of a point (--retry-failed, set-aside lines)."""
+    if rc != 0:
+        tally.add(phase, ruined=1)
+        problems.append(f"{phase}: finishing run exited {rc}: {log[-600:]}")
+        return
+    tally.add(phase, traceback=("Traceback" in log))
+    res = compare(ref, store)
+    a = set(sweep.load(ref)["hash"])
+    b = set(sweep.load(store)["hash"])
+    wrong = {p.split()[0] for p in res["problems"] if not p.startswith(("hashes", "journal",
+                                                                         "duplicates",
+                                                                         "validate"))}
+    if history:
+        res["problems"] = [p for p in res["problems"] if not p.startswith(
+            ("duplicates: 0 in the table", "journal and table hold"))]
+    tally.add(phase, lost=len(a - b), duplicated=res["dup_table"] + (
+        0 if history else res["dup_journal"]), wrong=len(wrong) + len(b - a))
+    problems += [f"{phase}: {p}" for p in res["problems"][:5]]
+
+
+def _left(store: Path, total: int) -> float:
+    """Share of the ``total`` points not yet in the store's journal."""
+    try:
+        return 1 - sweep.analysis.journal_points(store) / total
+    except (TypeError, OSError):
+        return 1.0
+
+
+def kill_loop(tally: Tally, phase: str, args: list[str], ref: Path, store: Path, kills: int,
+              rng: random.Random, window: tuple[float, float], mpi: int = 0,
+              problems: list[str] | None = None, before=None, history: bool = False,
+              shrink: int = 0) -> None:
+    """Start ``args`` and SIGKILL its process group at a random instant of ``window``,
+    ``kills`` times (resuming each time), then finish and compare. With ``shrink`` (the
+    number of points), the window's end after the first second shrinks with the share
+    of points still missing, so later kills still hit a running campaign."""
+    done = 0
+    while done < kills:
+        if before is not None:
+            before()
+        lo, hi = window
+        if shrink:
+            hi = lo + 1.0 + (hi - lo - 1.0) * _left(store, shrink)
+        p = run_cmd(args, mpi)
+        delay = rng.uniform(lo, hi)
+        try:
+            rc = p.wait(timeout=delay)
+        except subprocess.TimeoutExpired:
+            os.killpg(p.pid, signal.SIGKILL)
+            p.wait()
+            done += 1
+            tally.add(phase, kills=1)
+            continue
+        out = p.stdout.read() + p.stderr.read()
+        tally.add(phase, traceback=("Traceback" in out))
+        if rc != 0:
+            tally.add(phase, ruined=1)
+            problems.append(f"{phase}: a resume exited {rc}: {out[-600:]}")
+            return
+        break  # finished before the kill
+    rc, log = finish(args, mpi)
+    tally.add(phase, cases=1)
+    judge(tally, phase, ref, store, rc, log, problems, history)
+
+
+def fresh_copy(src: Path, dst: Path) -> None:
+    for suffix in ("", ".journal"):
+        shutil.copyfile(str(src) + suffix, str(dst) + suffix)
+    for extra in (str(dst) + ".lock", str(dst) + ".journal.rejected"):
+        if os.path.exists(extra):
+            os.unlink(extra)
+
+
+def unclean(path: Path) -> None:
+    with h5py.File(path, "r+", locking=False) as f:
+        f.attrs["writer_open"] = True
+
+
+# ---------------------------------------------------------------- journal corruptions
+def corruptions() -> dict[str, object]:
+    """The 13 journal corruptions: name -> function(lines, records) editing lines."""
+    def w_c(lines, r):
+        obj = decode(lines[r[0]])[0]
+        v = repr(obj["row"]["W_c"]).encode()
+        lines[r[0]] = lines[r[0]].replace(b'"W_c":' + v, b'"W_c":' + v[:-1] + b"7", 1)
+
+    def status(lines, r):
+        lines[r[1]] = lines[r[1]].replace(b'"status":"converged"', b'"status":"failed"', 1)
+
+    def hash_char(lines, r):
+        obj = decode(lines[r[2]])[0]
+        h = obj["row"]["hash"]
+        lines[r[2]] = lines[r[2]].replace(h.encode(), (h[:-1] + ("0" if h[-1] != "0" else
+                                                                 "1")).encode())
+
+    def resigned_hash(lines, r):
+        obj = decode(lines[r[3]])[0]
+        h = obj["row"]["hash"]
+        obj["row"]["hash"] = h[:-1] + ("0" if h[-1] != "0" else "1")
+        lines[r[3]] = encode(obj)
+
+    def no_row(lines, r):
+        obj = decode(lines[r[4]])[0]
+        del obj["row"]
+        lines[r[4]] = encode(obj)
+
+    def no_crc(lines, r):
+        obj = decode(lines[r[5]])[0]
+        lines[r[5]] = json.dumps(obj, separators=(",", ":")).encode() + b"\n"
+
+    def cut_middle(lines, r):
+        lines[r[6]] = lines[r[6]][: len(lines[r[6]]) // 2] + b"\n"
+
+    def garbage(lines, r):
+        lines.insert(r[7], b"this is not json at all\n")
+
+    def profile_byte(lines, r):
+        line = lines[r[8]]
+        i = line.index(b'"a":[') + 6
+        lines[r[8]] = line[:i] + (b"9" if line[i:i + 1] != b"9" else b"8") + line[i + 1:]
+
+    def nul_line(lines, r):
+        lines.insert(r[9], b"\0" * 100 + b"\n")
+
+    def seq_string(lines, r):
+        obj = decode(lines[r[10]])[0]
+        obj["row"]["seq"] = "seven"
+        lines[r[10]] = encode(obj)
+
+    def resigned_config(lines, r):
+        obj = decode(lines[r[11]])[0]
+        cfg = json.loads(obj["row"]["config_json"])
+        cfg["eps"] = 0.123
+        obj["row"]["config_json"] = json.dumps(cfg, sort_keys=True, separators=(",", ":"))
+        lines[r[11]] = encode(obj)
+
+    def header(lines, r):
+        lines[0] = lines[0].replace(b"sweep-journal", b"sweep-journaX")
+
+    return {"W_c digit": w_c, "status flip": status, "hash character": hash_char,
+            "hash re-signed": resigned_hash, "row removed": no_row, "checksum removed": no_crc,
+            "line cut": cut_middle, "garbage line": garbage, "profile byte": profile_byte,
+            "NUL line": nul_line, "seq not a number": seq_string,
+            "config re-signed": resigned_config, "campaign line": header}
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--kills", type=int, default=200, help="total kills over the kill phases")
+    ap.add_argument("--seed", type=int, default=15)
+    ap.add_argument("--workdir", type=Path)
+    ap.add_argument("--no-mpi", action="store_true")
+    args = ap.parse_args()
+    work = args.workdir or Path(tempfile.mkdtemp(prefix="sweep-torture-store-"))
+    work.mkdir(parents=True, exist_ok=True)
+    rng = random.Random(args.seed)
+    tally, problems = Tally(), []
+    t0 = time.monotonic()
+    small, big = work / "small.toml", work / "big.toml"
+    small.write_text(SMALL)
+    big.write_text(BIG)
+    ref_small, ref_big = work / "ref_small.h5", work / "ref_big.h5"
+    for cfg, ref in ((small, ref_small), (big, ref_big)):
+        rc, log = finish(["run", str(cfg), "--store", str(ref), "--compute", FAKE, "--no-bar"])
+        assert rc == 0, log
+    # a store whose rebuild takes long enough to be hit: 1,800 points
+    rebuild, ref_rebuild = work / "rebuild.toml", work / "ref_rebuild.h5"
+    many = ", ".join(repr(round(0.001 + 0.00165 * i, 5)) for i in range(600))
+    rebuild.write_text(f"[base]\nL_sheet = 6.0\n[sweep]\nL_x = [0.5, 1.0, 1.5]\n"
+                       f"eps = [{many}]\n")
+    rc, log = finish(["run", str(rebuild), "--store", str(ref_rebuild), "--compute", FAKE,
+                      "--no-bar"])
+    assert rc == 0, log
+    t = time.monotonic()
+    finish(["run", str(rebuild), "--store", str(ref_rebuild), "--compute", FAKE, "--no-bar"])
+    t_start = time.monotonic() - t  # a resume with nothing to do
+    probe = work / "probe.h5"
+    fresh_copy(ref_rebuild, probe)
+    unclean(probe)
+    t = time.monotonic()
+    finish(["run", str(rebuild), "--store", str(probe), "--compute", FAKE, "--no-bar"])
+    t_rebuild = max(time.monotonic() - t - t_start, 0.2)
+    print(f"resume {t_start:.2f} s; rebuild of {len(sweep.load(ref_rebuild))} points"
+          f" {t_rebuild:.2f} s more", flush=True)
+    phases = ["run", "resume-rebuild", "retry", "extend", "merge"]
+    use_mpi = MPIEXEC is not None and not args.no_mpi
+    if use_mpi:
+        phases.append("run (mpiexec -n 3)")
+    per = max(1, args.kills // len(phases))
+    n_big = len(sweep.load(ref_big))
+
+    # run: kills at any instant of a campaign (start-up, loop, commits, close)
+    for phase in phases:
+        k = 0
+        while k < per:
+            i = tally.rows.get(phase, Counter())["cases"]
+            store = work / f"{phase.split()[0]}-{i}.h5"
+            before = tally.rows.get(phase, Counter())["kills"]
+            base = ["run", str(big), "--store", str(store), "--no-bar"]
+            if phase.startswith("run"):
+                mpi = 3 if "mpiexec" in phase else 0
+                kill_loop(tally, phase, [*base, "--compute", SLEEPY], ref_big, store,
+                          min(5, per - k), rng, (0.3, 2.5 + 0.2 * n_big / (2 if mpi else 1)),
+                          mpi=mpi, problems=problems, shrink=n_big)
+            elif phase == "resume-rebuild":  # a killed (unclean) store: every start rebuilds
+                fresh_copy(ref_rebuild, store)
+                kill_loop(tally, phase, ["run", str(rebuild), "--store", str(store),
+                                         "--no-bar", "--compute", FAKE], ref_rebuild, store,
+                          min(5, per - k), rng, (t_start, t_start + t_rebuild),
+                          problems=problems, before=lambda s=store: unclean(s))
+            elif phase == "retry":
+                finish([*base, "--compute", "sweep.testing:faulty_point"])  # 15 failed
+                kill_loop(tally, phase, [*base, "--compute", SLEEPY, "--retry-failed"],
+                          ref_big, store, min(5, per - k), rng, (0.3, 4.0), problems=problems,
+                          history=True)
+            elif phase == "extend":
+                finish(["run", str(small), "--store", str(store), "--compute", FAKE,
+                        "--no-bar"])
+                kill_loop(tally, phase, [*base, "--compute", SLEEPY, "--extend"], ref_big,
+                          store, min(5, per - k), rng, (0.3, 3.0), problems=problems)
+            elif phase == "merge":
+                shards = []
+                for s in range(3):
+                    sp = work / f"merge-{i}-shard{s}.h5"
+                    finish(["run", str(big), "--store", str(sp), "--shard", f"{s}/3",
+                            "--compute", FAKE, "--no-bar"])
+                    shards.append(str(sp))
+                kill_loop(tally, phase, ["merge", str(store), *shards], ref_big, store,
+                          min(5, per - k), rng, (0.3, 1.6), problems=problems)
+            k += tally.rows[phase]["kills"] - before  # cases that finished before any
+            if tally.rows[phase]["cases"] > 6 * per:  # kill count as cases only
+                break
+        print(f"{phase}: {dict(tally.rows[phase])} ({time.monotonic() - t0:.0f} s)", flush=True)
+
+    # journal corruptions: each on a copy of the reference, with the file to be rebuilt
+    phase = "journal corruptions"
+    for name, edit in corruptions().items():
+        store = work / f"corrupt-{name.replace(' ', '_')}.h5"
+        fresh_copy(ref_big, store)
+        jp = journal_path(store)
+        lines = jp.read_bytes().splitlines(keepends=True)
+        records = [i for i, line in enumerate(lines) if line.startswith(b'{"row"')]
+        picks = sorted(rng.sample(records, 12))
+        edit(lines, picks)
+        jp.write_bytes(b"".join(lines))
+        unclean(store)
+        rc, log = finish(["run", str(big), "--store", str(store), "--compute", FAKE,
+                          "--no-bar"])
+        tally.add(phase, cases=1)
+        judge(tally, phase, ref_big, store, rc, log, problems)
+    print(f"{phase}: {dict(tally.rows[phase])}", flush=True)
+
+    # compute faults
+    phase = "compute faults"
+    faults = work / "faults.toml"
+    faults.write_text("[base]\nL_sheet = 6.0\n[sweep]\neps = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6]\n"
+                      "[run]\nmax_attempts = 2\n")
+    for compute, expect in (("sweep.testing:faulty_point", {"failed": 5, "converged": 1}),
+                            ("sweep.testing:stuck_point", {"timeout": 2}),
+                            ("sweep.testing:crashing_point", {"crashed": 1})):
+        store = work / f"faults-{compute.split(':')[1]}.h5"
+        extra = ["--point-timeout", "0.5"] if "stuck" in compute else []
+        log, rc = "", None
+        for _ in range(6):  # a crasher needs a few runs
+            rc, log = finish(["run", str(faults), "--store", str(store), "--compute", compute,
+                              "--no-bar", *extra], timeout=120)
+            if rc == 0:
+                break
+        tally.add(phase, cases=1, traceback=("Traceback" in log and rc != 0))
+        if rc != 0:
+            tally.add(phase, ruined=1)
+            problems.append(f"{phase} {compute}: exited {rc}: {log[-400:]}")
+            continue
+        counts = Counter(sweep.load(store)["status"])
+        lost = 6 - sum(counts.values())
+        bad = sum(max(0, n - counts.get(s, 0)) for s, n in expect.items())
+        tally.add(phase, lost=max(lost, 0), wrong=bad)
+        if bad or lost:
+            problems.append(f"{phase} {compute}: statuses {dict(counts)}, expected {expect}")
+    print(f"{phase}: {dict(tally.rows[phase])}", flush=True)
+
+    # stops during start-up and during the rebuild: SIGTERM/SIGINT/SIGUSR1 at random
+    phase = "stops (start-up, rebuild)"
+    statuses: Counter = Counter()
+    for i in range(15):
+        store = work / f"stop-{i}.h5"
+        fresh_copy(ref_big, store)
+        if i % 2:
+            unclean(store)
+        sig = (signal.SIGTERM, signal.SIGINT, signal.SIGUSR1)[i % 3]
+        p = run_cmd(["run", str(big), "--store", str(store), "--compute", FAKE, "--no-bar"])
+        time.sleep(rng.uniform(0.2, 2.0))
+        p.send_signal(sig)
+        out, err = p.communicate(timeout=120)
+        statuses[p.returncode] += 1
+        tally.add(phase, cases=1, traceback=("Traceback" in err))
+        rc, log = finish(["run", str(big), "--store", str(store), "--compute", FAKE,
+                          "--no-bar"])
+        judge(tally, phase, ref_big, store, rc, log, problems)
+    print(f"{phase}: {dict(tally.rows[phase])}; exit statuses of the stopped runs"
+          f" {dict(statuses)}", flush=True)
+
+    # reads during writes: load + status while a run commits
+    phase = "reads during writes"
+    store = work / "reads.h5"
+    eps = ", ".join(repr(round(0.001 + 0.0009 * i, 5)) for i in range(1000))
+    reads_cfg = work / "reads.toml"
+    reads_cfg.write_text(f"[base]\nL_sheet = 6.0\n[sweep]\neps = [{eps}]\n")
+    p = run_cmd(["run", str(reads_cfg), "--store", str(store), "--compute",
+                 "sweep.testing:sleepy_trivial_point", "--no-bar"])
+    failures = reads = 0
+    while p.poll() is None:
+        if not store.exists():
+            time.sleep(0.02)
+            continue
+        reads += 1
+        try:
+            sweep.load(store)
+        except Exception as exc:  # noqa: BLE001 - counted
+            failures += 1
+            problems.append(f"{phase}: load failed: {exc!r}")
+        if reads % 10 == 0:
+            st = subprocess.run([PY, "-m", "sweep", "status", str(store)],
+                                capture_output=True, text=True, env=env())
+            reads += 1
+            failures += st.returncode != 0
+    p.communicate()
+    tally.add(phase, cases=reads, wrong=failures)
+    print(f"{phase}: {reads} reads, {failures} failed", flush=True)
+
+    # hostile inputs: each must give one clear line and a documented status
+    phase = "hostile inputs"
+    cases = hostile(work)
+    for name, argv, setup in cases:
+        if setup:
+            setup()
+        rc, log = finish(argv, timeout=120)
+        tb = "Traceback" in log or rc not in (0, 2, 3, 4, 5, 6)
+        tally.add(phase, cases=1, traceback=tb)
+        if tb:
+            problems.append(f"{phase} {name}: exit {rc}: {log[-300:]}")
+    print(f"{phase}: {dict(tally.rows[phase])}", flush=True)
+
+    print()
+    print(tally.table())
+    print(f"\nelapsed {time.monotonic() - t0:.0f} s; work directory {work}")
+    for p in problems[:40]:
+        print("PROBLEM:", p)
+    return 1 if problems else 0
+
+
+def hostile(work: Path) -> list[tuple[str, list[str], object]]:
+    h = work / "hostile"
+    h.mkdir(exist_ok=True)
+    store = h / "s.h5"
+    good = h / "good.toml"
+    good.write_text(SMALL)
+    out: list[tuple[str, list[str], object]] = []
+
+    def toml(name: str, text: str) -> None:
+        path = h / f"{name}.toml"
+        path.write_text(text)
+        out.append((name, ["run", str(path), "--store", str(h / f"{name}.h5"), "--compute",
+                           FAKE, "--no-bar"], None))
+
+    toml("huge_grid", "[sweep]\n" + "\n".join(
+        f"{k} = [{', '.join(repr(v * (i + 1)) for i in range(40))}]"
+        for k, v in (("L_x", 0.1), ("T", 0.5), ("a0", 0.01), ("C_sd", 0.01), ("eps", 0.02),
+                     ("d_f", 0.001))))
+    toml("L_sheet_1e308", "[base]\nL_sheet = 1e308\n[sweep]\neps = [0.2]\n")
+    toml("dt_1e-305", "[base]\ndt = 1e-305\n[sweep]\neps = [0.2]\n")
+    toml("nested", "[base]\nL_sheet = 6.0\n[sweep]\neps = " + "[" * 500 + "0.2" + "]" * 500
+         + "\n")
+    toml("empty_sweep", "[base]\nL_sheet = 6.0\n[sweep]\n")
+    toml("grace_1e300", SMALL + "[run]\ngrace_period = 1e300\n")
+    toml("n0_1e30", "[base]\nL_sheet = 6.0\nn0 = 1e30\n[sweep]\neps = [0.2]\n")
+    toml("iterations_huge", "[base]\nL_sheet = 6.0\nmax_iterations = 100000000000000000000\n"
+         "[sweep]\neps = [0.2]\n")
+    toml("not_toml", "[base\nL_sheet = ")
+    out.append(("plan_rate_negative", ["plan", str(good), "--rate", "-1"], None))
+    out.append(("status_slowest_negative", ["status", str(h / "none.h5"), "--slowest", "-1"],
+                None))
+    out.append(("status_missing", ["status", str(h / "none.h5")], None))
+    ro = h / "ro"
+    ro.mkdir(exist_ok=True)
+    out.append(("store_is_directory", ["run", str(good), "--store", str(ro)], None))
+    (h / "lockdir.h5.lock").mkdir(exist_ok=True)
+    out.append(("lock_is_directory", ["run", str(good), "--store", str(h / "lockdir.h5"),
+                                      "--compute", FAKE], None))
+    (h / "jdir.h5.journal").mkdir(exist_ok=True)
+    out.append(("journal_is_directory", ["run", str(good), "--store", str(h / "jdir.h5"),
+                                         "--compute", FAKE], None))
+    loop = h / "loop.h5"
+    if not loop.is_symlink():
+        os.symlink(loop, loop)
+    out.append(("symlink_loop", ["run", str(good), "--store", str(loop), "--compute", FAKE],
+                None))
+    notes = h / "notes.txt"
+    notes.write_text("mine")
+    (h / "notes.txt.journal").write_text("mine too")
+    out.append(("store_is_a_text_file", ["run", str(good), "--store", str(notes),
+                                         "--compute", FAKE], None))
+
+    def abc() -> None:
+        finish(["run", str(good), "--store", str(store), "--compute", FAKE, "--no-bar"])
+        with h5py.File(store, "r+", locking=False) as f:
+            f.attrs["schema_version"] = "abc"
+    out.append(("schema_version_abc", ["run", str(good), "--store", str(store), "--compute",
+                                       FAKE], abc))
+    out.append(("validate_schema_abc", ["validate", str(store)], None))
+    out.append(("export_missing_dir", ["export", str(ref := work / "ref_small.h5"), "-o",
+                                       str(h / "nope" / "x.csv")], None))
+    out.append(("merge_self", ["merge", str(ref), str(ref)], None))
+    out.append(("bad_compute", ["run", str(good), "--store", str(h / "bc.h5"), "--compute",
+                                "no_such_module:f"], None))
+    out.append(("bad_compute_syntax", ["run", str(good), "--store", str(h / "bc.h5"),
+                                       "--compute", "nocolon"], None))
+    return out
+
+
+if __name__ == "__main__":
+    sys.exit(main())
