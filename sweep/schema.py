@@ -66,7 +66,8 @@ COLUMNS: tuple[Column, ...] = (
     _C("eps", "float", "1", "nominal restitution coefficient"),
     _C("d_f", "float", "m", "initial floe-floe distance"),
     _C("dispersion", "str", "", "dispersion relation (ep, ml, ow)"),
-    _C("status", "str", "", "converged, converged_noisy, not_converged, failed, invalid"),
+    _C("status", "str", "", "converged, converged_noisy, not_converged, failed, invalid,"
+       " crashed, timeout"),
     _C("message", "str", "", "reason for failed/invalid (traceback with rank and host)"),
     _C("n_floes", "int", "1", "number of floes N_f"),
     _C("W_c", "float", "m", "collision-zone width: start of the first compact zone (NaN: none)"),
