@@ -133,14 +133,19 @@ def submit_mpi(slurm, campaign, store: Path, env=None, ntasks: str = RANKS) -> s
                         str(MPI_SCRIPT), str(campaign), str(store), env=env or job_env(slurm))
 
 
+#: What the scripts print once their stop signals are trapped.
+TRAPPED = "stop signals are trapped"
+
+
 def log_of(store: Path, job: str) -> str:
     path = store.parent / f"job-{job}.log"
     return path.read_text(errors="replace") if path.exists() else "(no log)"
 
 
 def journal_lines(store: Path) -> int:
+    """Point records in the store's journal (not its campaign line or hand-outs)."""
     path = journal_path(store)
-    return path.read_bytes().count(b"\n") if path.exists() else 0
+    return sum(1 for _ in read_journal(path)) if path.exists() else 0
 
 
 def wait_for(pred, timeout: float, what: str, poll: float = 0.02) -> None:
@@ -322,7 +327,11 @@ def test_array_task_time_limit_signal_during_startup(slurm, campaign, reference,
     task = f"{job}_0"
     store = shards / "c-0.h5"
     try:
-        slurm.wait(task, "RUNNING", timeout=60)
+        # the script traps the signal from its first lines on; before that the batch
+        # shell dies of it (exit 0:10, JobLaunchFailure) -- not a time-limit case
+        log_path = tmp_path / f"shard-{job}_0.log"
+        wait_for(lambda: log_path.exists() and TRAPPED in log_path.read_text(errors="replace"),
+                 120, "the task's script did not start")
         slurm.run("scancel", "--signal=USR1", "--batch", task)
         slurm.wait(task, "PENDING", timeout=90, restarts=1)
         first = runs_of(store)
@@ -344,8 +353,9 @@ def test_array_task_time_limit_signal_during_startup(slurm, campaign, reference,
 def test_node_failure_then_time_limit_signal_during_startup(slurm, campaign, reference,
                                                            tmp_path):
     """The job step killed with SIGKILL (as by a node failure), the job requeued, and the
-    time-limit signal during the resumed job's start-up, as soon as its master has begun
-    to rebuild the store that the killed run left open (from the journal). The signal is
+    time-limit signal during the resumed job's start-up, as soon as its script runs (its
+    master then starts up and rebuilds the store the killed run left open, from the
+    journal). The signal is
     held back until the master listens; the store must end complete and as the reference.
     (The requeued run needs a step id of its own: step 0's MPICH shared memory, left in
     /dev/shm by the SIGKILL, hung MPI_Init.)"""
@@ -362,8 +372,10 @@ def test_node_failure_then_time_limit_signal_during_startup(slurm, campaign, ref
 
         slurm.run("scontrol", "requeue", job)
         slurm.release(job)
-        aside = store.with_name(store.name + ".unclean")  # moved aside to be rebuilt
-        wait_for(aside.exists, 60, "no rebuild of the store", poll=0.002)
+        # the resumed run's script has started (and trapped the signal): its master is
+        # about to start up and rebuild the store the killed run left open
+        wait_for(lambda: log_of(store, job).count(TRAPPED) >= 2, 120,
+                 "the requeued run did not start", poll=0.005)
         slurm.run("scancel", "--signal=USR1", "--batch", job)
         rec = slurm.wait(job, {"PENDING", *sorted({"COMPLETED", "FAILED", "CANCELLED"})},
                          timeout=90)
