@@ -199,6 +199,9 @@ class ModelConfig:
         _require(self, "noise_window", self.noise_window >= 0, "must be >= 0")
         _require(self, "n_average", self.n_average >= 2, "must be >= 2")
         _require(self, "n0_warm", self.n0_warm >= 0, "must be >= 0")
+        # counts that would make a point run for ever (or overflow the cost): refused here
+        for name in ("n0", "nT", "n0_warm", "max_iterations", "noise_window", "n_average"):
+            _require(self, name, getattr(self, name) <= 1_000_000, "must be <= 1000000")
         _require(self, "compact_min_pairs", self.compact_min_pairs >= 1, "must be >= 1")
         _require(self, "compact_bridge", self.compact_bridge >= 0, "must be >= 0")
         _require(self, "compact_bridge_gap", self.compact_bridge_gap > 0, "must be > 0")

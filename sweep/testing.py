@@ -187,6 +187,17 @@ def stuck_point(cfg: ModelConfig) -> dict[str, Any]:
     return fake_point(cfg)
 
 
+def native_stuck_point(cfg: ModelConfig) -> dict[str, Any]:
+    """:func:`fake_point`, but eps = 0.4 is stuck where no Python handler can run (as in
+    native code): the timeout signal is blocked and the thread sleeps for an hour."""
+    if cfg.eps == 0.4:
+        import signal
+
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGUSR2})
+        time.sleep(3600)
+    return fake_point(cfg)
+
+
 def sleepy_trivial_point(cfg: ModelConfig) -> dict[str, Any]:
     """:func:`trivial_point` after 2 ms (a steady stream of commits: reader tests)."""
     time.sleep(0.002)

@@ -58,3 +58,12 @@ def test_round_trip_is_exact(L_x, T, a0, eps, disp, confined):
     d = c.to_dict()
     assert ModelConfig.from_dict(d) == c
     assert ModelConfig.from_dict(d).to_dict() == d
+
+
+@pytest.mark.parametrize("name", ["n0", "nT", "n0_warm", "max_iterations", "noise_window",
+                                  "n_average"])
+def test_counts_that_would_run_for_ever_are_refused(name):
+    """[base] n0 = 1e30 used to pass validation and fail the point (issue 15)."""
+    with pytest.raises(ConfigError, match=f"{name} = 10+ must be <= 1000000"):
+        ModelConfig(**{name: 10**30})
+    ModelConfig(**{name: 1_000_000})

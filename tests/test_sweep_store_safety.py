@@ -427,6 +427,37 @@ def test_point_timeout_records_timeout(tmp_path):
     assert sweep.validate(path) == []
 
 
+def test_point_stuck_in_native_code_ends_the_process_then_is_stored_crashed(tmp_path):
+    """The hard limit: a point where no Python handler can run (the timeout signal blocked,
+    as in native code) ends the process (``faulthandler``) a margin after point_timeout;
+    it counts as an attempt, and after max_attempts the point is stored ``crashed`` and
+    the campaign completes. The margin is lowered for the test (SWEEP_HARD_TIMEOUT_MIN)."""
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(TOML.replace("[0.5, 1.5]", "[0.5]").replace("0.6, 0.8", "0.6")
+                   + "[run]\npoint_timeout = 0.5\nmax_attempts = 2\n")
+    path = tmp_path / "s.h5"
+    cmd = [sys.executable, "-m", "sweep", "run", str(cfg), "--store", str(path), "--compute",
+           "sweep.testing:native_stuck_point", "--no-bar"]
+    env = {**os.environ, "SWEEP_HARD_TIMEOUT_MIN": "1"}
+    env.pop("SLURM_NTASKS", None)
+    codes = []
+    for _ in range(5):
+        t0 = time.monotonic()
+        proc = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=120)
+        codes.append(proc.returncode)
+        if proc.returncode == 0:
+            break
+        assert time.monotonic() - t0 < 60, "the hard limit did not end the process"
+        assert "Timeout" in proc.stderr, proc.stderr[-2000:]
+    # the first death makes the point a suspect; it then dies max_attempts (2) times
+    # running alone, and the next run stores it as crashed and completes
+    assert codes == [1, 1, 1, 0], codes
+    df = sweep.load(path).set_index("eps")
+    assert df.loc[0.4, "status"] == "crashed"
+    assert set(df.loc[[0.2, 0.6], "status"]) <= {"converged", "converged_noisy"}
+    assert sweep.validate(path) == []
+
+
 def test_merge_refuses_itself_and_other_versions_and_stops_with_6(tmp_path):
     cfg, path = _big(tmp_path)
     a = str(path)
