@@ -11,8 +11,9 @@ compact if its phase-averaged gap is below gap_threshold = 0.1 mm), prints:
   in pairs and largest gap (these decide ``compact_bridge`` and ``compact_bridge_gap``);
 - the transition: the gaps of the four pairs before the first sustained zone (what a bridge
   must *not* swallow);
-- compact runs after bridging with the defaults: pairs and metres, and whether they reach the
-  far end (isolated runs versus zones: ``compact_min_pairs``, ``compact_min_length``);
+- the zones the default rule finds (bridges included) and the compact runs it leaves out:
+  pairs and metres, and whether they reach the far end (``compact_min_pairs``,
+  ``compact_min_length``);
 - the layouts the default rule gives, with W_c.
 """
 from __future__ import annotations
@@ -45,13 +46,12 @@ def main(paths: list[str]) -> int:
                               min_pairs=cfg.compact_min_pairs,
                               min_length=cfg.compact_min_length, bridge=cfg.compact_bridge,
                               bridge_gap=cfg.compact_bridge_gap)
-            bridged = compact.copy()
-            for i0, i1 in _runs(~compact):
-                if (i0 > 0 and i1 < len(gaps) and i1 - i0 <= cfg.compact_bridge
-                        and (gaps[i0:i1] < cfg.compact_bridge_gap).all()):
-                    bridged[i0:i1] = True
-            for i0, i1 in _runs(bridged):
-                runs.append((i1 - i0, (i1 - i0) * row["L_x"], i1 == len(gaps)))
+            # the rule's own result: zones (bridges included) and the raw compact runs it
+            # left out
+            for i0, i1 in _runs(z.compact):
+                runs.append((i1 - i0, (i1 - i0) * row["L_x"], i1 == len(gaps), True))
+            for i0, i1 in _runs(compact & ~z.compact):
+                runs.append((i1 - i0, (i1 - i0) * row["L_x"], i1 == len(gaps), False))
             if z.layout != "none":
                 i0 = z.first[0]
                 transitions.append(np.round(gaps[max(i0 - 4, 0):i0] * 1e3, 3).tolist())
@@ -63,10 +63,9 @@ def main(paths: list[str]) -> int:
     print("interruptions inside compact ice (pairs, largest gap [mm]):",
           sorted((n, round(v * 1e3, 3)) for n, v in interruptions))
     print("the four pairs before each zone [mm]:", transitions)
-    iso = sorted((n, m) for n, m, _ in runs if n < cfg.compact_min_pairs
-                 or m < cfg.compact_min_length)
-    zones = sorted((n, m, end) for n, m, end in runs if (n, m) not in iso)
-    print("compact runs shorter than a zone (pairs, m):", iso)
+    iso = sorted((n, m) for n, m, _, zone in runs if not zone)
+    zones = sorted((n, m, end) for n, m, end, zone in runs if zone)
+    print("compact runs left out of the zones (pairs, m):", iso)
     print("zones (pairs, m, reaches the far end):", zones)
     print("layouts:", dict(layouts))
     return 0
