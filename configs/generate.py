@@ -15,6 +15,8 @@ GROUPS = [
     ("geometry and material (MODEL.md §1, §7: LS-WICE-like tank; documented assumptions)",
      ["L_sheet", "h", "L_y", "h_i", "rho_i", "rho_w", "E", "nu", "k_s", "C_m"]),
     ("contact law (§3)", ["contact", "damping", "clip_attraction"]),
+    ("ensemble (MODEL.md §4 'Ensembles'; README 'Ensembles and error bars')",
+     ["replicas", "seed", "placement", "coupling"]),
     ("numerics (§3, §4)", []),  # every field not named elsewhere
     ("diagnostics (§6)", ["gap_threshold"]),
 ]
@@ -57,15 +59,16 @@ CONFIGS = {
             ' grid"\nprogress_interval = 300.0\ngrace_period = 240.0'),
     "demo": dict(header="""
 # A small demonstration campaign: 16 points with reduced numerics (n0 = 2, nT = 2,
-# max_iterations = 30, n_average = 8) so it finishes in about a minute on 2 cores
-# (`mpiexec -n 2 sweep run configs/demo.toml --store demo.h5`: one master, one worker;
-# measured 28-58 s, 2-4 s per L_x = 0.5 m point). Results are noisier than with the
-# paper's numerics; use it to try the workflow, not for science.
+# max_iterations = 30, n_average = 8, ensembles of 4 replicas without the W_c precision
+# target) so that it finishes quickly (`mpiexec -n 2 sweep run configs/demo.toml --store
+# demo.h5`; timing in the README). Results are noisier than with the default numerics;
+# use it to try the workflow, not for science.
 """, sweep=dict(L_x=[0.5, 1.5], T=[1.2, 1.6], a0=[0.0125], C_sd=[0.05], eps=[0.2, 0.6],
                 d_f=[0.005], dispersion=["ml", "ep"]),
         run='name = "demo"\ndescription = "16-point demonstration with reduced numerics"\n'
             'progress_interval = 10.0\ngrace_period = 30.0',
-        over=dict(n0=2, nT=2, max_iterations=30, n_average=8)),
+        over=dict(n0=2, nT=2, max_iterations=30, n_average=8, replicas=4,
+                  target_W_c_stderr=0.0)),
     "fig2": dict(header="""
 # Paper Fig. 2: a/a0 for L_x = 0.5 m, T = 1.2 s, a0 = 0.0125 m, d_f = 0.005 m, C_sd = 0.05,
 # eps = 0.2, 0.4, 0.6, 0.8, with 'ML' (a) and 'EP' (b) dispersion. 8 points.

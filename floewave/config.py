@@ -38,6 +38,8 @@ CONTACTS = ("hertz_disk", "linear")
 DAMPINGS = ("liggghts", "exact")
 DRAG_INTEGRATIONS = ("quadrature", "exact")
 INTEGRATORS = ("predictor", "half_step")
+PLACEMENTS = ("uniform", "random")
+COUPLINGS = ("mean", "independent")
 
 
 class FloewaveError(Exception):
@@ -100,14 +102,32 @@ class ModelConfig:
         ``target_stderr`` > 0)
     target_stderr : if > 0, keep averaging until max_i a_stderr_i / a0 <= target_stderr
         (adaptive window; status ``not_converged`` if max_iterations comes first)
+    target_W_c_stderr : ensembles (R >= 2): if > 0, keep averaging also until the standard
+        error of W_c is at most this [m] (points with a compact zone in >= 2 replicas)
     reuse_floor : start the average with the samples of the ``noise_window`` iterations
         whose residuals revealed the noise floor (instead of discarding them)
     n0_warm : spin-up periods of every iteration after the first when ``warm_start``
         (the state is already developed and a changes by at most ~relax x residual)
     warm_start : carry the DEM state over between iterations (default) instead of
         restarting from the initial state
-    confined : hold all floes fixed (u = 0), the analytic limit of §5
+    confined : hold all floes fixed (u = 0), the analytic limit of §5 (deterministic:
+        one chain whatever ``replicas``, uniform placement)
     overwash : include overwash dissipation (eqs. 17, 18, 21); c_ow [-], s_min [-]
+
+    Ensemble (MODEL.md §4 "Ensembles"; README "Ensembles and error bars")
+    -------------------------------------------------------------------
+    replicas : R, independent floe chains per point (1: a single trajectory)
+    seed : ensemble seed; replica r's arrangement derives from (the configuration without
+        ``replicas``, seed, r), so a point is bit-reproducible and replica r starts the
+        same whatever R
+    placement : ``"uniform"`` (the paper's: every gap d_f; replicas r >= 1 perturbed by
+        1e-9 of the random gaps' deviation, so that chaos separates them) or ``"random"``
+        (gaps (N_f - 1) d_f w_i with w uniform on the simplex: i.i.d. exponential gaps of
+        mean d_f conditioned on their sum, so the ice extent is the paper's, no overlaps)
+        (:func:`floewave.ensemble.initial_positions`)
+    coupling : ``"mean"`` (one a(x) marched from the replica-mean dissipation; error bars
+        by the jackknife over replicas) or ``"independent"`` (every replica iterates its
+        own a(x); the point is the replica mean)
 
     Diagnostics (§6)
     ----------------
@@ -161,6 +181,7 @@ class ModelConfig:
     noise_window: int = 4
     n_average: int = 5
     target_stderr: float = 0.01
+    target_W_c_stderr: float = 1.0
     n0_warm: int = 0
     reuse_floor: bool = True
     warm_start: bool = True
@@ -168,6 +189,11 @@ class ModelConfig:
     overwash: bool = False
     c_ow: float = 1.0
     s_min: float = 0.03
+    # --- ensemble ---
+    replicas: int = 8
+    seed: int = 0
+    placement: str = "random"
+    coupling: str = "mean"
     # --- diagnostics ---
     gap_threshold: float = 1.0e-4
     compact_min_pairs: int = 3
@@ -202,16 +228,20 @@ class ModelConfig:
         # counts that would make a point run for ever (or overflow the cost): refused here
         for name in ("n0", "nT", "n0_warm", "max_iterations", "noise_window", "n_average"):
             _require(self, name, getattr(self, name) <= 1_000_000, "must be <= 1000000")
+        _require(self, "replicas", 1 <= self.replicas <= 4096, "must be in [1, 4096]")
+        _require(self, "seed", 0 <= self.seed < 2**63, "must be in [0, 2**63)")
         _require(self, "compact_min_pairs", self.compact_min_pairs >= 1, "must be >= 1")
         _require(self, "compact_bridge", self.compact_bridge >= 0, "must be >= 0")
         _require(self, "compact_bridge_gap", self.compact_bridge_gap > 0, "must be > 0")
         _require(self, "fit_min_floes", self.fit_min_floes >= 3, "must be >= 3")
         _require(self, "target_stderr", 0 <= self.target_stderr < 1, "must be in [0, 1)")
+        _require(self, "target_W_c_stderr", self.target_W_c_stderr >= 0, "must be >= 0")
         _require(self, "rho_i", self.rho_i < self.rho_w or self.rho_i == self.rho_w,
                  "must not exceed rho_w (floes float)")
         for name, allowed in (("dispersion", DISPERSIONS), ("contact", CONTACTS),
                               ("damping", DAMPINGS), ("drag_integration", DRAG_INTEGRATIONS),
-                              ("integrator", INTEGRATORS)):
+                              ("integrator", INTEGRATORS), ("placement", PLACEMENTS),
+                              ("coupling", COUPLINGS)):
             _require(self, name, getattr(self, name) in allowed, f"must be one of {allowed}")
 
     # ------------------------------------------------------------------ derived
@@ -245,19 +275,24 @@ class ModelConfig:
         """Floe draft d = h_i rho_i / rho_w [m]."""
         return self.h_i * self.rho_i / self.rho_w
 
+    @property
+    def n_chains(self) -> int:
+        """Floe chains that run: ``replicas`` (1 when ``confined``: deterministic)."""
+        return 1 if self.confined else self.replicas
+
     def floe_steps_per_iteration(self) -> int:
         """(n0 + nT) n_t N_f: the cost unit of MODEL.md §4 for the first iteration."""
         return self.floe_steps_of(1)
 
     def floe_steps_of(self, iterations: int) -> int:
         """Floe-steps of ``iterations`` iterations (n0 in the first, n0_warm after it;
-        confined: nT only)."""
+        confined: nT only), summed over the :attr:`n_chains` replicas."""
         if iterations <= 0:
             return 0
         n0_first = 0 if self.confined else self.n0
         n0_later = 0 if self.confined else (self.n0_warm if self.warm_start else self.n0)
         periods = (n0_first + self.nT) + (iterations - 1) * (n0_later + self.nT)
-        return periods * self.n_t * self.n_floes
+        return periods * self.n_t * self.n_floes * self.n_chains
 
     def check_physics(self) -> None:
         """Raise :class:`InvalidPointError` if this point cannot be simulated.

@@ -8,10 +8,11 @@ from collections.abc import Callable
 import numpy as np
 
 from . import _kernels as K
-from .config import FloewaveError, G, ModelConfig
+from .config import FloewaveError, ModelConfig
 from .dispersion import alpha_confined, solve_dispersion
+from .ensemble import Records, estimate_point, initial_positions, march_rows, zone_of
 from .forces import cell_offsets, kernel_params
-from .results import PointResult, compact_zones, fit_exponential, fit_inverse, zone_fits
+from .results import PointResult
 
 __all__ = ["FloeChain", "NumericalError", "march_amplitude", "dissipation", "residual",
            "run_point", "Window"]
@@ -24,7 +25,7 @@ class NumericalError(FloewaveError, ArithmeticError):
 class FloeChain:
     """State of the 1-D floe chain (MODEL.md §1) and the compiled time loop around it."""
 
-    def __init__(self, cfg: ModelConfig, k: float):
+    def __init__(self, cfg: ModelConfig, k: float, x0: np.ndarray | None = None):
         self.cfg = cfg
         self.k = k
         self.P = kernel_params(cfg, k)
@@ -32,8 +33,11 @@ class FloeChain:
         self.cxi = np.cos(k * xi)
         self.sxi = np.sin(k * xi)
         n = cfg.n_floes
-        # x_1 = L_x / 2, x_{i+1} = x_i + L_x + d_f: the ice edge is x = 0
-        self.x0 = cfg.L_x / 2.0 + np.arange(n) * (cfg.L_x + cfg.d_f)
+        # x_1 = L_x / 2, x_{i+1} = x_i + L_x + d_f: the ice edge is x = 0 (uniform
+        # placement; an ensemble passes each replica's own arrangement)
+        if x0 is None:
+            x0 = cfg.L_x / 2.0 + np.arange(n) * (cfg.L_x + cfg.d_f)
+        self.x0 = np.ascontiguousarray(x0, dtype=float)
         self.work = K.new_work(n)
         self.mom = K.drag_tables(self.cxi, self.sxi, self.P)
         self.idx = np.zeros(n, np.int64)
@@ -112,25 +116,15 @@ def dissipation(cfg: ModelConfig, s3_mean: np.ndarray) -> np.ndarray:
 
 
 def march_amplitude(cfg: ModelConfig, S_sd: np.ndarray, c_g: float, k: float) -> np.ndarray:
-    """Amplitudes from the ice edge (eqs. 12, 20, optionally 21), clipped at 0.
+    """Amplitudes from the ice edge (eqs. 12, 20, optionally 21), clipped at 0
+    (:func:`floewave.ensemble.march_rows`, which marches many profiles at once).
 
     a_1^2 = a0^2 + L_x S_1 / (rho_w g c_g);
     a_i^2 = a_{i-1}^2 + L_x (S_{i-1} + S_i) / (rho_w g c_g)
             [- 3 g^(1/2) h_ow,i-1^(5/2) / c_g with overwash,
              h_ow = c_ow max(k a_{i-1} - s_min, 0)].
     """
-    fac = cfg.L_x / (cfg.rho_w * G * c_g)
-    n = S_sd.shape[0]
-    a = np.empty(n)
-    a2 = cfg.a0**2 + fac * S_sd[0]
-    a[0] = math.sqrt(max(a2, 0.0))
-    for i in range(1, n):
-        a2 = a[i - 1] ** 2 + fac * (S_sd[i - 1] + S_sd[i])
-        if cfg.overwash:
-            h_ow = cfg.c_ow * max(k * a[i - 1] - cfg.s_min, 0.0)
-            a2 -= 3.0 * math.sqrt(G) * h_ow**2.5 / c_g
-        a[i] = math.sqrt(max(a2, 0.0))
-    return a
+    return march_rows(cfg, np.asarray(S_sd, dtype=float), c_g, k)
 
 
 def residual(a_old: np.ndarray, a_new: np.ndarray) -> float:
@@ -177,14 +171,6 @@ def max_stderr(samples: list[np.ndarray]) -> float:
     return float(np.max(stderr(samples)))
 
 
-def _add_sample(samples: list[np.ndarray], win_sum: dict[str, np.ndarray],
-                a_new: np.ndarray, window: Window) -> None:
-    """Add one iteration to the average: its amplitudes and its window statistics."""
-    samples.append(a_new)
-    for name in Window.FIELDS:
-        win_sum[name] = win_sum.get(name, 0.0) + getattr(window, name)
-
-
 def kernel_mode(cfg: ModelConfig) -> str:
     """Which kernel ran, e.g. ``numba/quadrature/predictor`` or ``numba/confined``."""
     if cfg.confined:
@@ -215,42 +201,50 @@ def run_point(cfg: ModelConfig,
     cfg.check_physics()
     k, c_g = solve_dispersion(cfg)
     alpha_c = alpha_confined(cfg)
-    chain = FloeChain(cfg, k)
+    R = cfg.n_chains
+    chains = [FloeChain(cfg, k, x0) for x0 in initial_positions(cfg)]
     n = cfg.n_floes
     n_t = cfg.n_t
-    a = np.full(n, cfg.a0)
+    a = np.full((R, n), cfg.a0)          # per replica (rows equal under coupling "mean")
     history: list[float] = []
-    samples: list[np.ndarray] = []
-    win_sum: dict[str, np.ndarray] = {}
-    recent: list[tuple[np.ndarray, Window]] = []
+    samples: list[tuple] = []        # per averaging iteration: (S, a_new, windows, zones)
+    recent: list[tuple] = []
     phase = "iterate"
     status = "not_converged"
-    last_window: Window | None = None
+    last: tuple | None = None
     a_new = a
     a_prev = a
     for it in range(1, cfg.max_iterations + 1):
-        stats = K.new_stats(n)
-        if cfg.confined:
-            K.confined_window(chain.x0, a, cfg.nT * n_t, chain.P, chain.cxi, chain.sxi, stats)
+        windows = []
+        for r, chain in enumerate(chains):
+            stats = K.new_stats(n)
+            if cfg.confined:
+                K.confined_window(chain.x0, a[r], cfg.nT * n_t, chain.P, chain.cxi,
+                                  chain.sxi, stats)
+            else:
+                if not cfg.warm_start:
+                    chain.reset()
+                n0 = cfg.n0 if (it == 1 or not cfg.warm_start) else cfg.n0_warm
+                chain.run(a[r], n0 * n_t)
+                chain.run(a[r], cfg.nT * n_t, stats)
+                chain.check()
+            windows.append(Window(cfg, stats, cfg.nT * n_t, chain.x0))
+        S = np.array([dissipation(cfg, w.s3_mean) for w in windows])
+        if cfg.coupling == "mean":
+            a_new = np.broadcast_to(march_amplitude(cfg, S.mean(axis=0), c_g, k), (R, n))
         else:
-            if not cfg.warm_start:
-                chain.reset()
-            n0 = cfg.n0 if (it == 1 or not cfg.warm_start) else cfg.n0_warm
-            chain.run(a, n0 * n_t)
-            chain.run(a, cfg.nT * n_t, stats)
-            chain.check()
-        window = Window(cfg, stats, cfg.nT * n_t, chain.x0)
-        last_window = window
-        S_sd = dissipation(cfg, window.s3_mean)
-        a_new = march_amplitude(cfg, S_sd, c_g, k)
+            a_new = march_rows(cfg, S, c_g, k)
         if not np.all(np.isfinite(a_new)):
             raise NumericalError(f"non-finite amplitude at iteration {it}")
-        res = residual(a, a_new)
+        res = max(residual(a[r], a_new[r]) for r in range(R))
         history.append(res)
+        # the paper's W_c is a property of one averaging window: found per window and replica
+        zones = [zone_of(cfg, w.x_mean, w.gap_mean) for w in windows]
+        last = (S, np.array(a_new), windows, zones)
         if phase == "average":
-            _add_sample(samples, win_sum, a_new, window)
+            samples.append(last)
         elif cfg.reuse_floor and cfg.noise_window > 0:
-            recent = (recent + [(a_new, window)])[-cfg.noise_window:]
+            recent = (recent + [last])[-cfg.noise_window:]
         if progress is not None:
             progress(it, res, phase)
         a_prev = a
@@ -262,45 +256,88 @@ def run_point(cfg: ModelConfig,
             phase = "average"
             # the last noise_window iterations were already at the noise floor: their
             # samples start the average
-            for a_s, win in recent:
-                _add_sample(samples, win_sum, a_s, win)
+            samples.extend(recent)
         elif phase == "average" and len(samples) >= cfg.n_average:
-            if cfg.target_stderr <= 0 or max_stderr(samples) <= cfg.target_stderr * cfg.a0:
+            if _precise_enough(cfg, samples, c_g, k):
                 status = "converged_noisy"
                 break
     iterations = len(history)
+    assert last is not None
 
+    kept = samples if samples else [last]
+    est = estimate_point(cfg, _records(kept), c_g, k)
+    if R == 1:   # one trajectory: the iteration standard error (as the paper's model)
+        if samples:
+            est["a_stderr"] = (stderr([s[1][0] for s in samples]) if len(samples) > 1
+                               else np.full(n, np.nan))
+        else:
+            est["a_stderr"] = np.abs(a_new[0] - a_prev[0])
+        est["a_end_stderr"] = float(est["a_stderr"][-1])
+    elif not samples:
+        # the last iteration alone (converged, or stopped before any averaging): its
+        # replica spread and, in quadrature, how far it was from the fixed point (the
+        # single trajectory's error of such a point)
+        conv = np.abs(np.mean(a_new - a_prev, axis=0))
+        est["a_stderr"] = np.sqrt(est["a_stderr"] ** 2 + conv**2)
+        est["a_end_stderr"] = float(est["a_stderr"][-1])
     if samples:
-        a_out = np.mean(samples, axis=0)
-        a_stderr = stderr(samples) if len(samples) > 1 else np.full(n, np.nan)
-        prof = {name: win_sum[name] / len(samples) for name in Window.FIELDS}
         noise = float(np.median(history[-len(samples):]))
     else:
-        a_out = a_new
-        a_stderr = np.abs(a_new - a_prev)
-        prof = {name: getattr(last_window, name) for name in Window.FIELDS}
         noise = 0.0 if status == "converged" else float(history[-1])
-
-    x = prof["x_mean"]
-    zones = compact_zones(x, prof["gap_mean"], cfg.L_x, gap_threshold=cfg.gap_threshold,
-                          min_pairs=cfg.compact_min_pairs, min_length=cfg.compact_min_length,
-                          bridge=cfg.compact_bridge, bridge_gap=cfg.compact_bridge_gap)
-    alpha_all, r_all = fit_inverse(x, a_out, cfg.a0)
-    alpha_edge, r_edge, alpha_inner, r_inner = zone_fits(
-        x, a_out, cfg.a0, zones, min_floes=cfg.fit_min_floes, min_length=cfg.fit_min_length)
-    alpha_exp, r_exp = fit_exponential(x, a_out, cfg.a0)
     wall = time.perf_counter() - t_start
     return PointResult(
-        x_mean=x, a=a_out, a_stderr=a_stderr, S_sd=dissipation(cfg, prof["s3_mean"]),
-        gap_mean=prof["gap_mean"], contact_fraction=prof["contact_fraction"],
-        collisions=prof["collisions"], F_w_mean=prof["F_w_mean"], F_c_mean=prof["F_c_mean"],
-        F_d_mean=prof["F_d_mean"], n_floes=n, W_c=zones.W_c, compact_zone=zones.layout,
-        compact_end=zones.compact_end, ice_extent=zones.ice_extent,
-        alpha_all=alpha_all, alpha_all_resid=r_all, alpha_edge=alpha_edge,
-        alpha_edge_resid=r_edge, alpha_inner=alpha_inner, alpha_inner_resid=r_inner,
-        alpha_exp=alpha_exp, alpha_exp_resid=r_exp, alpha_c=alpha_c, k=k, c_g=c_g,
-        status=status, noise=noise, iterations=iterations, residual=float(history[-1]),
-        floe_steps=cfg.floe_steps_of(iterations), wall_time=wall,
-        kernel_mode=kernel_mode(cfg), a_end=float(a_out[-1]), a0=cfg.a0,
-        residual_history=np.array(history),
+        x_mean=est["x_mean"], a=est["a"], a_stderr=est["a_stderr"], S_sd=est["S_sd"],
+        gap_mean=est["gap_mean"], contact_fraction=est["contact_fraction"],
+        collisions=est["collisions"], F_w_mean=est["F_w_mean"], F_c_mean=est["F_c_mean"],
+        F_d_mean=est["F_d_mean"], n_floes=n, W_c=est["W_c"], compact_zone=est["compact_zone"],
+        compact_end=est["compact_end"], ice_extent=est["ice_extent"],
+        alpha_all=est["alpha_all"], alpha_all_resid=est["alpha_all_resid"],
+        alpha_edge=est["alpha_edge"], alpha_edge_resid=est["alpha_edge_resid"],
+        alpha_inner=est["alpha_inner"], alpha_inner_resid=est["alpha_inner_resid"],
+        alpha_exp=est["alpha_exp"], alpha_exp_resid=est["alpha_exp_resid"], alpha_c=alpha_c,
+        k=k, c_g=c_g, status=status, noise=noise, iterations=iterations,
+        residual=float(history[-1]), floe_steps=cfg.floe_steps_of(iterations),
+        wall_time=wall, kernel_mode=kernel_mode(cfg), a_end=est["a_end"], a0=cfg.a0,
+        residual_history=np.array(history), replicas=R, W_c_stderr=est["W_c_stderr"],
+        W_c_n=est["W_c_n"], alpha_all_stderr=est["alpha_all_stderr"],
+        alpha_edge_stderr=est["alpha_edge_stderr"],
+        alpha_inner_stderr=est["alpha_inner_stderr"],
+        alpha_exp_stderr=est["alpha_exp_stderr"], a_end_stderr=est["a_end_stderr"],
+        W_c_replicas=est["W_c_replicas"], compact_end_replicas=est["compact_end_replicas"],
+        x_mean_replicas=est["x_mean_replicas"], gap_mean_replicas=est["gap_mean_replicas"],
+        S_sd_replicas=est["S_sd_replicas"],
     )
+
+
+def _records(kept: list[tuple]) -> Records:
+    """The averaging window's samples as :class:`floewave.ensemble.Records`."""
+    S = np.array([s[0] for s in kept])
+    a_new = np.array([s[1] for s in kept])
+    profiles = {}
+    for name in Window.FIELDS:
+        total = 0.0
+        for sample in kept:
+            total = total + np.array([getattr(w, name) for w in sample[2]])
+        profiles[name] = total / len(kept)
+    zones = [sample[3] for sample in kept]
+    return Records(S, a_new, profiles,
+                   np.array([[z.W_c for z in row] for row in zones]),
+                   np.array([[z.compact_end for z in row] for row in zones]),
+                   [[z.layout for z in row] for row in zones])
+
+
+def _precise_enough(cfg: ModelConfig, samples: list, c_g: float, k: float) -> bool:
+    """May the averaging stop? max_i SE(a_i) <= ``target_stderr`` a0 (the iteration
+    standard error for one trajectory, the jackknife over replicas for an ensemble) and,
+    for an ensemble with a compact zone in at least two replicas, SE(W_c) <=
+    ``target_W_c_stderr``. A target <= 0 is no condition."""
+    if cfg.n_chains == 1:
+        return (cfg.target_stderr <= 0
+                or max_stderr([s[1][0] for s in samples]) <= cfg.target_stderr * cfg.a0)
+    if cfg.target_stderr <= 0 and cfg.target_W_c_stderr <= 0:
+        return True
+    est = estimate_point(cfg, _records(samples), c_g, k)
+    if cfg.target_stderr > 0 and float(np.max(est["a_stderr"])) > cfg.target_stderr * cfg.a0:
+        return False
+    se_w = est["W_c_stderr"]
+    return cfg.target_W_c_stderr <= 0 or not math.isfinite(se_w) or se_w <= cfg.target_W_c_stderr

@@ -8,8 +8,9 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["PointResult", "PROFILE_FIELDS", "SCALAR_FIELDS", "LAYOUTS", "Zones",
-           "compact_zones", "zone_fits", "fit_inverse", "fit_exponential", "power_law"]
+__all__ = ["PointResult", "PROFILE_FIELDS", "SCALAR_FIELDS", "REPLICA_FIELDS", "LAYOUTS", "Zones",
+           "compact_zones", "zone_fits", "fit_inverse", "fit_exponential", "power_law",
+           "power_law_weighted"]
 
 #: Per-floe (length N_f) or per-pair (length N_f - 1, padded to N_f with NaN) profiles.
 PROFILE_FIELDS = ("x_mean", "a", "a_stderr", "S_sd", "gap_mean", "contact_fraction",
@@ -20,7 +21,13 @@ SCALAR_FIELDS = ("n_floes", "W_c", "compact_zone", "compact_end", "ice_extent", 
                  "alpha_all_resid", "alpha_edge", "alpha_edge_resid", "alpha_inner",
                  "alpha_inner_resid", "alpha_exp", "alpha_exp_resid", "alpha_c", "k", "c_g",
                  "status", "noise", "iterations", "residual", "floe_steps", "wall_time",
-                 "kernel_mode", "a_end")
+                 "kernel_mode", "a_end", "replicas", "W_c_stderr", "W_c_n",
+                 "alpha_all_stderr", "alpha_edge_stderr", "alpha_inner_stderr",
+                 "alpha_exp_stderr", "a_end_stderr")
+
+#: Per-replica results: (R,) scalars per replica and (R, N_f) profiles per replica.
+REPLICA_FIELDS = ("W_c_replicas", "compact_end_replicas", "x_mean_replicas",
+                  "gap_mean_replicas", "S_sd_replicas")
 
 STATUSES = ("converged", "converged_noisy", "not_converged")
 
@@ -44,6 +51,18 @@ class PointResult:
     start of the first compact zone (NaN without one), ``compact_zone`` its layout
     (:data:`LAYOUTS`), ``compact_end`` [m] where that zone ends, ``ice_extent`` [m] the far
     end of the ice (last floe's mean centre + L_x / 2; above L_sheet when gaps open).
+
+    Ensemble (``replicas`` = R chains, :mod:`floewave.ensemble`): profiles and scalars
+    are the ensemble's estimates; ``a_stderr`` and every ``*_stderr`` are jackknife
+    standard errors over the replicas (R = 1: ``a_stderr`` is the iteration standard
+    error and the scalar ones are NaN: one trajectory has no error bar for them).
+    ``W_c`` is the mean of the per-replica ``W_c_replicas`` over the ``W_c_n`` replicas
+    with a compact zone, a replica's W_c the mean over its averaging windows of the
+    window's W_c (the paper's W_c is that of one nT-period window; so is the layout),
+    ``compact_zone`` the most common layout over windows and replicas. Per replica:
+    ``W_c_replicas``, ``compact_end_replicas`` (R,), ``x_mean_replicas``,
+    ``gap_mean_replicas``, ``S_sd_replicas`` (R, N_f), time means over the averaging
+    window.
     """
 
     x_mean: np.ndarray
@@ -82,6 +101,19 @@ class PointResult:
     a_end: float
     a0: float
     residual_history: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    replicas: int = 1
+    W_c_stderr: float = math.nan
+    W_c_n: int = 0
+    alpha_all_stderr: float = math.nan
+    alpha_edge_stderr: float = math.nan
+    alpha_inner_stderr: float = math.nan
+    alpha_exp_stderr: float = math.nan
+    a_end_stderr: float = math.nan
+    W_c_replicas: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    compact_end_replicas: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    x_mean_replicas: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    gap_mean_replicas: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    S_sd_replicas: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
 
     @property
     def a_rel(self) -> np.ndarray:
@@ -266,6 +298,34 @@ def power_law(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float, float]
     sxx = float(((lx - lx.mean()) ** 2).sum())
     m_se = math.sqrt(float(resid @ resid) / (n - 2) / sxx) if n > 2 and sxx > 0 else math.nan
     return m, math.exp(lc), m_se, float(np.sqrt(np.mean(resid**2)))
+
+
+def power_law_weighted(x: np.ndarray, y: np.ndarray,
+                       y_se: np.ndarray) -> tuple[float, float, float, float]:
+    """Weighted least-squares power law y = c x^m in log-log, each point weighted by
+    1 / sigma_i^2 with sigma_i = y_se_i / y_i (the standard error of ln y_i, first order):
+    (m, c, standard error of m, chi^2 per degree of freedom). The standard error of m is
+    the weighted fit's, multiplied by sqrt(chi^2 / dof) when that exceeds 1 (scatter
+    beyond the error bars: the law does not describe the points to within them), so it is
+    never smaller than the error bars alone imply. Needs >= 2 points (the standard error
+    and chi^2 >= 3); NaN otherwise."""
+    x, y, se = (np.asarray(v, dtype=float) for v in (x, y, y_se))
+    n = len(x)
+    if n < 2:
+        return math.nan, math.nan, math.nan, math.nan
+    lx, ly = np.log(x), np.log(y)
+    w = (y / se) ** 2
+    W = w.sum()
+    mx, my = (w * lx).sum() / W, (w * ly).sum() / W
+    sxx = float((w * (lx - mx) ** 2).sum())
+    if sxx <= 0:
+        return math.nan, math.nan, math.nan, math.nan
+    m = float((w * (lx - mx) * (ly - my)).sum() / sxx)
+    lc = my - m * mx
+    if n < 3:
+        return m, math.exp(lc), math.nan, math.nan
+    chi2 = float((w * (ly - lc - m * lx) ** 2).sum()) / (n - 2)
+    return m, math.exp(lc), math.sqrt(max(chi2, 1.0) / sxx), chi2
 
 
 def fit_inverse(x: np.ndarray, a: np.ndarray, a0: float) -> tuple[float, float]:

@@ -16,7 +16,8 @@ import pandas as pd
 import xarray as xr
 
 from .errors import StoreError
-from .schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, column, profile_path
+from .schema import (COLUMNS, HISTORY_VAR, MIGRATION_FILL, PROFILE_VARS, REPLICA_VARS, column,
+                     profile_path)
 
 __all__ = ["load", "load_xarray", "load_profile", "store_attrs", "resolve_hash",
            "journal_points"]
@@ -128,7 +129,8 @@ def _load(path: str | Path) -> pd.DataFrame:
         n = int(table.attrs["n_rows"])
         # a column an older schema version lacks reads as its fill value
         data = {c.name: (_decode(table[c.name][:n]) if c.name in table
-                         else np.full(n, c.fill, dtype=object if c.kind == "str" else None))
+                         else np.full(n, MIGRATION_FILL.get(c.name, c.fill),
+                                      dtype=object if c.kind == "str" else None))
                 for c in COLUMNS}
         campaign = f.attrs.get("campaign_json", "")
     df = pd.DataFrame(data)
@@ -184,7 +186,8 @@ def resolve_hash(path: str | Path, prefix: str) -> str:
 
 
 def load_profile(path: str | Path, hash: str) -> xr.Dataset:
-    """One point's profiles along the floe index (and residual history per iteration).
+    """One point's profiles along the floe index (and residual history per iteration;
+    for an ensemble stored with schema 3, the per-replica results along ``replica``).
 
     Reads only that point's group. ``hash`` may be a unique prefix (the short hash).
     """
@@ -196,13 +199,14 @@ def load_profile(path: str | Path, hash: str) -> xr.Dataset:
             if name not in f:
                 return None
             g = f[name]
-            return {k: g[k][()] for k in PROFILE_VARS}, g[HISTORY_VAR[0]][()]
+            rep = {k: g[k][()] for k in REPLICA_VARS if k in g}
+            return {k: g[k][()] for k in PROFILE_VARS}, g[HISTORY_VAR[0]][()], rep
 
     got = _retried(read)
     if got is None:
         raise KeyError(f"{path}: no profiles stored for point {h[:12]} (missing, failed"
                        " or invalid)")
-    data, history = got
+    data, history, rep = got
     n = len(data["a"])
     ds = xr.Dataset({k: ("floe", v) for k, v in data.items()},
                     coords={"floe": np.arange(n)})
@@ -215,5 +219,14 @@ def load_profile(path: str | Path, hash: str) -> xr.Dataset:
     ds["x"].attrs.update(units="m", long_name="time-mean floe centre from the ice edge")
     ds["residual_history"].attrs.update(units=HISTORY_VAR[1], long_name=HISTORY_VAR[2])
     ds["floe"].attrs.update(long_name="floe index from the ice edge")
+    for k, v in rep.items():      # ensembles (schema 3): per-replica results
+        units, long_name, shape = REPLICA_VARS[k]
+        dims = tuple({"R": "replica", "N_f": "floe"}[d] for d in shape)
+        ds[k] = (dims, v)
+        ds[k].attrs.update(units=units, long_name=long_name)
+    if rep:
+        R = next(iter(rep.values())).shape[0]
+        ds = ds.assign_coords(replica=np.arange(R))
+        ds["replica"].attrs.update(long_name="replica index of the ensemble")
     ds.attrs["hash"] = h
     return ds

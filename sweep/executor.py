@@ -47,7 +47,7 @@ from .errors import ConfigError, Interrupted, LaunchError, SweepError, WorkerErr
 from .identity import canonical_json
 from .progress import Progress
 from .provenance import environment, host
-from .schema import PROFILE_VARS, column
+from .schema import PROFILE_VARS, REPLICA_VARS, column
 from .store import Store, Unstorable, _jsonable, utc_now
 
 __all__ = ["run_campaign", "compute_point", "worker_loop", "Master", "InProcessTransport",
@@ -179,13 +179,13 @@ def compute_point(task: dict[str, Any], fn: Callable[[ModelConfig], Any],
         else:
             result = fn(cfg)
         data = result.to_dict() if hasattr(result, "to_dict") else dict(result)
-        profiles = {k: np.asarray(data[k], dtype=np.float64) for k in PROFILE_VARS
-                    if k in data}
+        profiles = {k: np.asarray(data[k], dtype=np.float64)
+                    for k in (*PROFILE_VARS, *REPLICA_VARS) if k in data}
         out["profiles"] = profiles
         out["residual_history"] = np.asarray(data.get("residual_history", []),
                                              dtype=np.float64)
         out["scalars"] = {k: _jsonable(v) for k, v in data.items()
-                          if k not in PROFILE_VARS and k != "residual_history"
+                          if k not in profiles and k != "residual_history"
                           and np.ndim(v) == 0}
         status = str(data.get("status", ""))
         bad = [k for k in ("a", "x_mean") if k in profiles

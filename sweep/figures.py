@@ -9,6 +9,7 @@ everything else fixed, so a store of any campaign gives whatever figures its gri
           eq. 25 (alpha_c from eq. 24, solid black), a dot where the phase-averaged gap drops
           below ``gap_threshold`` (x = W_c) and the compact-ice solution started from that dot
           (dashed black: 1/a = 1/a(W_c) + alpha_c (x - W_c)). Groups: (L_x, T, a0, C_sd, d_f).
+          Ensembles: the a(x) band is ±1 standard error, the bar on the dot ±1 SE(W_c).
 ``fig3``  mean gap (dashed: the initial d_f; dots at W_c), mean |F_w|, |F_c|, |F_d| versus x for
           each eps. Groups: (L_x, T, a0, C_sd, d_f, dispersion).
 ``fig5``  a/a0 for each floe size L_x (colours), ``ep`` solid, ``ml`` dashed, ``ow`` dotted.
@@ -127,6 +128,10 @@ def _amplitude(ax, row: pd.Series, prof: dict[str, np.ndarray], colour, style: s
     if np.isfinite(W_c) and W_c < end:
         a_w = float(np.interp(W_c, x, a))
         ax.plot([W_c], [a_w / a0], "o", color=colour, ms=6, mec="k", mew=0.6, zorder=5)
+        se_w = float(row.get("W_c_stderr", np.nan))
+        if np.isfinite(se_w) and se_w > 0:      # an ensemble's standard error of W_c
+            ax.errorbar([W_c], [a_w / a0], xerr=[se_w], fmt="none", ecolor=colour,
+                        elinewidth=1.2, capsize=3, zorder=5)
         if np.isfinite(alpha_c) and a_w > 0:
             xx = np.linspace(W_c, end, 100)
             ax.plot(xx, 1.0 / (1.0 / a_w + alpha_c * (xx - W_c)) / a0, "k--", lw=0.9)
@@ -317,6 +322,9 @@ def summary(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> lis
             sub = sub.sort_values("eps")
             label = _title([keys[i] for i in vary], [key[i] for i in vary]) or None
             line, = ax.plot(sub["eps"], sub["W_c"], "o-", ms=4, lw=1, label=label)
+            if "W_c_stderr" in sub.columns and sub["W_c_stderr"].notna().any():
+                ax.errorbar(sub["eps"], sub["W_c"], yerr=sub["W_c_stderr"].fillna(0.0),
+                            fmt="none", ecolor=line.get_color(), capsize=3, lw=1)
             none = sub["W_c"].isna()
             if none.any():      # no compact zone: marked at the top, not a width
                 ax.plot(sub.loc[none, "eps"], np.full(int(none.sum()), ax_top), "x",

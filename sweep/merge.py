@@ -16,8 +16,10 @@ from .provenance import environment
 from .schema import (
     COLUMNS,
     HISTORY_VAR,
+    MIGRATION_FILL,
     MIGRATIONS,
     PROFILE_VARS,
+    REPLICA_VARS,
     SCHEMA_VERSION,
     profile_path,
 )
@@ -39,8 +41,8 @@ def iter_records(path: str | Path) -> Iterator[dict[str, Any]]:
         table = f["table"]
         n = int(table.attrs["n_rows"])
         # a column an older (migratable) schema version lacks reads as its fill value
-        cols = {c.name: table[c.name][:n] if c.name in table else [c.fill] * n
-                for c in COLUMNS}
+        cols = {c.name: table[c.name][:n] if c.name in table
+                else [MIGRATION_FILL.get(c.name, c.fill)] * n for c in COLUMNS}
         for i in range(n):
             row = {name: _text(values[i]) for name, values in cols.items()}
             row = {k: (v.item() if hasattr(v, "item") else v) for k, v in row.items()}
@@ -48,7 +50,8 @@ def iter_records(path: str | Path) -> Iterator[dict[str, Any]]:
             name = profile_path(h)
             profiles, history = {}, []
             if name in f:
-                profiles = {k: f[name][k][()] for k in PROFILE_VARS}
+                profiles = {k: f[name][k][()] for k in (*PROFILE_VARS, *REPLICA_VARS)
+                            if k in f[name] or k in PROFILE_VARS}
                 history = f[name][HISTORY_VAR[0]][()]
             yield {"row": row, "profiles": profiles, "residual_history": history}
 

@@ -10,8 +10,10 @@ keeps the two identical). Layout of a store (one HDF5 file)::
     /table/<column>        one 1-D dataset per column of :data:`COLUMNS`;
                            attrs of /table: n_rows (rows beyond it are not committed)
     /profiles/<hh>/<hash>  per point (hh = first two hash characters): one float64
-                           dataset per :data:`PROFILE_VARS` entry of length N_f, and
-                           residual_history (length = iterations); attrs: hash
+                           dataset per :data:`PROFILE_VARS` entry of length N_f,
+                           residual_history (length = iterations), and (schema 3) one
+                           per :data:`REPLICA_VARS` entry of shape (R,) or (R, N_f);
+                           attrs: hash
     /runs/<n>              attrs: provenance of the n-th ``sweep run`` on this store
     /campaign_history/<n>  earlier campaign texts (``--extend``)
 
@@ -28,10 +30,11 @@ import numpy as np
 
 from .identity import HASH_LENGTH
 
-__all__ = ["SCHEMA_VERSION", "FORMAT", "Column", "COLUMNS", "PROFILE_VARS", "MIGRATIONS",
+__all__ = ["SCHEMA_VERSION", "FORMAT", "Column", "COLUMNS", "PROFILE_VARS", "REPLICA_VARS",
+           "MIGRATIONS",
            "STATUSES", "schema_document", "validate", "column", "profile_path"]
 
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 FORMAT = "sweep-store"
 
 #: Point statuses: the model's three plus sweep's four (``crashed``: its worker died
@@ -94,6 +97,16 @@ COLUMNS: tuple[Column, ...] = (
     _C("kernel_mode", "str", "", "kernel variant that ran"),
     _C("a_end", "float", "m", "amplitude at the far end of the sheet"),
     _C("model_wall_time", "float", "s", "wall time reported by the model"),
+    _C("replicas", "int", "1", "floe chains R of the ensemble (1: a single trajectory)"),
+    _C("W_c_stderr", "float", "m", "standard error of W_c (mean over the W_c_n replicas with"
+       " a compact zone; NaN with fewer than 2)"),
+    _C("W_c_n", "int", "1", "replicas with a compact zone (-1: stored before schema 3)"),
+    _C("alpha_all_stderr", "float", "m-2", "jackknife standard error of alpha_all over"
+       " replicas (NaN: R = 1)"),
+    _C("alpha_edge_stderr", "float", "m-2", "jackknife standard error of alpha_edge"),
+    _C("alpha_inner_stderr", "float", "m-2", "jackknife standard error of alpha_inner"),
+    _C("alpha_exp_stderr", "float", "m-1", "jackknife standard error of alpha_exp"),
+    _C("a_end_stderr", "float", "m", "standard error of a_end"),
     _C("host", "str", "", "host that computed the point"),
     _C("rank", "int", "1", "MPI rank that computed the point (0: in-process)"),
     _C("pid", "int", "1", "process id that computed the point"),
@@ -107,7 +120,13 @@ COLUMNS: tuple[Column, ...] = (
 )
 _BY_NAME = {c.name: c for c in COLUMNS}
 #: Schema version that added a column (columns not listed: version 1).
-ADDED_IN = {"compact_zone": 2, "compact_end": 2, "ice_extent": 2}
+ADDED_IN = {"compact_zone": 2, "compact_end": 2, "ice_extent": 2,
+            **{name: 3 for name in ("replicas", "W_c_stderr", "W_c_n", "alpha_all_stderr",
+                                    "alpha_edge_stderr", "alpha_inner_stderr",
+                                    "alpha_exp_stderr", "a_end_stderr")}}
+#: Fill value of a column added by a migration, where it differs from the column's fill
+#: (every point stored before schema 3 ran one trajectory).
+MIGRATION_FILL = {"replicas": 1}
 
 #: Per-point profiles (``/profiles/<hh>/<hash>/<name>``): name -> (units, long_name).
 PROFILE_VARS: dict[str, tuple[str, str]] = {
@@ -123,31 +142,55 @@ PROFILE_VARS: dict[str, tuple[str, str]] = {
     "F_d_mean": ("N", "time-mean |drag force|"),
 }
 HISTORY_VAR = ("residual_history", "1", "residual max |a_new - a| / a per iteration")
+#: Per-replica results of an ensemble (schema 3; absent for points stored before it):
+#: name -> (units, long_name, shape) with shape ``("R",)`` or ``("R", "N_f")``.
+REPLICA_VARS: dict[str, tuple[str, str, tuple[str, ...]]] = {
+    "W_c_replicas": ("m", "W_c of each replica (NaN: no compact zone)", ("R",)),
+    "compact_end_replicas": ("m", "end of each replica's first compact zone", ("R",)),
+    "x_mean_replicas": ("m", "time-mean floe centre per replica", ("R", "N_f")),
+    "gap_mean_replicas": ("m", "mean gap to the next floe per replica (last NaN)",
+                          ("R", "N_f")),
+    "S_sd_replicas": ("W m-2", "skin-drag dissipation per replica", ("R", "N_f")),
+}
 
 def profile_path(h: str) -> str:
     """The HDF5 group of point ``h``'s profiles: ``profiles/<first two hash chars>/<h>``."""
     return f"profiles/{h[:2]}/{h}"
 
 
-def _v1_to_v2(f: Any) -> None:
-    """Add the compact-zone columns (fill values: their points keep the first-pair W_c
-    rule of model version 2, which the empty ``compact_zone`` marks)."""
+def _add_columns(f: Any, version: int) -> None:
+    """Add the columns of schema ``version`` to an older store's table, with their fill
+    values (:data:`MIGRATION_FILL` where given)."""
     table = f["table"]
     size = table["hash"].shape[0]
-    for name in ("compact_zone", "compact_end", "ice_extent"):
+    for name in [c.name for c in COLUMNS if ADDED_IN.get(c.name, 1) == version]:
         if name in table:
             continue
         col = _BY_NAME[name]
+        fill = MIGRATION_FILL.get(name, col.fill)
         if col.kind == "str":
             import h5py
             ds = table.create_dataset(name, shape=(size,), maxshape=(None,),
                                       chunks=table["hash"].chunks,
                                       dtype=h5py.string_dtype("utf-8"))
-            ds[...] = [""] * size
+            ds[...] = [fill] * size
         else:
             ds = table.create_dataset(name, shape=(size,), maxshape=(None,),
-                                      chunks=table["hash"].chunks, dtype="float64")
-            ds[...] = np.nan
+                                      chunks=table["hash"].chunks,
+                                      dtype={"float": "float64", "int": "int64"}[col.kind])
+            ds[...] = fill
+
+
+def _v1_to_v2(f: Any) -> None:
+    """Add the compact-zone columns (fill values: their points keep the first-pair W_c
+    rule of model version 2, which the empty ``compact_zone`` marks)."""
+    _add_columns(f, 2)
+
+
+def _v2_to_v3(f: Any) -> None:
+    """Add the ensemble columns: replicas = 1 (every older point ran one trajectory),
+    standard errors NaN, W_c_n -1 (unknown); no per-replica datasets."""
+    _add_columns(f, 3)
 
 
 #: Migrations: from-version -> (to-version, description, function(h5py.File)). A store
@@ -156,6 +199,9 @@ def _v1_to_v2(f: Any) -> None:
 MIGRATIONS: dict[int, tuple[int, str, Any]] = {
     1: (2, "add compact_zone, compact_end, ice_extent (model version 3's robust W_c); "
            "old points keep their values, compact_zone empty", _v1_to_v2),
+    2: (3, "add the ensemble columns replicas (= 1 for old points), W_c_stderr, W_c_n "
+           "(-1), alpha_*_stderr, a_end_stderr (NaN); old points have no per-replica "
+           "datasets", _v2_to_v3),
 }
 
 ROOT_ATTRS = {
@@ -201,7 +247,10 @@ def schema_document() -> dict[str, Any]:
         "profile_datasets": [{"name": n, "units": u, "long_name": ln, "dtype": "float64",
                               "length": "N_f"} for n, (u, ln) in PROFILE_VARS.items()]
         + [{"name": HISTORY_VAR[0], "units": HISTORY_VAR[1], "long_name": HISTORY_VAR[2],
-            "dtype": "float64", "length": "iterations"}],
+            "dtype": "float64", "length": "iterations"}]
+        + [{"name": n, "units": u, "long_name": ln, "dtype": "float64",
+            "shape": list(shape), "optional": "absent for points stored before schema 3"}
+           for n, (u, ln, shape) in REPLICA_VARS.items()],
         "statuses": list(STATUSES),
         "hash": {
             "algorithm": "SHA-256, lower-case hex, 64 characters; displayed as the first 12",
@@ -287,6 +336,7 @@ def validate(path: str | Path) -> list[str]:
         hashes = [h.decode() if isinstance(h, bytes) else h for h in table["hash"][:n]]
         status = [s.decode() if isinstance(s, bytes) else s for s in table["status"][:n]]
         n_floes = table["n_floes"][:n]
+        replicas = table["replicas"][:n] if "replicas" in table else None
         if len(set(hashes)) != len(hashes):
             problems.append("/table/hash: duplicate hashes")
         for i, (h, s) in enumerate(zip(hashes, status, strict=False)):
@@ -310,6 +360,13 @@ def validate(path: str | Path) -> list[str]:
                                     f"({int(n_floes[i])},)")
             if HISTORY_VAR[0] not in f[name]:
                 problems.append(f"/{name}/{HISTORY_VAR[0]}: missing")
+            R = int(replicas[i]) if replicas is not None else -1
+            for var, (_, _, shape) in REPLICA_VARS.items():
+                if var not in f[name]:
+                    continue        # optional: points stored before schema 3
+                want = tuple({"R": R, "N_f": int(n_floes[i])}[d] for d in shape)
+                if f[name][var].shape != want:
+                    problems.append(f"/{name}/{var}: shape {f[name][var].shape} != {want}")
     return problems
 
 

@@ -28,7 +28,7 @@ import numpy as np
 import pandas as pd
 
 from floewave import SWEPT_FIELDS
-from floewave.results import STATUSES, power_law
+from floewave.results import STATUSES, power_law, power_law_weighted
 
 __all__ = ["SWEPT", "RESULT_STATUSES", "derived", "collision_stats", "alpha_omega"]
 
@@ -81,7 +81,10 @@ def derived(df: pd.DataFrame, *, L_sheet: float | None = None,
       ``edge_over_inner`` alpha_edge / alpha_inner;
     - ``fit_ratio`` alpha_exp_resid / alpha_all_resid (> 1: the 1/a law, n = 2, fits better
       than the exponential, n = 1); ``prefers_n2`` (bool) alpha_all_resid <
-      alpha_exp_resid.
+      alpha_exp_resid;
+    - standard errors (ensembles, schema 3; NaN for single trajectories): ``W_c_rel_stderr``,
+      ``inner_over_c_stderr`` (alpha_inner_stderr / alpha_c: alpha_c is exact) and
+      ``edge_over_inner_stderr`` (first order, the two fits' errors taken as independent).
     """
     out = df[df["status"].isin(statuses)].copy() if "status" in df.columns else df.copy()
     out["omega"] = 2.0 * math.pi / out["T"].astype(float)
@@ -98,8 +101,33 @@ def derived(df: pd.DataFrame, *, L_sheet: float | None = None,
     out["fit_ratio"] = _ratio(out["alpha_exp_resid"], out["alpha_all_resid"])
     both = out["alpha_all_resid"].notna() & out["alpha_exp_resid"].notna()
     out["prefers_n2"] = both & (out["alpha_all_resid"] < out["alpha_exp_resid"])
+    for name in _SE_COLUMNS:
+        if name not in out.columns:
+            out[name] = math.nan
+        out[name] = out[name].astype(float)
+    out["W_c_stderr"] = out["W_c_stderr"].where(out["W_c"].notna())
+    out["W_c_rel_stderr"] = out["W_c_stderr"] / out["L_sheet"]
+    out["inner_over_c_stderr"] = _ratio(out["alpha_inner_stderr"], out["alpha_c"]).abs()
+    out["edge_over_inner_stderr"] = (out["edge_over_inner"].abs() * np.sqrt(
+        _ratio(out["alpha_edge_stderr"], out["alpha_edge"]) ** 2
+        + _ratio(out["alpha_inner_stderr"], out["alpha_inner"]) ** 2))
     return out
 
+
+#: Standard-error columns of an ensemble store (schema 3), NaN where a table lacks them.
+_SE_COLUMNS = ("W_c_stderr", "alpha_all_stderr", "alpha_edge_stderr", "alpha_inner_stderr",
+               "alpha_exp_stderr", "a_end_stderr")
+
+
+def _se_of_mean(values: pd.Series, se: pd.Series) -> float:
+    """Standard error of the plain mean of ``values`` (the finite ones) from the points'
+    own standard errors, sqrt(sum se_i^2) / n: NaN when any of them lacks one."""
+    ok = values.notna()
+    n = int(ok.sum())
+    e = se[ok]
+    if n == 0 or e.isna().any():
+        return math.nan
+    return float(np.sqrt((e.astype(float) ** 2).sum()) / n)
 
 def _layouts(df: pd.DataFrame) -> pd.Series:
     """The compact_zone column; for rows of older stores (empty value) derived from the
@@ -154,7 +182,12 @@ def collision_stats(df: pd.DataFrame, by: str | Sequence[str] | None = None, *,
     - ``edge_over_inner_mean``, ``edge_over_inner_median``, ``n_edge_over_inner``;
     - ``frac_prefers_n2`` (share of points where 1/a fits better than the exponential),
       ``fit_ratio_median`` (alpha_exp_resid / alpha_all_resid), ``alpha_all_resid_median``,
-      ``alpha_exp_resid_median``.
+      ``alpha_exp_resid_median``;
+    - ``W_c_mean_stderr``, ``W_c_rel_mean_stderr``, ``inner_over_c_mean_stderr``: the
+      standard errors of those means propagated from the points' own (ensemble) standard
+      errors, sqrt(sum se_i^2) / n — the uncertainty from the chaotic dynamics, not the
+      spread across parameters (that is ``*_std``); NaN when any point of the mean has
+      no standard error (single-trajectory points).
     """
     keys = _as_list(by)
     unknown = [k for k in keys if k not in df.columns]
@@ -192,6 +225,11 @@ def collision_stats(df: pd.DataFrame, by: str | Sequence[str] | None = None, *,
         alpha_all_resid_median=("alpha_all_resid", "median"),
         alpha_exp_resid_median=("alpha_exp_resid", "median"),
     ).reset_index()
+    se_cols = {"W_c_mean_stderr": ("W_c", "W_c_stderr"),
+               "W_c_rel_mean_stderr": ("W_c_rel", "W_c_rel_stderr"),
+               "inner_over_c_mean_stderr": ("inner_over_c", "inner_over_c_stderr")}
+    for name, (val, se) in se_cols.items():
+        agg[name] = [_se_of_mean(g[val], g[se]) for _, g in grouped] if len(d) else []
     if not keys:
         agg = agg.drop(columns="_all")
     for col in ("n_not_converged", "n_edge", "n_compact", "n_inverted", "n_patchy",
@@ -219,7 +257,12 @@ def alpha_omega(df: pd.DataFrame, alpha: str = "alpha_inner",
     Returns
     -------
     DataFrame with the ``by`` columns and ``m`` (exponent), ``c`` (prefactor, units of
-    alpha times s^m), ``m_stderr`` (least-squares standard error of m; NaN with 2 periods),
+    alpha times s^m), ``m_stderr`` (standard error of m; NaN with 2 periods),
+    ``weighted`` (True when every fitted point has a standard error, ``<alpha>_stderr``
+    of an ensemble: the fit is then weighted by them and ``m_stderr`` is the weighted
+    fit's, inflated by sqrt(chi^2/dof) when the scatter exceeds the error bars —
+    :func:`floewave.results.power_law_weighted`; otherwise the unweighted fit and its
+    residual-based standard error), ``chi2_dof`` (weighted fits),
     ``rms_log_resid`` (RMS of ln alpha - fit), ``n_periods`` (distinct T fitted),
     ``n_points`` (points fitted), ``n_dropped`` (points left out) and why:
     ``n_dropped_no_zone`` (no rate because the point has no compact zone: alpha_inner),
@@ -245,15 +288,24 @@ def alpha_omega(df: pd.DataFrame, alpha: str = "alpha_inner",
         ok = np.isfinite(al) & (al > 0)
         row = dict(zip(keys, key, strict=True))
         n_per = int(len(np.unique(om[ok])))
+        se_col = alpha + "_stderr"
+        se = g[se_col].to_numpy(float) if se_col in g.columns else np.full(len(g), np.nan)
+        weighted = bool(ok.any() and np.all(np.isfinite(se[ok]) & (se[ok] > 0)))
+        chi2 = math.nan
         if n_per >= min_periods:
             m, c, m_se, rms = power_law(om[ok], al[ok])
+            if weighted:
+                m, c, m_se, chi2 = power_law_weighted(om[ok], al[ok], se[ok])
+                rms = float(np.sqrt(np.mean((np.log(al[ok]) - np.log(c)
+                                             - m * np.log(om[ok])) ** 2)))
         else:
             m = c = m_se = rms = math.nan
         ac = g["alpha_c"].to_numpy(float) if "alpha_c" in g.columns else np.full(len(g), np.nan)
         okc = ok & np.isfinite(ac) & (ac > 0)
         m_c = (power_law(om[okc], ac[okc])[0]
                if len(np.unique(om[okc])) >= min_periods else math.nan)
-        row.update(m=m, c=c, m_stderr=m_se, rms_log_resid=rms, n_periods=n_per,
+        row.update(m=m, c=c, m_stderr=m_se, weighted=weighted, chi2_dof=chi2,
+                   rms_log_resid=rms, n_periods=n_per,
                    n_points=int(ok.sum()), n_dropped=int((~ok).sum()),
                    n_dropped_no_zone=int((~np.isfinite(al) & none).sum()),
                    n_dropped_nan=int((~np.isfinite(al) & ~none).sum()),
@@ -261,7 +313,8 @@ def alpha_omega(df: pd.DataFrame, alpha: str = "alpha_inner",
                    omega_min=float(om[ok].min()) if ok.any() else math.nan,
                    omega_max=float(om[ok].max()) if ok.any() else math.nan, m_c=m_c)
         rows.append(row)
-    cols = keys + ["m", "c", "m_stderr", "rms_log_resid", "n_periods", "n_points",
+    cols = keys + ["m", "c", "m_stderr", "weighted", "chi2_dof", "rms_log_resid",
+                   "n_periods", "n_points",
                    "n_dropped", "n_dropped_no_zone", "n_dropped_nan",
                    "n_dropped_nonpositive", "omega_min",
                    "omega_max", "m_c"]

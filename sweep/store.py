@@ -541,7 +541,7 @@ class Store:
         missing = [h for h in w.rows if h not in self.scan.latest]
         if not missing:
             return
-        from .schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, profile_path
+        from .schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, REPLICA_VARS, profile_path
 
         table = w.file["table"]
         n = int(table.attrs["n_rows"])
@@ -554,8 +554,8 @@ class Store:
             name = profile_path(h)
             profiles, history = {}, []
             if name in w.file:
-                profiles = {k: w.file[name][k][()].tolist() for k in PROFILE_VARS
-                            if k in w.file[name]}
+                profiles = {k: w.file[name][k][()].tolist()
+                            for k in (*PROFILE_VARS, *REPLICA_VARS) if k in w.file[name]}
                 history = w.file[name][HISTORY_VAR[0]][()].tolist()
             lines.append(encode({"row": row, "profiles": profiles,
                                  "residual_history": history}))

@@ -21,7 +21,15 @@ import h5py
 import numpy as np
 from h5py import h5a, h5d, h5g, h5s, h5t
 
-from .schema import COLUMNS, FORMAT, HISTORY_VAR, PROFILE_VARS, SCHEMA_VERSION, profile_path
+from .schema import (
+    COLUMNS,
+    FORMAT,
+    HISTORY_VAR,
+    PROFILE_VARS,
+    REPLICA_VARS,
+    SCHEMA_VERSION,
+    profile_path,
+)
 
 __all__ = ["H5Writer", "Unstorable", "normalise_record", "HDF5_SIGNATURE", "fsync_path",
            "fsync_dir"]
@@ -80,7 +88,8 @@ def normalise_record(record: dict[str, Any]) -> dict[str, Any]:
     ------
     Unstorable
         When a value cannot be converted (text in a float column, an integer beyond
-        64 bits, a profile that is not a 1-D array of numbers...).
+        64 bits, a profile that is not a 1-D array of numbers (2-D for the per-replica
+        profiles)...).
     """
     row_in = record.get("row")
     if not isinstance(row_in, dict):
@@ -97,9 +106,10 @@ def normalise_record(record: dict[str, Any]) -> dict[str, Any]:
             arr = np.asarray(value, dtype=np.float64)
         except (TypeError, ValueError, OverflowError) as exc:
             raise Unstorable(f"profile {name}: {exc}") from None
-        if arr.ndim > 1:
-            raise Unstorable(f"profile {name}: {arr.ndim}-D, expected 1-D")
-        profiles[str(name)] = arr.reshape(-1)
+        want = len(REPLICA_VARS[name][2]) if name in REPLICA_VARS else 1
+        if arr.ndim > want:
+            raise Unstorable(f"profile {name}: {arr.ndim}-D, expected {want}-D")
+        profiles[str(name)] = arr.reshape(-1) if want == 1 else arr
     try:
         hist = np.asarray(record.get("residual_history", ()), dtype=np.float64).reshape(-1)
     except (TypeError, ValueError, OverflowError) as exc:
@@ -289,6 +299,9 @@ class H5Writer:
         for name in PROFILE_VARS:
             _dataset(gid, name, profiles.get(name, ()))
         _dataset(gid, HISTORY_VAR[0], record.get("residual_history", ()))
+        for name in REPLICA_VARS:
+            if name in profiles:          # optional: ensembles of schema 3 write them
+                _dataset(gid, name, profiles[name])
 
     def durable(self) -> None:
         """Flush the file and ``fsync`` it."""

@@ -71,7 +71,7 @@ def test_exact_mode_confined_profile_is_eq25():
 def test_exact_and_quadrature_dem_points_agree_within_errors():
     """A reduced DEM point in both modes: far-end amplitudes within 4 combined std errors."""
     opts = dict(L_x=1.5, n0=3, n0_warm=3, nT=2, noise_window=4, n_average=20, eps=0.4, relax=0.3,
-                target_stderr=0.0,
+                target_stderr=0.0, replicas=1, placement="uniform",
                 max_iterations=80)
     rq = run_point(ModelConfig(**opts))
     re_ = run_point(ModelConfig(drag_integration="exact", **opts))

@@ -4,7 +4,8 @@ The kernels used to be compiled with fast-math, and a process that compiled them
 machine code than a process that loaded them from the on-disk cache (see
 :mod:`floewave._jit`): the Fig. 2 ``ml`` eps 0.6 point gave W_c 18.42 m cold and 15.92 m
 warm. Here short DEM points (every kernel path: two-pass and plain quadrature drag, exact
-drag, the amplitude iteration) run in fresh interpreters:
+drag, the amplitude iteration; ensembles of 2 replicas, random and uniform placement, mean
+and independent coupling) run in fresh interpreters:
 
 - A: an empty cache directory, the quadrature point first, then the exact-drag point;
 - B: the cache A left (everything loaded, nothing compiled);
@@ -39,8 +40,12 @@ SCRIPT = textwrap.dedent("""
         # 1.5 m floes, exact drag: the per-floe exact loop (most floes need roots)
         "exact-long": dict(L_x=1.5, T=1.2, a0=0.02, eps=0.8, d_f=0.005, dispersion="ep",
                            drag_integration="exact", integrator="half_step"),
+        # an ensemble of independently iterated replicas from the paper's arrangement
+        "independent": dict(L_x=3.0, T=1.2, a0=0.02, eps=0.6, d_f=0.005, dispersion="ml",
+                            coupling="independent", placement="uniform"),
     }
-    SHORT = dict(n0=2, nT=1, max_iterations=4, noise_window=2, n_average=2, n0_warm=0)
+    SHORT = dict(n0=2, nT=1, max_iterations=4, noise_window=2, n_average=2, n0_warm=0,
+                 replicas=2)
 
     out = {}
     for name in sys.argv[1:]:
@@ -71,7 +76,7 @@ def _run(cache_dir, order):
 
 @pytest.mark.skipif(os.environ.get("NUMBA_DISABLE_JIT") == "1", reason="needs the JIT")
 def test_point_bits_do_not_depend_on_the_jit_cache(tmp_path):
-    names = ["quadrature", "long", "exact", "exact-long"]
+    names = ["quadrature", "long", "exact", "exact-long", "independent"]
     cold = _run(tmp_path / "cache-a", names)
     assert any((tmp_path / "cache-a").rglob("*.nbc")), "nothing was cached"
     warm = _run(tmp_path / "cache-a", names)

@@ -49,6 +49,8 @@ max_iterations = 10
 noise_window = 2
 n_average = 2
 n0_warm = 1
+replicas = 2
+target_W_c_stderr = 0.0
 
 [sweep]
 L_x = [3.0, 1.5]

@@ -15,6 +15,7 @@ L_sheet = 9.0
 n0 = 1
 nT = 1
 max_iterations = 4
+replicas = 2
 [sweep]
 L_x = [1.5, 3.0]
 eps = [0.2, 0.8]

@@ -169,3 +169,70 @@ def test_rows_of_old_stores(table):
     s = collision_stats(old, by="eps").set_index("eps")
     assert s.loc[0.8, "n_no_compact"] == 24 and s.loc[0.8, "n_W_c"] == 0
     assert s.loc[0.2, "n_legacy"] == 24 and s.loc[0.2, "W_c_mean"] == pytest.approx(1.0)
+
+
+# ---------------------------------------------------------------- standard errors (ensembles)
+def test_power_law_weighted_recovers_the_law_and_an_honest_error():
+    """The weighted log-log fit gives the exact law on exact data, and on data scattered
+    by their stated standard errors its m_stderr matches the spread of m over 4000 draws
+    (Monte Carlo: within 5 %)."""
+    from floewave.results import power_law_weighted
+    om = np.array([3.1, 3.9, 4.5, 5.2, 5.7, 6.3])
+    se_rel = np.array([0.02, 0.05, 0.03, 0.1, 0.04, 0.06])
+    y = 2.0 * om**3.5
+    m, c, m_se, chi2 = power_law_weighted(om, y, se_rel * y)
+    assert m == pytest.approx(3.5, rel=1e-12) and c == pytest.approx(2.0, rel=1e-10)
+    assert chi2 == pytest.approx(0.0, abs=1e-18)
+    w = se_rel**-2                          # weights of ln y: 1 / (SE of ln y)^2
+    lx = np.log(om)
+    expected = 1.0 / math.sqrt(float((w * (lx - np.average(lx, weights=w)) ** 2).sum()))
+    rng = np.random.default_rng(7)
+    ms = []
+    for _ in range(4000):
+        yy = y * np.exp(rng.normal(0.0, se_rel))
+        ms.append(power_law_weighted(om, yy, se_rel * yy)[0])
+    assert np.std(ms) == pytest.approx(expected, rel=0.05)
+    # the reported error is never below the error bars' own (chi^2 inflation only raises it)
+    for _ in range(20):
+        yy = y * np.exp(rng.normal(0.0, se_rel))
+        assert power_law_weighted(om, yy, se_rel * yy)[2] >= expected * (1 - 1e-12)
+
+
+def _with_se(table, se):
+    t = table.copy()
+    t["W_c_stderr"] = se
+    t["alpha_inner_stderr"] = 0.05 * t["alpha_inner"].abs()
+    return t
+
+
+def test_collision_stats_propagate_the_points_standard_errors(table):
+    t = _with_se(table, 0.5)
+    s = collision_stats(t, by="eps").set_index("eps")
+    d = derived(t)
+    for eps in (0.2, 0.8):
+        g = d[d["eps"] == eps]
+        n = int(g["W_c"].notna().sum())
+        assert s.loc[eps, "W_c_mean_stderr"] == pytest.approx(0.5 * math.sqrt(n) / n)
+        assert s.loc[eps, "W_c_rel_mean_stderr"] == pytest.approx(0.5 / 6.0 / math.sqrt(n))
+        inner = g["inner_over_c_stderr"][g["inner_over_c"].notna()]
+        assert s.loc[eps, "inner_over_c_mean_stderr"] == pytest.approx(
+            math.sqrt((inner**2).sum()) / len(inner))
+    # one point of a group without an error bar: that group's mean has none
+    t.loc[t.index[0], "W_c_stderr"] = np.nan
+    s2 = collision_stats(t, by="eps").set_index("eps")
+    eps0 = t.loc[t.index[0], "eps"]
+    if not math.isnan(t.loc[t.index[0], "W_c"]) and t.loc[t.index[0], "compact_zone"] != "none":
+        assert math.isnan(s2.loc[eps0, "W_c_mean_stderr"])
+    # single trajectories (no standard-error columns): NaN, never zero
+    s3 = collision_stats(table, by="eps")
+    assert s3["W_c_mean_stderr"].isna().all()
+
+
+def test_alpha_omega_weighted_when_every_point_has_an_error_bar(table):
+    t = _with_se(table, 0.5)
+    w = alpha_omega(t)
+    ok = w["n_periods"] >= 3
+    assert w.loc[ok, "weighted"].all()
+    # exact power law with proportional errors: the weighted fit finds the same m exactly
+    np.testing.assert_allclose(w.loc[ok, "m"], alpha_omega(table).loc[ok, "m"], rtol=1e-9)
+    assert not alpha_omega(table)["weighted"].any()

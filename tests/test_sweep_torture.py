@@ -28,7 +28,7 @@ import pytest
 
 import sweep
 from sweep.journal import BadLine, decode
-from sweep.schema import COLUMNS, HISTORY_VAR, PROFILE_VARS
+from sweep.schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, REPLICA_VARS
 from sweep.store import journal_path, lock_path, read_journal
 from sweep.testing import find_mpiexec
 
@@ -46,6 +46,8 @@ max_iterations = 10
 noise_window = 2
 n_average = 2
 n0_warm = 1
+replicas = 2
+target_W_c_stderr = 0.0
 
 [sweep]
 L_x = [3.0, 1.5]
@@ -178,7 +180,7 @@ def compare(ref: Path, store: Path) -> dict[str, Any]:
                 problems.append(f"{h[:12]}: profile group present in only one store")
                 continue
             if name in fa:
-                for var in (*PROFILE_VARS, HISTORY_VAR[0]):
+                for var in (*PROFILE_VARS, *REPLICA_VARS, HISTORY_VAR[0]):
                     x, y = fa[name][var][()], fb[name][var][()]
                     if x.shape != y.shape or not np.array_equal(x, y, equal_nan=True):
                         problems.append(f"{h[:12]} profile {var} differs")

@@ -1,0 +1,180 @@
+"""Are the ensemble's error bars honest? Two independent ensembles per point, z-scores.
+
+For every point (the paper's 8 Fig. 2 points plus ``--random`` points of the paper's grid,
+MODEL.md §7, drawn with a fixed seed) run two ensembles that differ only in ``seed`` (or
+in ``placement``, with ``--placements uniform random``) and compute, per quantity,
+
+    z = (x1 - x2) / sqrt(se1^2 + se2^2)
+
+for a(x) per floe, W_c, alpha_inner, alpha_all (and alpha_edge, alpha_exp, a_end).
+Honest standard errors give an RMS z near 1 (too small: error bars too wide; too large:
+too narrow or the two ensembles differ systematically). Also prints the cost per point in
+floe-steps (summed over replicas) against a single trajectory (R = 1, uniform: the paper's
+model) at the same SE(a): single-trajectory floe-steps x (SE_1 / SE_R)^2 (the iteration
+standard error falls as 1/sqrt(iterations averaged)).
+
+    python benchmarks/honesty.py                       # R = 8, coupling mean, 8 + 8 points
+    python benchmarks/honesty.py --coupling independent
+    python benchmarks/honesty.py --placements uniform random --random 0   # §4.1's claim
+    python benchmarks/honesty.py --set nT=3 --replicas 4 --jobs 2
+
+Stochastic: the figures change with the seeds drawn; they are statistics of chaotic
+runs. Results are cached in ``--cache`` (JSON per run) so a rerun only adds missing runs.
+"""
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import math
+import multiprocessing as mp
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from floewave import ModelConfig
+from floewave.config import InvalidPointError
+from floewave.model import run_point
+
+GRID = {"L_x": [0.5, 1.5, 3.0], "T": [1.1, 1.2, 1.4, 1.5, 1.6, 1.8, 2.0],
+        "a0": [0.0125, 0.015, 0.02, 0.025], "C_sd": [0.005, 0.01, 0.05, 0.1, 0.15, 0.2],
+        "eps": [0.2, 0.4, 0.6, 0.8], "d_f": [0.005, 0.010, 0.020, 0.050],
+        "dispersion": ["ep", "ow", "ml"]}
+SCALARS = ("W_c", "alpha_inner", "alpha_all", "alpha_edge", "alpha_exp", "a_end")
+
+
+def points(n_random: int, seed: int) -> list[dict]:
+    """The Fig. 2 points, then ``n_random`` valid random grid points."""
+    out = [dict(eps=e, dispersion=d) for d in ("ml", "ep") for e in (0.2, 0.4, 0.6, 0.8)]
+    rng = np.random.default_rng(seed)
+    while len(out) < 8 + n_random:
+        p = {k: v[int(rng.integers(len(v)))] for k, v in GRID.items()}
+        try:
+            ModelConfig(**p).check_physics()
+        except InvalidPointError:
+            continue
+        out.append(p)
+    return out
+
+
+def run_one(task: tuple[dict, str]) -> tuple[str, dict]:
+    cfg_dict, key = task
+    cfg = ModelConfig(**cfg_dict)
+    t = time.perf_counter()
+    r = run_point(cfg)
+    rec = {"a": r.a.tolist(), "a_stderr": r.a_stderr.tolist(), "status": r.status,
+           "iterations": r.iterations, "floe_steps": r.floe_steps,
+           "wall": time.perf_counter() - t, "W_c_n": r.W_c_n, "layout": r.compact_zone,
+           "W_c_replicas": np.asarray(r.W_c_replicas).tolist()}
+    for name in SCALARS:
+        rec[name] = getattr(r, name)
+        rec[name + "_stderr"] = getattr(r, name + "_stderr")
+    return key, rec
+
+
+def key_of(d: dict) -> str:
+    return hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()[:20]
+
+
+def z_scores(r1: dict, r2: dict, name: str) -> np.ndarray:
+    x1, x2 = np.asarray(r1[name], float), np.asarray(r2[name], float)
+    s1, s2 = np.asarray(r1[name + "_stderr"], float), np.asarray(r2[name + "_stderr"], float)
+    var = s1**2 + s2**2
+    ok = np.isfinite(x1) & np.isfinite(x2) & np.isfinite(var) & (var > 0)
+    return np.atleast_1d(((x1 - x2) / np.sqrt(np.where(ok, var, 1.0)))[ok])
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--replicas", type=int, default=8)
+    ap.add_argument("--coupling", default="mean", choices=("mean", "independent"))
+    ap.add_argument("--placements", nargs=2, default=("random", "random"))
+    ap.add_argument("--seeds", nargs=2, type=int, default=(1, 2))
+    ap.add_argument("--random", type=int, default=8, help="random grid points (>= 8)")
+    ap.add_argument("--grid-seed", type=int, default=2019)
+    ap.add_argument("--set", action="append", default=[], metavar="FIELD=VALUE")
+    ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--no-single", action="store_true", help="skip the R = 1 baseline")
+    ap.add_argument("--cache", default="/tmp/floewave-honesty.json")
+    args = ap.parse_args(argv)
+    extra = {}
+    for item in args.set:
+        k, v = item.split("=", 1)
+        extra[k] = json.loads(v) if v[:1] not in "\"'" and not v.isalpha() else v
+    pts = points(args.random, args.grid_seed)
+    cache_path = Path(args.cache)
+    cache = json.loads(cache_path.read_text()) if cache_path.exists() else {}
+    ens = []
+    tasks = []
+    for p in pts:
+        pair = []
+        for placement, seed in zip(args.placements, args.seeds, strict=True):
+            d = {**p, **extra, "replicas": args.replicas, "seed": seed,
+                 "placement": placement, "coupling": args.coupling}
+            pair.append(key_of(d))
+            tasks.append((d, key_of(d)))
+        single = {**p, **extra, "replicas": 1, "placement": "uniform"}
+        if not args.no_single:
+            tasks.append((single, key_of(single)))
+        ens.append((p, pair, key_of(single)))
+    todo = [t for t in tasks if t[1] not in cache]
+    todo = list({t[1]: t for t in todo}.values())
+    print(f"{len(pts)} points, {len(tasks)} runs ({len(todo)} to compute), R = "
+          f"{args.replicas}, coupling {args.coupling}, placements {args.placements}, "
+          f"seeds {args.seeds}, extra {extra}", flush=True)
+    t0 = time.perf_counter()
+    with mp.get_context("fork").Pool(args.jobs) as pool:
+        for i, (key, rec) in enumerate(pool.imap_unordered(run_one, todo), 1):
+            cache[key] = rec
+            cache_path.write_text(json.dumps(cache))
+            print(f"  {i}/{len(todo)} done ({time.perf_counter() - t0:.0f} s)", flush=True)
+
+    zs: dict[str, list[np.ndarray]] = {"a": [], **{s: [] for s in SCALARS}}
+    print(f"\n{'point':44s} {'W_c 1 +- se':>15s} {'W_c 2 +- se':>15s} {'z_Wc':>6s} "
+          f"{'rms z_a':>7s} {'SE(a)/a0':>8s} {'iters':>7s} status")
+    cost_R, cost_1, cost_eq = [], [], []
+    statuses = []
+    for p, (k1, k2), ks in ens:
+        r1, r2 = cache[k1], cache[k2]
+        za = z_scores(r1, r2, "a")
+        zs["a"].append(za)
+        for s in SCALARS:
+            zs[s].append(z_scores(r1, r2, s))
+        zw = z_scores(r1, r2, "W_c")
+        name = ",".join(f"{k}={v}" for k, v in p.items() if k != "dispersion") + \
+            f",{p['dispersion']}"
+        se_a = np.nanmax(r1["a_stderr"]) / ModelConfig(**p).a0
+        print(f"{name:44s} {r1['W_c']:7.2f}+-{r1['W_c_stderr']:5.2f} "
+              f"{r2['W_c']:7.2f}+-{r2['W_c_stderr']:5.2f} "
+              f"{(zw[0] if zw.size else math.nan):6.2f} "
+              f"{math.sqrt(np.mean(za**2)) if za.size else math.nan:7.2f} {se_a:8.4f} "
+              f"{r1['iterations']:3d}/{r2['iterations']:<3d} {r1['status']}/{r2['status']}")
+        statuses += [r1["status"], r2["status"]]
+        if ks in cache:
+            rs = cache[ks]
+            med_R = np.nanmedian(r1["a_stderr"])
+            med_1 = np.nanmedian(rs["a_stderr"])
+            cost_R.append(r1["floe_steps"])
+            cost_1.append(rs["floe_steps"])
+            if med_R > 0 and np.isfinite(med_1):
+                cost_eq.append((r1["floe_steps"], rs["floe_steps"] * (med_1 / med_R) ** 2))
+    print("\nRMS z (target 0.6-1.5; n = number of z values):")
+    for name, parts in zs.items():
+        z = np.concatenate(parts) if parts else np.zeros(0)
+        rms = math.sqrt(np.mean(z**2)) if z.size else math.nan
+        print(f"  {name:12s} RMS z = {rms:5.2f}  n = {z.size:4d}  |z|>3: {int((abs(z) > 3).sum())}")
+    nc = sum(s == "not_converged" for s in statuses)
+    print(f"\nnot_converged: {nc} of {len(statuses)} ensemble runs")
+    if cost_R:
+        print(f"floe-steps per point (median over points): ensemble {np.median(cost_R):.3g}, "
+              f"single trajectory {np.median(cost_1):.3g}, single trajectory at the "
+              f"ensemble's SE(a) {np.median([c for _, c in cost_eq]):.3g} (median ratio "
+              f"ensemble / that {np.median([e / c for e, c in cost_eq]):.2f})")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
