@@ -14,8 +14,9 @@ positions, ...). Its standard error is the delete-one jackknife over replicas,
 for a mean it is exactly the standard error of the mean). ``W_c`` is a property of one
 averaging window (the paper's: where the window's mean gaps drop below 1e-4 m): it is found
 in every window of every replica, averaged over each replica's windows, then over the
-replicas that have a compact zone, with the standard error of that mean. ``benchmarks/honesty.py`` checks these error bars against independent
-ensembles (README "Ensembles and error bars").
+replicas that have a compact zone, with the standard error of that mean.
+``benchmarks/honesty.py`` checks these error bars against independent ensembles (README
+"Ensembles and error bars").
 """
 from __future__ import annotations
 

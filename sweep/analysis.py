@@ -16,8 +16,15 @@ import pandas as pd
 import xarray as xr
 
 from .errors import StoreError
-from .schema import (COLUMNS, HISTORY_VAR, MIGRATION_FILL, PROFILE_VARS, REPLICA_VARS, column,
-                     profile_path)
+from .schema import (
+    COLUMNS,
+    HISTORY_VAR,
+    MIGRATION_FILL,
+    PROFILE_VARS,
+    REPLICA_VARS,
+    column,
+    profile_path,
+)
 
 __all__ = ["load", "load_xarray", "load_profile", "store_attrs", "resolve_hash",
            "journal_points"]

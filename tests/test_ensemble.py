@@ -13,8 +13,14 @@ import pytest
 
 from floewave import ModelConfig, run_point
 from floewave.config import ConfigError
-from floewave.ensemble import (Records, estimate_point, initial_positions, jackknife_se,
-                               march_rows, zone_of)
+from floewave.ensemble import (
+    Records,
+    estimate_point,
+    initial_positions,
+    jackknife_se,
+    march_rows,
+    zone_of,
+)
 from floewave.model import march_amplitude
 
 SHORT = dict(L_x=1.5, T=1.2, a0=0.02, eps=0.8, dispersion="ep", n0=2, nT=1,
