@@ -110,6 +110,22 @@ def plot(cfg: ModelConfig, r, path: Path) -> None:
     plt.close(fig)
 
 
+def _check_outputs(args: argparse.Namespace) -> None:
+    """Refuse an output that cannot be written before the point runs (and is lost)."""
+    from ._paths import output_file_problem
+
+    for option, path in (("--json", args.json), ("--plot", args.plot)):
+        problem = output_file_problem(path, option) if path is not None else None
+        if problem:
+            raise FloewaveError(problem)
+    if args.plot is not None:
+        try:
+            import matplotlib  # noqa: F401
+        except ImportError:
+            raise FloewaveError("--plot needs matplotlib: pip install 'floewave[plot]'") \
+                from None
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="floewave", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="cmd", required=True)
@@ -129,6 +145,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         cfg = config_from_sets(args.set)
         cfg.check_physics()
+        _check_outputs(args)
     except (FloewaveError, ValueError) as exc:
         print(f"floewave: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT

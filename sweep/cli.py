@@ -16,9 +16,22 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from .errors import EXIT_CONFIG, EXIT_INTERNAL, EXIT_OK, EXIT_STORE, ConfigError, SweepError
+from floewave._paths import output_dir_problem, output_file_problem
+
+from .errors import EXIT_INTERNAL, EXIT_OK, EXIT_STORE, ConfigError, Interrupted, SweepError
 
 __all__ = ["main", "build_parser"]
+
+
+def plural(n: int, noun: str) -> str:
+    """``1 point``, ``2 points``."""
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
+
+
+def _kinds(text: str) -> list[str]:
+    """``--only fig2,fig3``: a comma-separated list (one argument, so that a store name
+    after ``--only`` is never taken for a kind)."""
+    return [k for k in (s.strip() for s in text.split(",")) if k]
 
 
 def _shard(text: str) -> tuple[int, int]:
@@ -100,8 +113,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     e = sub.add_parser("export", help="write the per-point table as CSV or Parquet")
     e.add_argument("store", type=Path)
-    e.add_argument("--output", "-o", type=Path, required=True,
-                   help="file ending in .csv or .parquet")
+    e.add_argument("--output", "--out", "-o", type=Path, required=True, dest="output",
+                   help="file ending in .csv or .parquet (Parquet needs the 'parquet' extra)")
 
     v = sub.add_parser("validate", help="check a store against results_schema")
     v.add_argument("store", type=Path)
@@ -113,8 +126,9 @@ def build_parser() -> argparse.ArgumentParser:
     fg.add_argument("--max", type=int, default=20, metavar="N",
                     help="at most N figures per kind (default 20; groups closest to the "
                          "paper's setup first)")
-    fg.add_argument("--only", nargs="+", metavar="KIND", default=None,
-                    help="only these kinds: fig2 fig3 fig5 fig6 summary (default all)")
+    fg.add_argument("--only", type=_kinds, action="extend", metavar="KIND[,KIND]",
+                    default=None, help="only these kinds, comma-separated or repeated:"
+                    " fig2,fig3,fig5,fig6,summary (default all)")
 
     m = sub.add_parser("merge", help="combine shard stores of one campaign (dedup by hash)")
     m.add_argument("output", type=Path, help="merged store (created or extended)")
@@ -122,9 +136,12 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def _err(message: str) -> None:
+def _err(message: str | BaseException) -> None:
+    """Report an error on stderr; a requested stop (:class:`Interrupted`) is not an error
+    and says ``sweep: stopped:`` instead."""
+    prefix = "sweep: stopped:" if isinstance(message, Interrupted) else "sweep: error:"
     for line in str(message).splitlines() or [""]:
-        print(f"sweep: error: {line}", file=sys.stderr)
+        print(f"{prefix} {line}", file=sys.stderr)
 
 
 # ---------------------------------------------------------------------- commands
@@ -173,7 +190,7 @@ def cmd_run(args: argparse.Namespace) -> int:
                                command=" ".join(sys.argv), point_timeout=args.point_timeout)
     except SweepError as exc:
         if rank == 0:
-            _err(str(exc))
+            _err(exc)
         return exc.exit_status
     if rank == 0 and summary is not None:
         print(f"sweep: {summary}; store {args.store}")
@@ -319,24 +336,29 @@ def cmd_status(args: argparse.Namespace) -> int:
 def cmd_export(args: argparse.Namespace) -> int:
     from .analysis import load
 
-    if not args.output.parent.is_dir():
-        _err(f"--output {args.output}: directory {args.output.parent} does not exist")
-        return EXIT_CONFIG
-    df = load(args.store)
     suffix = args.output.suffix.lower()
+    if suffix not in (".csv", ".parquet"):
+        raise ConfigError(f"--output {args.output}: expected a .csv or .parquet file name")
+    problem = output_file_problem(args.output, "--output")
+    if problem:
+        raise ConfigError(problem)
+    if suffix == ".parquet" and not _parquet_engine():
+        raise ConfigError(f"--output {args.output}: Parquet needs pyarrow:"
+                          " pip install 'floewave[parquet]' (or write .csv)")
+    df = load(args.store)
     if suffix == ".csv":
         df.to_csv(args.output, index=False)
-    elif suffix == ".parquet":
-        try:
-            df.to_parquet(args.output, index=False)
-        except ImportError as exc:
-            _err(f"--output {args.output}: Parquet needs pyarrow ({exc}); use .csv")
-            return EXIT_CONFIG
     else:
-        _err(f"--output {args.output}: expected a .csv or .parquet file name")
-        return EXIT_CONFIG
-    print(f"sweep: wrote {len(df)} rows to {args.output}")
+        df.to_parquet(args.output, index=False)
+    print(f"sweep: wrote {plural(len(df), 'row')} to {args.output}")
     return EXIT_OK
+
+
+def _parquet_engine() -> bool:
+    """Whether pandas can write Parquet (pyarrow or fastparquet importable)."""
+    import importlib.util
+
+    return any(importlib.util.find_spec(m) is not None for m in ("pyarrow", "fastparquet"))
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
@@ -362,15 +384,18 @@ def cmd_merge(args: argparse.Namespace) -> int:
 def cmd_figures(args: argparse.Namespace) -> int:
     from .figures import KINDS, make_figures
 
-    if not args.store.exists():
-        raise FileNotFoundError(f"{args.store}: no such store")
     if args.max < 1:
         raise ConfigError(f"--max {args.max}: must be at least 1")
+    problem = output_dir_problem(args.out, "--out")
+    if problem:
+        raise ConfigError(problem)
+    if not args.store.exists():
+        raise FileNotFoundError(f"{args.store}: no such store")
     files = make_figures(args.store, args.out, max_figures=args.max,
                          kinds=args.only or KINDS)
     for f in files:
         print(f)
-    print(f"sweep: wrote {len(files)} figures to {args.out}")
+    print(f"sweep: wrote {plural(len(files), 'figure')} to {args.out}")
     return EXIT_OK
 
 
@@ -384,12 +409,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         args = build_parser().parse_args(argv)
     except SweepError as exc:  # a stop during the parser's imports
-        _err(str(exc))
+        _err(exc)
         return exc.exit_status
     try:
         return _COMMANDS[args.command](args)
     except SweepError as exc:  # ConfigError, StoreError, ...: each carries its exit status
-        _err(str(exc))
+        _err(exc)
         return exc.exit_status
     except (KeyError, FileNotFoundError) as exc:
         _err(str(exc))

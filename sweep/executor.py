@@ -373,6 +373,9 @@ class RunSummary:
     elapsed: float = 0.0
     master_cpu: float = 0.0
     loop_elapsed: float = 0.0
+    #: the master computed the points itself (no MPI workers): its CPU share is the
+    #: computation's, not the scheduling overhead, and is not reported
+    in_process: bool = False
 
     @property
     def master_cpu_share(self) -> float:
@@ -382,9 +385,12 @@ class RunSummary:
 
     def __str__(self) -> str:
         counts = ", ".join(f"{k} {v}" for k, v in sorted(self.counts.items())) or "none"
-        return (f"{self.total} grid points: {self.skipped} already stored, {self.computed}"
-                f" stored now ({counts}) in {self.elapsed:.2f} s; master CPU"
-                f" {100 * self.master_cpu_share:.1f}% of a core")
+        noun = "grid point" if self.total == 1 else "grid points"
+        text = (f"{self.total} {noun}: {self.skipped} already stored, {self.computed}"
+                f" stored now ({counts}) in {self.elapsed:.2f} s")
+        if self.in_process:
+            return text + " (computed in-process)"
+        return text + f"; master CPU {100 * self.master_cpu_share:.1f}% of a core"
 
 
 class _StopSignals:
@@ -723,7 +729,7 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
         info = environment(with_mpi=comm is not None)
         info.update(mpi_size=comm.Get_size() if comm is not None else 1, command=command,
                     compute=compute)
-        summary = RunSummary(total=campaign.size)
+        summary = RunSummary(total=campaign.size, in_process=not mpi)
         with _StopSignals(campaign.run.grace_period, in_process=not mpi) as signals:
             store = Store(store_path, campaign, extend=extend, run_info=info)
             outcome = "complete"

@@ -66,8 +66,10 @@ def _title(keys: Sequence[str], values: Sequence[Any]) -> str:
 
 
 def _file(prefix: str, keys: Sequence[str], values: Sequence[Any]) -> str:
-    text = "_".join(f"{k}{v}" for k, v in zip(keys, values, strict=True))
-    return f"{prefix}_" + re.sub(r"[^A-Za-z0-9_.-]", "", text) + ".png"
+    """``fig5_T=1.2_a0=0.0125_C_sd=0.05….png``: name=value, so that ``a0`` and its value
+    do not run together (``a00.0125``)."""
+    text = "_".join(f"{k}={v}" for k, v in zip(keys, values, strict=True))
+    return f"{prefix}_" + re.sub(r"[^A-Za-z0-9_.=-]", "", text) + ".png"
 
 
 def _closeness(keys: Sequence[str], values: Sequence[Any]) -> tuple:

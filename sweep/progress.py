@@ -60,7 +60,8 @@ class Progress:
                 self._bar = tqdm(total=total, file=self.stream, unit="pt", dynamic_ncols=True,
                                  smoothing=0.1)
         if not self._bar:
-            self._line(f"{total} points to compute ({skipped} already stored)")
+            noun = "point" if total == 1 else "points"
+            self._line(f"{total} {noun} to compute ({skipped} already stored)")
 
     @property
     def rate(self) -> float:

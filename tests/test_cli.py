@@ -40,3 +40,13 @@ def test_bad_input_exits_2_and_writes_nothing(tmp_path, args, needle):
     assert needle in p.stderr
     assert p.stderr.count("error:") == 1
     assert not (tmp_path / "out.json").exists()
+
+
+@pytest.mark.parametrize("option", ["--json", "--plot"])
+def test_unwritable_output_is_refused_before_the_point_runs(tmp_path, option):
+    """Issue *first hour* 1: the point is not computed and then lost to a bad path."""
+    p = run(FAST + [option, "nodir/out.x"], tmp_path)
+    assert p.returncode == 2, p.stderr
+    assert f"{option} nodir/out.x: directory" in p.stderr and "does not exist" in p.stderr
+    assert p.stderr.count("error:") == 1 and "Traceback" not in p.stderr
+    assert "iteration" not in p.stderr and p.stdout == ""  # nothing ran

@@ -180,3 +180,45 @@ def test_cli_status_and_export(tmp_path, capsys, campaign):
     assert main(["export", str(store), "-o", str(tmp_path / "t.xlsx")]) == 2
     assert main(["validate", str(store)]) == 0
     assert main(["status", str(tmp_path / "none.h5")]) == 3
+
+
+def test_export_checks_its_output_before_reading(tmp_path, capsys, campaign, monkeypatch):
+    """Issue *first hour* 1, 7, 9: ``--out`` is accepted as in the guide, a bad path or a
+    missing Parquet engine is one line and exit 2, before the store is read."""
+    store = tmp_path / "s.h5"
+    run_campaign(campaign, str(store), compute="sweep.testing:fake_point")
+    capsys.readouterr()
+    assert main(["export", str(store), "--out", str(tmp_path / "t.csv")]) == 0
+    assert "wrote 12 rows" in capsys.readouterr().out
+    assert main(["export", str(tmp_path / "none.h5"), "--out",
+                 str(tmp_path / "nodir" / "t.csv")]) == 2  # the path first, not the store
+    err = capsys.readouterr().err
+    assert "nodir" in err and "does not exist" in err and err.count("\n") == 1
+    import sweep.cli
+
+    monkeypatch.setattr(sweep.cli, "_parquet_engine", lambda: False)
+    assert main(["export", str(store), "-o", str(tmp_path / "t.parquet")]) == 2
+    err = capsys.readouterr().err
+    assert "floewave[parquet]" in err and err.count("\n") == 1
+    assert not (tmp_path / "t.parquet").exists()
+
+
+def test_in_process_summary_reports_no_master_cpu_share(tmp_path, campaign, capsys):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(TOML)
+    assert main(["run", str(cfg), "--store", str(tmp_path / "s.h5"), "--compute",
+                 "sweep.testing:fake_point", "--no-bar"]) == 0
+    out = capsys.readouterr().out
+    assert "12 grid points" in out and "computed in-process" in out
+    assert "master CPU" not in out
+
+
+def test_a_requested_stop_is_not_reported_as_an_error(capsys):
+    from sweep.cli import _err
+    from sweep.errors import ConfigError, Interrupted
+
+    _err(Interrupted("campaign stopped by SIGINT: ... resumable"))
+    _err(ConfigError("bad"))
+    err = capsys.readouterr().err.splitlines()
+    assert err == ["sweep: stopped: campaign stopped by SIGINT: ... resumable",
+                   "sweep: error: bad"]
