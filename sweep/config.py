@@ -201,6 +201,10 @@ def parse_campaign(text: str, source: str = "<string>") -> Campaign:
             data[section] = {}
     if "sweep" not in data:
         errors.append(f"{source}: missing table [sweep] (the swept values)")
+    for key in sorted(set(data.get("base", {})) & set(data.get("sweep", {}))):
+        errors.append(f"{source}: {key} is set in both [base] ({key} ="
+                      f" {data['base'][key]!r}) and [sweep] ({key} = {data['sweep'][key]!r}):"
+                      " a swept value replaces the base one; keep it in one place")
     base = _parse_base(data.get("base", {}), source, errors)
     sweep = _parse_sweep(data.get("sweep", {}), base, source, errors)
     run = _parse_run(data.get("run", {}), source, errors)
