@@ -1,4 +1,8 @@
-"""``floewave run --set L_x=1.5 --set T=1.4 ... [--json out.json] [--plot out.png]``.
+"""floewave: run one model point (floewave run) or draw the analytic figures (floewave figures).
+
+``floewave run --set L_x=1.5 --set T=1.4 ... [--json out.json] [--plot out.png]`` runs one
+point and prints a summary; ``floewave run --help`` lists every field with its default and
+units (read from :class:`floewave.ModelConfig`, so the list follows the code).
 
 ``floewave figures --out DIR`` writes the analytic figures (DIR/fig1_dispersion.png, the
 paper's Fig. 1; :mod:`floewave.figures`) and prints the paths and fitted tail exponents.
@@ -23,12 +27,19 @@ from .config import FloewaveError, InvalidPointError, ModelConfig
 EXIT_OK = 0
 EXIT_BAD_INPUT = 2
 EXIT_FAILED = 3
+EXIT_HELP = ("exit statuses: 0 success; 2 bad input (unknown field, bad value, physically"
+             " invalid point,\n  an output path that cannot be written, matplotlib missing"
+             " for --plot or figures);\n  3 the point failed numerically")
 
 
 def _parse_value(name: str, text: str) -> Any:
     types = {f.name: f.type for f in fields(ModelConfig)}
     if name not in types:
-        raise FloewaveError(f"--set {name}={text}: unknown field {name!r}")
+        from ._help import did_you_mean
+
+        raise FloewaveError(f"--set {name}={text}: unknown field {name!r}{did_you_mean(name)};"
+                            f" the fields are {', '.join(types)} ('floewave run --help'"
+                            " gives defaults and units)")
     t = types[name] if isinstance(types[name], str) else types[name].__name__
     try:
         if t == "bool":
@@ -127,9 +138,21 @@ def _check_outputs(args: argparse.Namespace) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="floewave", description=__doc__.splitlines()[0])
+    from . import MODEL_VERSION, __version__
+    from ._help import fields_help
+
+    parser = argparse.ArgumentParser(prog="floewave", description=__doc__.splitlines()[0],
+                                     epilog=EXIT_HELP,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--version", action="version",
+                        version=f"floewave {__version__} (model version {MODEL_VERSION})")
     sub = parser.add_subparsers(dest="cmd", required=True)
-    run = sub.add_parser("run", help="run one model point and print a summary")
+    run = sub.add_parser("run", help="run one model point and print a summary",
+                         description="Run one model point (the attenuation iteration of"
+                         " MODEL.md §4) with the defaults below changed by --set, and print"
+                         " a summary.",
+                         epilog=fields_help() + "\n\n" + EXIT_HELP,
+                         formatter_class=argparse.RawDescriptionHelpFormatter)
     run.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                      help="override a ModelConfig field (repeatable)")
     run.add_argument("--json", type=Path, help="write all results to this JSON file")

@@ -74,12 +74,23 @@ def _count(text: str) -> int:
     return value
 
 
+def _version() -> str:
+    """``sweep (floewave 0.1.0, model version 3, store schema 2)``."""
+    import floewave
+
+    from .schema import SCHEMA_VERSION
+
+    return (f"sweep (floewave {floewave.__version__}, model version {floewave.MODEL_VERSION},"
+            f" store schema {SCHEMA_VERSION})")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (documented in sweep/README.md)."""
     from .executor import DEFAULT_COMPUTE
 
     p = argparse.ArgumentParser(prog="sweep", description="Run and analyse floewave"
                                 " parameter campaigns (MPI master/worker, one HDF5 store).")
+    p.add_argument("--version", action="version", version=_version())
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     r = sub.add_parser("run", help="run or resume a campaign into a store")

@@ -24,6 +24,7 @@ from typing import Any
 
 import floewave
 from floewave import ModelConfig
+from floewave._help import did_you_mean
 
 from .errors import ConfigError
 from .identity import canonical_json, point_hash, sha256_hex
@@ -246,7 +247,7 @@ def _parse_base(table: dict[str, Any], source: str, errors: list[str]) -> ModelC
     for key, value in table.items():
         if key not in _MODEL_FIELDS:
             errors.append(f"{source}: [base] {key} = {value!r}: unknown parameter"
-                          " (see floewave.ModelConfig)")
+                          f"{did_you_mean(key)} (the parameters: 'floewave run --help')")
             continue
         try:
             ModelConfig(**{key: value})
