@@ -303,7 +303,7 @@ def status_report(path: Path, slowest: int = 5) -> dict[str, Any]:
     total = 1
     for values in campaign["sweep"].values():
         total *= len(values)
-    counts = {str(k): int(v) for k, v in df["status"].value_counts().items()}
+    counts = {str(k): int(v) for k, v in df["status"].value_counts().items() if v}
     failures = [{"hash": r.hash[:12], "status": r.status, "swept": {k: getattr(r, k) for k in
                                                                      campaign["sweep"]},
                  "message": r.message.splitlines()[0] if r.message else ""}

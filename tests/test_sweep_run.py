@@ -222,3 +222,59 @@ def test_a_requested_stop_is_not_reported_as_an_error(capsys):
     err = capsys.readouterr().err.splitlines()
     assert err == ["sweep: stopped: campaign stopped by SIGINT: ... resumable",
                    "sweep: error: bad"]
+
+
+def test_load_profiles_by_parameter(tmp_path, campaign):
+    """Issue *first hour*: one Dataset of every profile along the swept dimensions and a
+    floe dimension; missing points NaN; units on every variable; selection by value."""
+    from sweep.schema import PROFILE_VARS
+
+    store = tmp_path / "s.h5"
+    run_campaign(campaign.shard(0, 2), str(store), compute="sweep.testing:fake_point")
+    df = sweep.load(store)
+    ds = sweep.load_profiles(store)
+    assert ds["a"].dims == ("L_x", "eps", "dispersion", "floe")
+    assert dict(ds.sizes) == {"L_x": 2, "eps": 3, "dispersion": 2, "floe": 12}
+    for k, (units, _) in PROFILE_VARS.items():
+        assert ds[k].attrs["units"] == units and ds[k].attrs["long_name"]
+    # every stored point's profile is where its swept values say, padded with NaN
+    for row in df.itertuples():
+        one = sweep.load_profile(store, row.hash)
+        got = ds["a"].sel(L_x=row.L_x, eps=row.eps, dispersion=row.dispersion).values
+        n = one.sizes["floe"]
+        np.testing.assert_array_equal(got[:n], one["a"].values)
+        assert np.all(np.isnan(got[n:]))
+    missing = ds["status"].values == "missing"
+    assert missing.sum() == 12 - len(df) > 0
+    assert np.all(np.isnan(ds["a"].values[missing]))
+    # selection: a scalar drops its dimension, a list keeps it
+    sub = sweep.load_profiles(store, eps=0.4, dispersion="ml")
+    assert sub["a"].dims == ("L_x", "floe") and float(sub["eps"]) == 0.4
+    assert sweep.load_profiles(store, eps=[0.2, 0.6])["a"].sizes["eps"] == 2
+    with pytest.raises(sweep.PointNotFoundError, match="not a swept parameter"):
+        sweep.load_profiles(store, T=1.2)
+
+
+def test_load_profile_unknown_hash_is_a_clear_error(tmp_path, campaign):
+    store = tmp_path / "s.h5"
+    run_campaign(campaign, str(store), compute="sweep.testing:fake_point")
+    with pytest.raises(sweep.PointNotFoundError) as info:
+        sweep.load_profile(store, "0123456789ab")
+    assert str(info.value).startswith(f"{store}: 0 stored points have a hash")
+    assert isinstance(info.value, KeyError)  # callers catching KeyError still do
+
+
+def test_table_types(tmp_path, campaign):
+    """Times are datetimes, status and dispersion categoricals, integers stay integers."""
+    import pandas as pd
+
+    store = tmp_path / "s.h5"
+    run_campaign(campaign.shard(0, 2), str(store), compute="sweep.testing:fake_point")
+    df = sweep.load(store)
+    assert str(df["start_time"].dtype).startswith("datetime64") and df["end_time"].dt.tz
+    assert isinstance(df["status"].dtype, pd.CategoricalDtype)
+    assert isinstance(df["dispersion"].dtype, pd.CategoricalDtype)
+    assert (df["status"] == "converged").all()
+    ds = sweep.load_xarray(store)
+    assert ds["n_floes"].dtype == np.int64 and ds["iterations"].dtype == np.int64
+    assert (ds["n_floes"].values == -1).sum() == 12 - len(df)
