@@ -18,7 +18,7 @@ import xarray as xr
 from .errors import PointNotFoundError, StoreError
 from .schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, column, profile_path
 
-__all__ = ["load", "load_xarray", "load_profile", "load_profiles", "store_attrs",
+__all__ = ["load", "load_xarray", "load_profile", "load_profiles", "store_attrs", "store_runs",
            "resolve_hash", "journal_points", "STATUS_ORDER", "PROFILE_LEADING_DIMS"]
 
 #: Every status a point can have, in the order of the ``status`` categorical.
@@ -60,6 +60,23 @@ def store_attrs(path: str | Path) -> dict[str, Any]:
         with _open(path) as f:
             return {k: (v.decode() if isinstance(v, bytes) else v)
                     for k, v in f.attrs.items()}
+
+    return _retried(read)
+
+
+def store_runs(path: str | Path) -> list[dict[str, Any]]:
+    """One dict per ``sweep run`` on the store (``/runs/<n>`` attributes, strings decoded,
+    plus ``index``), oldest first."""
+    def read() -> list[dict[str, Any]]:
+        with _open(path) as f:
+            if "runs" not in f:
+                return []
+            out = []
+            for name in sorted(f["runs"], key=int):
+                attrs = {k: (v.decode() if isinstance(v, bytes) else v)
+                         for k, v in f["runs"][name].attrs.items()}
+                out.append({"index": int(name), **attrs})
+            return out
 
     return _retried(read)
 

@@ -292,30 +292,55 @@ def cmd_plan(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _swept(row: Any, dims: Sequence[str]) -> dict[str, Any]:
+    """A point's swept values as plain Python values (for text and JSON)."""
+    out = {}
+    for k in dims:
+        v = getattr(row, k)
+        out[k] = v if isinstance(v, str) else float(v)
+    return out
+
+
+def _swept_text(swept: dict[str, Any]) -> str:
+    return " ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}"
+                    for k, v in swept.items())
+
+
 def status_report(path: Path, slowest: int = 5) -> dict[str, Any]:
-    """The data behind ``sweep status``."""
-    from .analysis import journal_points, load, store_attrs
+    """The data behind ``sweep status``: counts, the points that did not converge or
+    failed (with their swept values), the slowest points, and one line per run."""
+    from .analysis import journal_points, load, store_attrs, store_runs
 
     df = load(path)
     journaled = journal_points(path)
     attrs = store_attrs(path)
     campaign = json.loads(attrs["campaign_json"])
+    dims = list(campaign["sweep"])
     total = 1
     for values in campaign["sweep"].values():
         total *= len(values)
     counts = {str(k): int(v) for k, v in df["status"].value_counts().items() if v}
-    failures = [{"hash": r.hash[:12], "status": r.status, "swept": {k: getattr(r, k) for k in
-                                                                     campaign["sweep"]},
+    failures = [{"hash": r.hash[:12], "status": str(r.status), "swept": _swept(r, dims),
                  "message": r.message.splitlines()[0] if r.message else ""}
                 for r in df[df["status"].isin(["failed", "invalid", "crashed",
                                                "timeout"])].itertuples()]
+    not_converged = [{"hash": r.hash[:12], "swept": _swept(r, dims),
+                      "iterations": int(r.iterations), "residual": float(r.residual)}
+                     for r in df[df["status"] == "not_converged"].itertuples()]
     slow = df.sort_values("wall_time", ascending=False).head(slowest)
+    runs = [{"index": int(r["index"]), "started": str(r.get("started", "")),
+             "ended": str(r.get("ended", "")), "outcome": str(r.get("outcome", "")),
+             "mpi_size": int(r.get("mpi_size", 1)), "host": str(r.get("host", "")),
+             "stored": int((df["run"] == r["index"]).sum())} for r in store_runs(path)]
     return {"store": str(path), "grid_points": total, "stored": len(df),
             "journaled": journaled,
             "remaining": max(total - len(df), 0), "counts": counts, "failures": failures,
+            "not_converged": not_converged,
             "slowest": [{"hash": r.hash[:12], "wall_time": float(r.wall_time),
-                         "status": r.status, "host": r.host, "rank": int(r.rank)}
+                         "status": str(r.status), "host": r.host, "rank": int(r.rank),
+                         "swept": _swept(r, dims)}
                         for r in slow.itertuples()],
+            "runs": runs,
             "total_wall_time": float(df["wall_time"].sum()) if len(df) else 0.0}
 
 
@@ -335,12 +360,23 @@ def cmd_status(args: argparse.Namespace) -> int:
     if rep["failures"]:
         print("failed / invalid:")
         for f in rep["failures"]:
-            print(f"  {f['hash']} {f['status']:8s} {f['swept']}: {f['message']}")
+            print(f"  {f['hash']} {f['status']:8s} {_swept_text(f['swept'])}: {f['message']}")
+    if rep["not_converged"]:
+        print("not converged (max_iterations reached; the mean so far is stored):")
+        for f in rep["not_converged"]:
+            print(f"  {f['hash']} {_swept_text(f['swept'])}: {f['iterations']} iterations,"
+                  f" residual {f['residual']:.3g}")
     if rep["slowest"]:
         print("slowest:")
         for s in rep["slowest"]:
             print(f"  {s['hash']} {s['wall_time']:9.2f} s  {s['status']}  rank {s['rank']}"
-                  f" on {s['host']}")
+                  f" on {s['host']}  {_swept_text(s['swept'])}")
+    if rep["runs"]:
+        print("runs:")
+        for r in rep["runs"]:
+            print(f"  {r['index']}: {r['started'][:19]} to {r['ended'][:19] or '(running)'},"
+                  f" {r['mpi_size']} rank(s) on {r['host']}, {plural(r['stored'], 'point')}"
+                  f" stored: {r['outcome']}")
     return EXIT_OK
 
 

@@ -113,10 +113,18 @@ def _colours(n: int) -> list:
 
 def _amplitude(ax, row: pd.Series, prof: dict[str, np.ndarray], colour, style: str = "-",
                label: str | None = None, band: bool = True, zone: bool = False) -> None:
-    """a/a0 versus x (with SE band); with ``zone``: the W_c dot and compact-ice line."""
+    """a/a0 versus x (with SE band); with ``zone``: the W_c dot and compact-ice line.
+
+    A ``not_converged`` point (``max_iterations`` reached: the mean so far) is drawn with
+    crosses and its label says so.
+    """
     a0 = float(row["a0"])
     x, a, se = prof["x"], prof["a"], prof["a_stderr"]
-    ax.plot(x, a / a0, style, color=colour, lw=1.3, label=label)
+    marks: dict[str, Any] = {}
+    if str(row.get("status", "")) == "not_converged":
+        marks = {"marker": "x", "ms": 4, "markevery": max(1, len(x) // 10)}
+        label = f"{label} (not converged)" if label else label
+    ax.plot(x, a / a0, style, color=colour, lw=1.3, label=label, **marks)
     if band and np.isfinite(se).any():
         ax.fill_between(x, (a - se) / a0, (a + se) / a0, color=colour, alpha=0.25, lw=0)
     if not zone:

@@ -124,15 +124,21 @@ def _as_list(by: str | Sequence[str] | None) -> list[str]:
 def collision_stats(df: pd.DataFrame, by: str | Sequence[str] | None = None, *,
                     L_sheet: float | None = None,
                     statuses: Sequence[str] = RESULT_STATUSES,
-                    layouts: Sequence[str] | None = None) -> pd.DataFrame:
+                    layouts: Sequence[str] | None = None,
+                    converged_only: bool = False) -> pd.DataFrame:
     """Collision-zone statistics of a campaign, one row per group of ``by``.
+
+    By default ``not_converged`` points (``max_iterations`` reached; their stored profile
+    is the mean so far, with its standard error) enter the statistics: ``n_not_converged``
+    counts them per group, and ``converged_only=True`` leaves them out.
 
     Parameters
     ----------
     df : the table of :func:`sweep.load` (one row per point).
     by : swept parameter(s) to group by; ``None`` summarises all points in one row.
     L_sheet : sheet length [m]; default: from each row's ``config_json``.
-    statuses : which points enter (default: all with results).
+    statuses : which points enter (default: all with results, ``not_converged`` included).
+    converged_only : shortcut for ``statuses=("converged", "converged_noisy")``.
 
     Returns
     -------
@@ -160,6 +166,8 @@ def collision_stats(df: pd.DataFrame, by: str | Sequence[str] | None = None, *,
     unknown = [k for k in keys if k not in df.columns]
     if unknown:
         raise KeyError(f"collision_stats: no column {unknown[0]!r} to group by")
+    if converged_only:
+        statuses = [s for s in statuses if s != "not_converged"]
     d = derived(df, L_sheet=L_sheet, statuses=statuses)
     if layouts is not None:
         d = d[d["compact_zone"].isin(list(layouts))]

@@ -158,3 +158,22 @@ def test_one_figure_is_singular(fake_store, tmp_path, capsys):
     assert main(["figures", str(fake_store), "--out", str(out), "--only", "fig5",
                  "--max", "1"]) == 0
     assert f"wrote 1 figure to {out}" in capsys.readouterr().out
+
+
+def test_not_converged_curves_are_marked():
+    """Issue *first hour* 6: a not-converged point does not look like a converged one."""
+    import matplotlib.pyplot as plt
+    import pandas as pd
+
+    from sweep.figures import _amplitude
+
+    x = np.linspace(0.25, 9.75, 20)
+    prof = {"x": x, "a": 0.01 / (1 + x), "a_stderr": 1e-4 + 0 * x}
+    fig, ax = plt.subplots()
+    for status in ("converged", "not_converged"):
+        _amplitude(ax, pd.Series({"a0": 0.01, "status": status}), prof, "C0",
+                   label=f"eps {status}")
+    ok, bad = ax.get_lines()
+    assert ok.get_marker() in ("None", "", None) and ok.get_label() == "eps converged"
+    assert bad.get_marker() == "x" and bad.get_label().endswith("(not converged)")
+    plt.close(fig)

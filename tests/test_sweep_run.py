@@ -278,3 +278,35 @@ def test_table_types(tmp_path, campaign):
     ds = sweep.load_xarray(store)
     assert ds["n_floes"].dtype == np.int64 and ds["iterations"].dtype == np.int64
     assert (ds["n_floes"].values == -1).sum() == 12 - len(df)
+
+
+def test_status_names_the_swept_values_and_lists_runs(tmp_path, capsys):
+    """Issue *first hour* 6, 7: not-converged and failed points are traceable by their
+    parameters; the runs section the guide promises is printed."""
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(TOML)
+    store = tmp_path / "s.h5"
+    assert main(["run", str(cfg), "--store", str(store), "--compute",
+                 "sweep.testing:raising_point", "--no-bar"]) == 0
+    capsys.readouterr()
+    assert main(["status", str(store)]) == 0
+    out = capsys.readouterr().out
+    assert "failed / invalid:" in out and "L_x=" in out and "dispersion=" in out
+    assert "runs:\n  0: " in out and "12 points stored: complete" in out
+    assert main(["status", str(store), "--json"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    f = rep["failures"][0]
+    assert set(f["swept"]) == {"L_x", "eps", "dispersion"}
+    assert rep["runs"][0]["stored"] == 12 and rep["slowest"][0]["swept"]
+    assert rep["not_converged"] == []
+
+
+def test_status_lists_not_converged_points(tmp_path, capsys):
+    store = tmp_path / "s.h5"
+    small = parse_campaign(TOML.replace("[0.2, 0.4, 0.6]", "[0.2, 0.8]"), "test.toml")
+    run_campaign(small, str(store), compute="sweep.testing:power_point")
+    capsys.readouterr()
+    assert main(["status", str(store)]) == 0
+    out = capsys.readouterr().out
+    block = out.split("not converged (max_iterations reached")[1].split("slowest:")[0]
+    assert block.count("eps=0.8") == 4 and "eps=0.2" not in block

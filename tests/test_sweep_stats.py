@@ -169,3 +169,11 @@ def test_rows_of_old_stores(table):
     s = collision_stats(old, by="eps").set_index("eps")
     assert s.loc[0.8, "n_no_compact"] == 24 and s.loc[0.8, "n_W_c"] == 0
     assert s.loc[0.2, "n_legacy"] == 24 and s.loc[0.2, "W_c_mean"] == pytest.approx(1.0)
+
+
+def test_converged_only_leaves_out_the_not_converged_points(table):
+    """Issue *first hour* 6: not-converged points enter by default (counted in
+    n_not_converged); ``converged_only`` is the filter."""
+    s = collision_stats(table, by="eps", converged_only=True).set_index("eps")
+    assert list(s.index) == [0.2]  # every eps 0.8 point is not_converged (power_point)
+    assert s.loc[0.2, "n_points"] == 24 and s.loc[0.2, "n_not_converged"] == 0
