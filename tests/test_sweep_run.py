@@ -310,3 +310,34 @@ def test_status_lists_not_converged_points(tmp_path, capsys):
     out = capsys.readouterr().out
     block = out.split("not converged (max_iterations reached")[1].split("slowest:")[0]
     assert block.count("eps=0.8") == 4 and "eps=0.2" not in block
+
+
+REAL_TINY = """\
+[base]
+L_sheet = 2.0
+n0 = 1
+nT = 1
+max_iterations = 2
+[sweep]
+L_x = [0.5]
+eps = [0.2, 0.6]
+[run]
+progress_interval = 100.0
+"""
+
+
+def test_kernels_are_compiled_before_the_clock_starts(tmp_path, capsys):
+    """Issue *first hour* 4: the kernels are compiled (or loaded) on the workers first,
+    reported on a line of their own; fake compute functions are not warmed up."""
+    summary = run_campaign(parse_campaign(REAL_TINY, "t.toml"), str(tmp_path / "s.h5"),
+                           progress_bar=False)
+    err = capsys.readouterr().err
+    lines = err.splitlines()
+    ready = [i for i, ln in enumerate(lines) if "kernels ready in" in ln]
+    start = [i for i, ln in enumerate(lines) if "points to compute" in ln]
+    assert len(ready) == 1 and ready[0] < start[0], err
+    assert "1 worker (1 kernel variant" in lines[ready[0]]
+    assert summary.warm_up > 0
+    run_campaign(parse_campaign(TOML, "t.toml"), str(tmp_path / "f.h5"),
+                 compute="sweep.testing:fake_point", progress_bar=False)
+    assert "kernels ready" not in capsys.readouterr().err
