@@ -57,10 +57,11 @@ CONFIGS = {
             ' grid"\nprogress_interval = 300.0\ngrace_period = 240.0'),
     "demo": dict(header="""
 # A small demonstration campaign: 16 points with reduced numerics (n0 = 2, nT = 2,
-# max_iterations = 30, n_average = 8) so it finishes in about a minute on 2 cores
-# (`mpiexec -n 2 sweep run configs/demo.toml --store demo.h5`: one master, one worker;
-# measured 28-58 s, 2-4 s per L_x = 0.5 m point). Results are noisier than with the
-# paper's numerics; use it to try the workflow, not for science.
+# max_iterations = 30, n_average = 8). `mpiexec -n 3 sweep run configs/demo.toml --store
+# demo.h5` (one master, two workers on 2 cores) took 11-14 s on the 2-core development
+# machine with the kernels in the numba cache (2026-11-30, other jobs sharing it;
+# `python benchmarks/docs_numbers.py`). Results are noisier than with the paper's
+# numerics; use it to try the workflow, not for science.
 """, sweep=dict(L_x=[0.5, 1.5], T=[1.2, 1.6], a0=[0.0125], C_sd=[0.05], eps=[0.2, 0.6],
                 d_f=[0.005], dispersion=["ml", "ep"]),
         run='name = "demo"\ndescription = "16-point demonstration with reduced numerics"\n'

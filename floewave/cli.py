@@ -155,7 +155,8 @@ def _check_outputs(args: argparse.Namespace) -> None:
                                 " pip install 'floewave[plot]'") from None
 
 
-def main(argv: list[str] | None = None) -> int:
+def main_parser() -> argparse.ArgumentParser:
+    """The ``floewave`` argument parser (``run`` and ``figures``)."""
     from . import MODEL_VERSION, __version__
     from ._help import fields_help
 
@@ -192,7 +193,11 @@ def main(argv: list[str] | None = None) -> int:
     figs = sub.add_parser("figures", help="write the analytic figures (paper's Fig. 1)")
     figs.add_argument("--out", type=Path, required=True, metavar="DIR",
                       help="output directory (created if missing)")
-    args = parser.parse_args(argv)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = main_parser().parse_args(argv)
     if args.cmd == "figures":
         return figures_main(args.out)
     from .model import run_point
