@@ -82,7 +82,7 @@ def _groups(df: pd.DataFrame, keys: Sequence[str], varying: str,
             min_values: int = 2) -> list[tuple[tuple, pd.DataFrame]]:
     """Groups of ``df`` by ``keys`` in which ``varying`` takes >= min_values values."""
     out = []
-    for key, sub in df.groupby(list(keys), sort=False):
+    for key, sub in df.groupby(list(keys), sort=False, observed=True):
         key = key if isinstance(key, tuple) else (key,)
         if sub[varying].nunique() >= min_values:
             out.append((key, sub))

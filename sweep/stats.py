@@ -177,7 +177,7 @@ def collision_stats(df: pd.DataFrame, by: str | Sequence[str] | None = None, *,
                  _inverted=d["compact_zone"] == "inverted",
                  _patchy=d["compact_zone"] == "patchy",
                  _legacy=d["compact_zone"] == "legacy")
-    grouped = d.groupby(keys or ["_all"], sort=True, dropna=False)
+    grouped = d.groupby(keys or ["_all"], sort=True, dropna=False, observed=True)
     agg = grouped.agg(
         n_points=("W_c", "size"),
         n_not_converged=("_nc", "sum"),
@@ -244,7 +244,8 @@ def alpha_omega(df: pd.DataFrame, alpha: str = "alpha_inner",
         raise ValueError("alpha_omega: T is the fitted variable, it cannot be a group key")
     d = df[df["status"].isin(statuses)] if "status" in df.columns else df
     rows = []
-    for key, g in (d.groupby(keys, sort=True, dropna=False) if keys else [((), d)]):
+    for key, g in (d.groupby(keys, sort=True, dropna=False, observed=True) if keys
+                   else [((), d)]):
         key = key if isinstance(key, tuple) else (key,)
         om = 2.0 * math.pi / g["T"].to_numpy(float)
         al = g[alpha].to_numpy(float)
