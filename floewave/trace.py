@@ -32,7 +32,7 @@ import numpy as np
 
 from . import _kernels as K
 from .config import ConfigError, ModelConfig
-from .forces import cell_offsets, kernel_params
+from .forces import cell_offsets
 
 __all__ = ["Trace", "trace_point", "floes_at", "instantaneous", "PAPER_DISTANCES"]
 

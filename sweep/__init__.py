@@ -61,7 +61,8 @@ def __dir__() -> list[str]:
 
 __all__ = ["load_campaign", "parse_campaign", "Campaign", "Point", "RunOptions",
            "point_hash", "short_hash", "canonical_json", "run_campaign", "load",
-           "load_xarray", "load_profile", "load_profiles", "validate", "collision_stats", "alpha_omega",
+           "load_xarray", "load_profile", "load_profiles", "validate", "collision_stats",
+           "alpha_omega",
            "derived", "SCHEMA_VERSION", "SweepError",
            "ConfigError", "StoreError", "StoreLockedError", "SchemaVersionError",
            "CampaignMismatchError", "LaunchError", "WorkerError", "Interrupted",

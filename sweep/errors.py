@@ -24,8 +24,8 @@ from __future__ import annotations
 
 __all__ = ["SweepError", "ConfigError", "StoreError", "StoreLockedError",
            "SchemaVersionError", "CampaignMismatchError", "LaunchError", "WorkerError",
-           "Interrupted", "PointNotFoundError", "EXIT_OK", "EXIT_INTERNAL", "EXIT_CONFIG", "EXIT_STORE",
-           "EXIT_LAUNCH", "EXIT_WORKER", "EXIT_INTERRUPTED"]
+           "Interrupted", "PointNotFoundError", "EXIT_OK", "EXIT_INTERNAL", "EXIT_CONFIG",
+           "EXIT_STORE", "EXIT_LAUNCH", "EXIT_WORKER", "EXIT_INTERRUPTED"]
 
 EXIT_OK = 0
 EXIT_INTERNAL = 1
