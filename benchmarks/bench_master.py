@@ -42,9 +42,10 @@ def run(cmd: list[str]) -> tuple[float, str]:
 
 
 def parse(stdout: str) -> tuple[int, float, float]:
-    m = re.search(r"(\d+) stored now .* in ([\d.]+) s; master CPU ([\d.]+)%", stdout)
+    # in-process runs report no master CPU share (the master computes the points)
+    m = re.search(r"(\d+) stored now .* in ([\d.]+) s(?:; master CPU ([\d.]+)%)?", stdout)
     assert m, stdout
-    return int(m.group(1)), float(m.group(2)), float(m.group(3))
+    return int(m.group(1)), float(m.group(2)), float(m.group(3) or "nan")
 
 
 def main() -> None:

@@ -2,7 +2,7 @@
 
     python benchmarks/docs_numbers.py [--out DIR] [--skip-runs]
 
-Runs the shipped campaigns the docs quote (``configs/demo.toml`` under ``mpiexec -n 2``
+Runs the shipped campaigns the docs quote (``configs/demo.toml`` under ``mpiexec -n 3``
 when a launcher is available, else in-process; ``fig2``, ``fig5``, ``fig6a``, ``fig6b``,
 ``periods`` in-process, two at a time) into stores in ``--out`` (default: a new temporary
 directory; ``--skip-runs`` reuses the stores there) and prints, labelled as in the docs:
@@ -57,7 +57,7 @@ def main() -> int:
     pd.set_option("display.max_columns", 30)
     if not args.skip_runs:
         mpiexec = shutil.which("mpiexec")
-        launcher = [mpiexec, "-n", "2"] if mpiexec else []
+        launcher = [mpiexec, "-n", "3"] if mpiexec else []
         t = run("demo", out, launcher)
         print(f"[timing] demo campaign ({'mpiexec -n 2' if mpiexec else 'in-process'}),"
               f" cache warm: {t:.1f} s")

@@ -60,9 +60,10 @@ CONFIGS = {
     "demo": dict(header="""
 # A small demonstration campaign: 16 points with reduced numerics (n0 = 2, nT = 2,
 # max_iterations = 30, n_average = 8, ensembles of 4 replicas without the W_c precision
-# target) so that it finishes quickly (`mpiexec -n 2 sweep run configs/demo.toml --store
-# demo.h5`; timing in the README). Results are noisier than with the default numerics;
-# use it to try the workflow, not for science.
+# target). `mpiexec -n 3 sweep run configs/demo.toml --store demo.h5` (one master, two
+# workers on 2 cores): timing in the README (`python benchmarks/docs_numbers.py`).
+# Results are noisier than with the default numerics; use it to try the workflow, not for
+# science.
 """, sweep=dict(L_x=[0.5, 1.5], T=[1.2, 1.6], a0=[0.0125], C_sd=[0.05], eps=[0.2, 0.6],
                 d_f=[0.005], dispersion=["ml", "ep"]),
         run='name = "demo"\ndescription = "16-point demonstration with reduced numerics"\n'

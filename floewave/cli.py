@@ -1,4 +1,8 @@
-"""``floewave run --set L_x=1.5 --set T=1.4 ... [--json out.json] [--plot out.png]``.
+"""floewave: run one model point (floewave run) or draw the analytic figures (floewave figures).
+
+``floewave run --set L_x=1.5 --set T=1.4 ... [--json out.json] [--plot out.png]`` runs one
+point and prints a summary; ``floewave run --help`` lists every field with its default and
+units (read from :class:`floewave.ModelConfig`, so the list follows the code).
 
 ``floewave figures --out DIR`` writes the analytic figures (DIR/fig1_dispersion.png, the
 paper's Fig. 1; :mod:`floewave.figures`) and prints the paths and fitted tail exponents.
@@ -23,12 +27,19 @@ from .config import FloewaveError, InvalidPointError, ModelConfig
 EXIT_OK = 0
 EXIT_BAD_INPUT = 2
 EXIT_FAILED = 3
+EXIT_HELP = ("exit statuses: 0 success; 2 bad input (unknown field, bad value, physically"
+             " invalid point,\n  an output path that cannot be written, matplotlib missing"
+             " for --plot or figures);\n  3 the point failed numerically")
 
 
 def _parse_value(name: str, text: str) -> Any:
     types = {f.name: f.type for f in fields(ModelConfig)}
     if name not in types:
-        raise FloewaveError(f"--set {name}={text}: unknown field {name!r}")
+        from ._help import did_you_mean
+
+        raise FloewaveError(f"--set {name}={text}: unknown field {name!r}{did_you_mean(name)};"
+                            f" the fields are {', '.join(types)} ('floewave run --help'"
+                            " gives defaults and units)")
     t = types[name] if isinstance(types[name], str) else types[name].__name__
     try:
         if t == "bool":
@@ -43,6 +54,17 @@ def _parse_value(name: str, text: str) -> Any:
     except ValueError:
         raise FloewaveError(f"--set {name}={text}: expected {t}") from None
     return text
+
+
+def _distances(text: str) -> list[float]:
+    try:
+        values = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected distances in metres, e.g."
+                                         " 3,12,30") from None
+    if not values or any(not (v >= 0) for v in values):
+        raise argparse.ArgumentTypeError(f"{text!r}: expected distances >= 0 m, e.g. 3,12,30")
+    return values
 
 
 def config_from_sets(sets: list[str]) -> ModelConfig:
@@ -110,18 +132,72 @@ def plot(cfg: ModelConfig, r, path: Path) -> None:
     plt.close(fig)
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="floewave", description=__doc__.splitlines()[0])
+def _check_outputs(args: argparse.Namespace) -> None:
+    """Refuse an output that cannot be written before the point runs (and is lost)."""
+    from ._paths import output_file_problem
+
+    for option, path in (("--json", args.json), ("--plot", args.plot),
+                         ("--trace-plot", args.trace_plot)):
+        problem = output_file_problem(path, option) if path is not None else None
+        if problem:
+            raise FloewaveError(problem)
+    if args.trace_plot is not None and args.trace is None:
+        raise FloewaveError("--trace-plot needs --trace X[,X...] (the floes to trace)")
+    if args.trace is not None and args.trace_every < 1:
+        raise FloewaveError(f"--trace-every {args.trace_every}: must be at least 1")
+    if args.trace is not None and args.trace_periods is not None and args.trace_periods < 1:
+        raise FloewaveError(f"--trace-periods {args.trace_periods}: must be at least 1")
+    if args.plot is not None or args.trace_plot is not None:
+        try:
+            import matplotlib  # noqa: F401
+        except ImportError:
+            raise FloewaveError("--plot and --trace-plot need matplotlib:"
+                                " pip install 'floewave[plot]'") from None
+
+
+def main_parser() -> argparse.ArgumentParser:
+    """The ``floewave`` argument parser (``run`` and ``figures``)."""
+    from . import MODEL_VERSION, __version__
+    from ._help import fields_help
+
+    parser = argparse.ArgumentParser(prog="floewave", description=__doc__.splitlines()[0],
+                                     epilog=EXIT_HELP,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--version", action="version",
+                        version=f"floewave {__version__} (model version {MODEL_VERSION})")
     sub = parser.add_subparsers(dest="cmd", required=True)
-    run = sub.add_parser("run", help="run one model point and print a summary")
+    run = sub.add_parser("run", help="run one model point and print a summary",
+                         description="Run one model point (the attenuation iteration of"
+                         " MODEL.md §4) with the defaults below changed by --set, and print"
+                         " a summary.",
+                         epilog=fields_help() + "\n\n" + EXIT_HELP,
+                         formatter_class=argparse.RawDescriptionHelpFormatter)
     run.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                      help="override a ModelConfig field (repeatable)")
     run.add_argument("--json", type=Path, help="write all results to this JSON file")
     run.add_argument("--plot", type=Path, help="save a/a0 versus x to this PNG file")
+    tr = run.add_argument_group(
+        "trace (the paper's Fig. 4; off by default)",
+        "after the point converges, rerun the floe chain with the converged a(x) fixed and"
+        " record selected floes (position, velocity, instantaneous S_sd, contact force)"
+        " over --trace-periods periods after n0 spin-up periods (floewave.trace)")
+    tr.add_argument("--trace", type=_distances, metavar="X[,X...]",
+                    help="trace the floes nearest to these distances from the ice edge [m],"
+                         " e.g. 3,12,30 (the paper's)")
+    tr.add_argument("--trace-every", type=int, default=10, metavar="STEPS",
+                    help="time steps between samples (default 10 = 1 ms at dt = 1e-4 s)")
+    tr.add_argument("--trace-periods", type=int, default=None, metavar="N",
+                    help="recorded wave periods (default: nT)")
+    tr.add_argument("--trace-plot", type=Path, metavar="PNG",
+                    help="draw Fig. 4 (|S_sd| versus time per traced floe) to this file")
     figs = sub.add_parser("figures", help="write the analytic figures (paper's Fig. 1)")
     figs.add_argument("--out", type=Path, required=True, metavar="DIR",
                       help="output directory (created if missing)")
-    args = parser.parse_args(argv)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = main_parser().parse_args(argv)
     if args.cmd == "figures":
         return figures_main(args.out)
     from .model import run_point
@@ -129,6 +205,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         cfg = config_from_sets(args.set)
         cfg.check_physics()
+        _check_outputs(args)
     except (FloewaveError, ValueError) as exc:
         print(f"floewave: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -145,12 +222,32 @@ def main(argv: list[str] | None = None) -> int:
         print(f"floewave: point failed: {exc}", file=sys.stderr)
         return EXIT_FAILED
     print(summary(cfg, r))
+    trace = None
+    if args.trace is not None:
+        from .trace import trace_point
+
+        try:
+            trace = trace_point(cfg, r, distances=args.trace, every=args.trace_every,
+                                periods=args.trace_periods)
+        except FloewaveError as exc:
+            print(f"floewave: trace failed: {exc}", file=sys.stderr)
+            return EXIT_FAILED
+        print(f"trace: floes {', '.join(str(int(i) + 1) for i in trace.floes)} at x ="
+              f" {', '.join(f'{d:.1f}' for d in trace.distance)} m, {len(trace.t)} samples"
+              f" every {trace.every} steps; max |S_sd| ="
+              f" {', '.join(f'{v:.3g}' for v in np.abs(trace.S_sd).max(axis=0))} W m-2")
     if args.json:
         out = {"config": cfg.to_dict(), "result": {k: _jsonable(v)
                                                    for k, v in r.to_dict().items()}}
+        if trace is not None:
+            out["trace"] = trace.to_dict()
         args.json.write_text(json.dumps(out, indent=1))
     if args.plot:
         plot(cfg, r, args.plot)
+    if args.trace_plot:
+        from .figures import figure4
+
+        figure4(trace, cfg, args.trace_plot)
     return EXIT_OK
 
 

@@ -54,7 +54,8 @@ from .results import power_law
 
 __all__ = ["LAB", "FIELD", "F_RANGE", "LSWICE_F", "TAIL_OCTAVES", "ML_CUTOFF_FRACTION",
            "DISPERSIONS", "Curve", "dispersion_curves", "mass_loading_cutoff", "tail_range",
-           "fit_power_law", "tail_exponent", "tail_exponents", "figure1", "FIG1_NAME"]
+           "fit_power_law", "tail_exponent", "tail_exponents", "figure1", "FIG1_NAME",
+           "figure4", "FIG4_NAME"]
 
 #: Thin laboratory ice: the LS-WICE-like ModelConfig defaults (assumptions, MODEL.md §7).
 LAB = ModelConfig()
@@ -251,3 +252,46 @@ def figure1(out_path: str | Path, n: int = 400) -> dict[tuple[str, str], tuple[f
     fig.savefig(out_path, dpi=130)
     plt.close(fig)
     return fits
+
+
+FIG4_NAME = "fig4_trace.png"
+
+
+def figure4(trace: Any, cfg: ModelConfig, out_path: str | Path) -> Path:
+    """The paper's Fig. 4 from a :class:`floewave.trace.Trace`: |S_sd| versus t/T, one
+    panel per traced floe (nearest the ice edge on top).
+
+    Ticks under each curve mark the samples with a floe-floe contact (F_c != 0), so a
+    reader can check the paper's description: regular spikes after each collision near the
+    edge, low periodic S_sd far from it, erratic in between. Needs matplotlib.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    n = len(trace.floes)
+    fig, axes = plt.subplots(n, 1, figsize=(8.0, 1.9 * n + 0.9), sharex=True, squeeze=False)
+    tt = (trace.t - trace.t[0]) / trace.T
+    for j, ax in enumerate(axes[:, 0]):
+        s = np.abs(trace.S_sd[:, j])
+        ax.plot(tt, s, color="k", lw=0.8)
+        contact = trace.F_c[:, j] != 0.0
+        top = float(np.max(s)) if s.size else 1.0
+        ax.plot(tt[contact], np.full(int(contact.sum()), -0.04 * top), "|", color="tab:red",
+                ms=5, mew=0.8)
+        ax.set_ylim(-0.08 * top, 1.08 * top)
+        ax.set_ylabel("|S$_{sd}$| [W m$^{-2}$]")
+        ax.text(0.01, 0.93, f"({chr(97 + j)}) floe {int(trace.floes[j]) + 1},"
+                f" x = {trace.distance[j]:.1f} m", transform=ax.transAxes, va="top",
+                fontsize=9)
+        ax.grid(alpha=0.3)
+    axes[-1, 0].set_xlabel("time t / T from the start of the record [-]")
+    fig.suptitle(f"Fig. 4: instantaneous skin-drag dissipation, L_x = {cfg.L_x:g} m, T ="
+                 f" {cfg.T:g} s, a0 = {cfg.a0:g} m, C_sd = {cfg.C_sd:g}, eps = {cfg.eps:g},"
+                 f" {cfg.dispersion}\n(red ticks: in contact with a neighbour; a(x) fixed"
+                 " at the converged profile)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(out_path, dpi=130)
+    plt.close(fig)
+    return Path(out_path)

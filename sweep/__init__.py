@@ -19,6 +19,7 @@ from .errors import (
                      ConfigError,
                      Interrupted,
                      LaunchError,
+                     PointNotFoundError,
                      SchemaVersionError,
                      StoreError,
                      StoreLockedError,
@@ -29,7 +30,8 @@ from .errors import (
 #: Imported on first use (``import sweep`` stays light, so the ``sweep`` command can
 #: catch stop signals from its first instants): name -> module.
 _LAZY = {
-    "load": "analysis", "load_profile": "analysis", "load_xarray": "analysis",
+    "load": "analysis", "load_profile": "analysis", "load_profiles": "analysis",
+    "load_xarray": "analysis",
     "Campaign": "config", "Point": "config", "RunOptions": "config",
     "load_campaign": "config", "parse_campaign": "config",
     "run_campaign": "executor",
@@ -59,7 +61,9 @@ def __dir__() -> list[str]:
 
 __all__ = ["load_campaign", "parse_campaign", "Campaign", "Point", "RunOptions",
            "point_hash", "short_hash", "canonical_json", "run_campaign", "load",
-           "load_xarray", "load_profile", "validate", "collision_stats", "alpha_omega",
+           "load_xarray", "load_profile", "load_profiles", "validate", "collision_stats",
+           "alpha_omega",
            "derived", "SCHEMA_VERSION", "SweepError",
            "ConfigError", "StoreError", "StoreLockedError", "SchemaVersionError",
-           "CampaignMismatchError", "LaunchError", "WorkerError", "Interrupted"]
+           "CampaignMismatchError", "LaunchError", "WorkerError", "Interrupted",
+           "PointNotFoundError"]

@@ -15,7 +15,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from .errors import StoreError
+from .errors import PointNotFoundError, StoreError
 from .schema import (
     COLUMNS,
     HISTORY_VAR,
@@ -26,8 +26,17 @@ from .schema import (
     profile_path,
 )
 
-__all__ = ["load", "load_xarray", "load_profile", "store_attrs", "resolve_hash",
-           "journal_points"]
+__all__ = ["load", "load_xarray", "load_profile", "load_profiles", "store_attrs", "store_runs",
+           "resolve_hash", "journal_points", "STATUS_ORDER", "PROFILE_LEADING_DIMS"]
+
+#: Every status a point can have, in the order of the ``status`` categorical.
+STATUS_ORDER = ("converged", "converged_noisy", "not_converged", "failed", "invalid",
+                "crashed", "timeout")
+#: Statuses without results: NaN in :func:`load_xarray` and :func:`load_profiles`.
+NO_RESULT = ("failed", "invalid", "crashed", "timeout")
+#: Names of a profile's leading axes when it has more than the floe axis (a profile of
+#: shape (R, N_f) gets dimensions ("replica", "floe")).
+PROFILE_LEADING_DIMS = ("replica",)
 
 #: Columns that are bookkeeping, not results: left out of :func:`load_xarray`.
 _NOT_RESULTS = {"hash", "message", "host", "rank", "pid", "start_time", "end_time", "run",
@@ -59,6 +68,23 @@ def store_attrs(path: str | Path) -> dict[str, Any]:
         with _open(path) as f:
             return {k: (v.decode() if isinstance(v, bytes) else v)
                     for k, v in f.attrs.items()}
+
+    return _retried(read)
+
+
+def store_runs(path: str | Path) -> list[dict[str, Any]]:
+    """One dict per ``sweep run`` on the store (``/runs/<n>`` attributes, strings decoded,
+    plus ``index``), oldest first."""
+    def read() -> list[dict[str, Any]]:
+        with _open(path) as f:
+            if "runs" not in f:
+                return []
+            out = []
+            for name in sorted(f["runs"], key=int):
+                attrs = {k: (v.decode() if isinstance(v, bytes) else v)
+                         for k, v in f["runs"][name].attrs.items()}
+                out.append({"index": int(name), **attrs})
+            return out
 
     return _retried(read)
 
@@ -140,10 +166,22 @@ def _load(path: str | Path) -> pd.DataFrame:
                                       dtype=object if c.kind == "str" else None))
                 for c in COLUMNS}
         campaign = f.attrs.get("campaign_json", "")
-    df = pd.DataFrame(data)
+    df = _typed(pd.DataFrame(data))
     df.attrs["units"] = {c.name: c.units for c in COLUMNS}
     df.attrs["long_name"] = {c.name: c.long_name for c in COLUMNS}
     df.attrs["campaign"] = campaign.decode() if isinstance(campaign, bytes) else campaign
+    return df
+
+
+def _typed(df: pd.DataFrame) -> pd.DataFrame:
+    """Times as UTC datetimes (NaT where unset), status and dispersion as categoricals
+    (statuses in :data:`STATUS_ORDER`; dispersions as stored, sorted)."""
+    for name in ("start_time", "end_time"):
+        df[name] = pd.to_datetime(df[name].replace("", None), utc=True, format="ISO8601")
+    extra = sorted(set(df["status"]) - set(STATUS_ORDER))
+    df["status"] = pd.Categorical(df["status"], categories=list(STATUS_ORDER) + extra)
+    df["dispersion"] = pd.Categorical(df["dispersion"],
+                                      categories=sorted(set(df["dispersion"])))
     return df
 
 
@@ -162,8 +200,11 @@ def load_xarray(path: str | Path) -> xr.Dataset:
     coords = {d: np.asarray(sorted(campaign["sweep"][d])) for d in dims}
     keep = [c.name for c in COLUMNS if c.name not in _NOT_RESULTS and c.name not in dims
             and c.name not in ("L_x", "T", "a0", "C_sd", "eps", "d_f", "dispersion")]
-    bad = df["status"].isin(["failed", "invalid", "crashed", "timeout"])
+    bad = df["status"].isin(NO_RESULT)
     values = df[dims + keep].copy()
+    for name in dims + keep:
+        if isinstance(values[name].dtype, pd.CategoricalDtype):
+            values[name] = values[name].astype(object)
     for name in keep:
         if column(name).kind != "str":
             values[name] = values[name].astype(float)
@@ -174,6 +215,10 @@ def load_xarray(path: str | Path) -> xr.Dataset:
     for name in list(ds.data_vars):
         col = column(name)
         ds[name].attrs.update(units=col.units, long_name=col.long_name)
+        if col.kind == "int":  # integers stay integers: -1 where missing or failed
+            ds[name] = ds[name].fillna(col.fill).astype(np.int64)
+            ds[name].attrs.update(units=col.units, long_name=col.long_name,
+                                  missing_value=col.fill)
     for d in dims:
         col = column(d)
         ds[d].attrs.update(units=col.units, long_name=col.long_name)
@@ -187,8 +232,11 @@ def resolve_hash(path: str | Path, prefix: str) -> str:
     df = load(path)
     matches = [h for h in df["hash"] if h.startswith(prefix.lower())]
     if len(matches) != 1:
-        raise KeyError(f"{path}: {len(matches)} stored points have a hash starting with"
-                       f" {prefix!r}")
+        hint = ("" if matches else "; the stored hashes are in sweep.load(path)['hash'], or"
+                " select by parameters with sweep.load_profiles(path, eps=..., ...)")
+        raise PointNotFoundError(f"{path}: {len(matches)} stored points have a hash"
+                                 f" starting with {prefix!r}{hint}", store=str(path),
+                                 key=prefix)
     return matches[0]
 
 
@@ -211,8 +259,8 @@ def load_profile(path: str | Path, hash: str) -> xr.Dataset:
 
     got = _retried(read)
     if got is None:
-        raise KeyError(f"{path}: no profiles stored for point {h[:12]} (missing, failed"
-                       " or invalid)")
+        raise PointNotFoundError(f"{path}: no profiles stored for point {h[:12]} (missing,"
+                                 " failed or invalid)", store=str(path), key=h)
     data, history, rep = got
     n = len(data["a"])
     ds = xr.Dataset({k: ("floe", v) for k, v in data.items()},
@@ -237,3 +285,133 @@ def load_profile(path: str | Path, hash: str) -> xr.Dataset:
         ds["replica"].attrs.update(long_name="replica index of the ensemble")
     ds.attrs["hash"] = h
     return ds
+
+
+def _selected(df: pd.DataFrame, dims: list[str], selectors: dict[str, Any],
+              path: str | Path) -> pd.DataFrame:
+    """Rows of ``df`` whose swept values match ``selectors`` (a value or a list; floats
+    compared with a relative tolerance of 1e-9)."""
+    keep = np.ones(len(df), bool)
+    for name, want in selectors.items():
+        if name not in dims:
+            raise PointNotFoundError(f"{path}: {name!r} is not a swept parameter of this"
+                                     f" campaign (swept: {', '.join(dims)})", store=str(path),
+                                     key=name)
+        wanted = list(want) if isinstance(want, (list, tuple, np.ndarray)) else [want]
+        col = df[name].astype(object)
+        hit = np.zeros(len(df), bool)
+        for w in wanted:
+            if isinstance(w, str):
+                hit |= (col == w).to_numpy()
+            else:
+                hit |= np.isclose(col.astype(float), float(w), rtol=1e-9, atol=0.0)
+        keep &= hit
+    return df[keep]
+
+
+def load_profiles(path: str | Path, **selectors: Any) -> xr.Dataset:
+    """Every point's profiles along the swept dimensions plus a floe dimension.
+
+    ``sweep.load_profiles("demo.h5", eps=0.6, dispersion="ml")`` keeps the points with
+    those values; a scalar selector drops its dimension (as ``Dataset.sel`` does), a list
+    keeps it with those values. Every variable of :data:`sweep.schema.PROFILE_VARS`
+    becomes a variable with dimensions (swept..., floe) -- or (swept..., replica, floe)
+    for a profile stored with a leading axis (:data:`PROFILE_LEADING_DIMS`) -- with its
+    ``units`` and ``long_name``. The floe axis is as long as the longest sheet (N_f
+    differs with L_x): shorter profiles, missing points and points without results
+    (failed, invalid, crashed, timeout) are NaN. ``status`` and ``hash`` per point, and
+    ``x`` (the time-mean floe centre, a coordinate) come along, so
+    ``ds.a.sel(L_x=0.5).plot(x="x", hue="eps")`` works.
+
+    Raises
+    ------
+    PointNotFoundError
+        A selector names a parameter that is not swept, or no point matches.
+    """
+    df = load(path)
+    attrs = store_attrs(path)
+    campaign = json.loads(attrs["campaign_json"])
+    dims = list(json.loads(attrs["swept_fields"]))
+    df = _selected(df, dims, selectors, path)
+    if df.empty:
+        raise PointNotFoundError(f"{path}: no stored point matches {selectors}",
+                                 store=str(path), key=str(selectors))
+    coords: dict[str, np.ndarray] = {}
+    for d in dims:
+        values = sorted(campaign["sweep"][d])
+        if d in selectors:
+            values = [v for v in values if not _selected(pd.DataFrame({d: [v]}), [d],
+                                                         {d: selectors[d]}, path).empty]
+        coords[d] = np.asarray(values)
+    hashes = list(df["hash"])
+    good = ~df["status"].isin(NO_RESULT).to_numpy()
+
+    def read() -> dict[str, dict[str, np.ndarray]]:
+        out: dict[str, dict[str, np.ndarray]] = {}
+        with _open(path) as f:
+            for h, ok in zip(hashes, good, strict=True):
+                name = profile_path(h)
+                if ok and name in f:
+                    g = f[name]
+                    out[h] = {k: np.asarray(g[k][()], dtype=float) for k in PROFILE_VARS
+                              if k in g}
+        return out
+
+    data = _retried(read)
+    # the shape of each variable: the largest along every axis over the points
+    shapes: dict[str, tuple[int, ...]] = {}
+    for prof in data.values():
+        for k, v in prof.items():
+            old = shapes.get(k, (0,) * v.ndim)
+            shapes[k] = tuple(max(a, b) for a, b in zip(old, v.shape, strict=True))
+    n_floe = max((s[-1] for s in shapes.values()), default=0)
+    grid_shape = tuple(len(coords[d]) for d in dims)
+    index = {d: {v: i for i, v in enumerate(coords[d])} for d in dims}
+
+    def where(row: Any) -> tuple[int, ...]:
+        return tuple(index[d][_grid_value(coords[d], getattr(row, d))] for d in dims)
+
+    ds = xr.Dataset(coords={**{d: coords[d] for d in dims}, "floe": np.arange(n_floe)})
+    status = np.full(grid_shape, "missing", dtype=object)
+    hash_ = np.full(grid_shape, "", dtype=object)
+    for row in df.itertuples():
+        status[where(row)] = str(row.status)
+        hash_[where(row)] = row.hash
+    for k, (units, long_name) in PROFILE_VARS.items():
+        if k not in shapes:
+            continue
+        lead = shapes[k][:-1]
+        arr = np.full(grid_shape + lead + (n_floe,), np.nan)
+        for row in df.itertuples():
+            v = data.get(row.hash, {}).get(k)
+            if v is not None:
+                arr[where(row) + tuple(slice(0, m) for m in v.shape)] = v
+        lead_dims = tuple(PROFILE_LEADING_DIMS[i] if i < len(PROFILE_LEADING_DIMS)
+                          else f"{k}_dim{i}" for i in range(len(lead)))
+        ds[k] = (tuple(dims) + lead_dims + ("floe",), arr)
+        ds[k].attrs.update(units=units, long_name=long_name)
+    ds["status"] = (tuple(dims), status)
+    ds["status"].attrs["long_name"] = "point status ('missing': not stored)"
+    ds["hash"] = (tuple(dims), hash_)
+    ds["hash"].attrs["long_name"] = "point identity (SHA-256 of its configuration)"
+    if "x_mean" in ds and ds["x_mean"].ndim == len(dims) + 1:
+        ds = ds.assign_coords(x=ds["x_mean"])
+        ds["x"].attrs.update(units="m", long_name="time-mean floe centre from the ice edge")
+    ds["floe"].attrs.update(long_name="floe index from the ice edge")
+    for d in dims:
+        col = column(d)
+        ds[d].attrs.update(units=col.units, long_name=col.long_name)
+    scalar = {d: coords[d][0] for d in dims if d in selectors
+              and not isinstance(selectors[d], (list, tuple, np.ndarray))}
+    if scalar:
+        ds = ds.isel({d: 0 for d in scalar})
+    ds.attrs.update(campaign=attrs["campaign_json"], source=str(path),
+                    schema_version=int(attrs["schema_version"]))
+    return ds
+
+
+def _grid_value(values: np.ndarray, v: Any) -> Any:
+    """The campaign grid value equal to the stored ``v`` (floats to 1e-9 relative)."""
+    if isinstance(v, str):
+        return v
+    return values[int(np.argmin(np.abs(values.astype(float) - float(v))))]

@@ -16,9 +16,22 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from .errors import EXIT_CONFIG, EXIT_INTERNAL, EXIT_OK, EXIT_STORE, ConfigError, SweepError
+from floewave._paths import output_dir_problem, output_file_problem
+
+from .errors import EXIT_INTERNAL, EXIT_OK, EXIT_STORE, ConfigError, Interrupted, SweepError
 
 __all__ = ["main", "build_parser"]
+
+
+def plural(n: int, noun: str) -> str:
+    """``1 point``, ``2 points``."""
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
+
+
+def _kinds(text: str) -> list[str]:
+    """``--only fig2,fig3``: a comma-separated list (one argument, so that a store name
+    after ``--only`` is never taken for a kind)."""
+    return [k for k in (s.strip() for s in text.split(",")) if k]
 
 
 def _shard(text: str) -> tuple[int, int]:
@@ -61,12 +74,23 @@ def _count(text: str) -> int:
     return value
 
 
+def _version() -> str:
+    """``sweep (floewave 0.1.0, model version 3, store schema 2)``."""
+    import floewave
+
+    from .schema import SCHEMA_VERSION
+
+    return (f"sweep (floewave {floewave.__version__}, model version {floewave.MODEL_VERSION},"
+            f" store schema {SCHEMA_VERSION})")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (documented in sweep/README.md)."""
     from .executor import DEFAULT_COMPUTE
 
     p = argparse.ArgumentParser(prog="sweep", description="Run and analyse floewave"
                                 " parameter campaigns (MPI master/worker, one HDF5 store).")
+    p.add_argument("--version", action="version", version=_version())
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     r = sub.add_parser("run", help="run or resume a campaign into a store")
@@ -100,8 +124,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     e = sub.add_parser("export", help="write the per-point table as CSV or Parquet")
     e.add_argument("store", type=Path)
-    e.add_argument("--output", "-o", type=Path, required=True,
-                   help="file ending in .csv or .parquet")
+    e.add_argument("--output", "--out", "-o", type=Path, required=True, dest="output",
+                   help="file ending in .csv or .parquet (Parquet needs the 'parquet' extra)")
 
     v = sub.add_parser("validate", help="check a store against results_schema")
     v.add_argument("store", type=Path)
@@ -113,8 +137,9 @@ def build_parser() -> argparse.ArgumentParser:
     fg.add_argument("--max", type=int, default=20, metavar="N",
                     help="at most N figures per kind (default 20; groups closest to the "
                          "paper's setup first)")
-    fg.add_argument("--only", nargs="+", metavar="KIND", default=None,
-                    help="only these kinds: fig2 fig3 fig5 fig6 summary (default all)")
+    fg.add_argument("--only", type=_kinds, action="extend", metavar="KIND[,KIND]",
+                    default=None, help="only these kinds, comma-separated or repeated:"
+                    " fig2,fig3,fig5,fig6,summary (default all)")
 
     m = sub.add_parser("merge", help="combine shard stores of one campaign (dedup by hash)")
     m.add_argument("output", type=Path, help="merged store (created or extended)")
@@ -122,9 +147,12 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def _err(message: str) -> None:
+def _err(message: str | BaseException) -> None:
+    """Report an error on stderr; a requested stop (:class:`Interrupted`) is not an error
+    and says ``sweep: stopped:`` instead."""
+    prefix = "sweep: stopped:" if isinstance(message, Interrupted) else "sweep: error:"
     for line in str(message).splitlines() or [""]:
-        print(f"sweep: error: {line}", file=sys.stderr)
+        print(f"{prefix} {line}", file=sys.stderr)
 
 
 # ---------------------------------------------------------------------- commands
@@ -173,7 +201,7 @@ def cmd_run(args: argparse.Namespace) -> int:
                                command=" ".join(sys.argv), point_timeout=args.point_timeout)
     except SweepError as exc:
         if rank == 0:
-            _err(str(exc))
+            _err(exc)
         return exc.exit_status
     if rank == 0 and summary is not None:
         print(f"sweep: {summary}; store {args.store}")
@@ -264,30 +292,55 @@ def cmd_plan(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _swept(row: Any, dims: Sequence[str]) -> dict[str, Any]:
+    """A point's swept values as plain Python values (for text and JSON)."""
+    out = {}
+    for k in dims:
+        v = getattr(row, k)
+        out[k] = v if isinstance(v, str) else float(v)
+    return out
+
+
+def _swept_text(swept: dict[str, Any]) -> str:
+    return " ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}"
+                    for k, v in swept.items())
+
+
 def status_report(path: Path, slowest: int = 5) -> dict[str, Any]:
-    """The data behind ``sweep status``."""
-    from .analysis import journal_points, load, store_attrs
+    """The data behind ``sweep status``: counts, the points that did not converge or
+    failed (with their swept values), the slowest points, and one line per run."""
+    from .analysis import journal_points, load, store_attrs, store_runs
 
     df = load(path)
     journaled = journal_points(path)
     attrs = store_attrs(path)
     campaign = json.loads(attrs["campaign_json"])
+    dims = list(campaign["sweep"])
     total = 1
     for values in campaign["sweep"].values():
         total *= len(values)
-    counts = {str(k): int(v) for k, v in df["status"].value_counts().items()}
-    failures = [{"hash": r.hash[:12], "status": r.status, "swept": {k: getattr(r, k) for k in
-                                                                     campaign["sweep"]},
+    counts = {str(k): int(v) for k, v in df["status"].value_counts().items() if v}
+    failures = [{"hash": r.hash[:12], "status": str(r.status), "swept": _swept(r, dims),
                  "message": r.message.splitlines()[0] if r.message else ""}
                 for r in df[df["status"].isin(["failed", "invalid", "crashed",
                                                "timeout"])].itertuples()]
+    not_converged = [{"hash": r.hash[:12], "swept": _swept(r, dims),
+                      "iterations": int(r.iterations), "residual": float(r.residual)}
+                     for r in df[df["status"] == "not_converged"].itertuples()]
     slow = df.sort_values("wall_time", ascending=False).head(slowest)
+    runs = [{"index": int(r["index"]), "started": str(r.get("started", "")),
+             "ended": str(r.get("ended", "")), "outcome": str(r.get("outcome", "")),
+             "mpi_size": int(r.get("mpi_size", 1)), "host": str(r.get("host", "")),
+             "stored": int((df["run"] == r["index"]).sum())} for r in store_runs(path)]
     return {"store": str(path), "grid_points": total, "stored": len(df),
             "journaled": journaled,
             "remaining": max(total - len(df), 0), "counts": counts, "failures": failures,
+            "not_converged": not_converged,
             "slowest": [{"hash": r.hash[:12], "wall_time": float(r.wall_time),
-                         "status": r.status, "host": r.host, "rank": int(r.rank)}
+                         "status": str(r.status), "host": r.host, "rank": int(r.rank),
+                         "swept": _swept(r, dims)}
                         for r in slow.itertuples()],
+            "runs": runs,
             "total_wall_time": float(df["wall_time"].sum()) if len(df) else 0.0}
 
 
@@ -307,36 +360,52 @@ def cmd_status(args: argparse.Namespace) -> int:
     if rep["failures"]:
         print("failed / invalid:")
         for f in rep["failures"]:
-            print(f"  {f['hash']} {f['status']:8s} {f['swept']}: {f['message']}")
+            print(f"  {f['hash']} {f['status']:8s} {_swept_text(f['swept'])}: {f['message']}")
+    if rep["not_converged"]:
+        print("not converged (max_iterations reached; the mean so far is stored):")
+        for f in rep["not_converged"]:
+            print(f"  {f['hash']} {_swept_text(f['swept'])}: {f['iterations']} iterations,"
+                  f" residual {f['residual']:.3g}")
     if rep["slowest"]:
         print("slowest:")
         for s in rep["slowest"]:
             print(f"  {s['hash']} {s['wall_time']:9.2f} s  {s['status']}  rank {s['rank']}"
-                  f" on {s['host']}")
+                  f" on {s['host']}  {_swept_text(s['swept'])}")
+    if rep["runs"]:
+        print("runs:")
+        for r in rep["runs"]:
+            print(f"  {r['index']}: {r['started'][:19]} to {r['ended'][:19] or '(running)'},"
+                  f" {r['mpi_size']} rank(s) on {r['host']}, {plural(r['stored'], 'point')}"
+                  f" stored: {r['outcome']}")
     return EXIT_OK
 
 
 def cmd_export(args: argparse.Namespace) -> int:
     from .analysis import load
 
-    if not args.output.parent.is_dir():
-        _err(f"--output {args.output}: directory {args.output.parent} does not exist")
-        return EXIT_CONFIG
-    df = load(args.store)
     suffix = args.output.suffix.lower()
+    if suffix not in (".csv", ".parquet"):
+        raise ConfigError(f"--output {args.output}: expected a .csv or .parquet file name")
+    problem = output_file_problem(args.output, "--output")
+    if problem:
+        raise ConfigError(problem)
+    if suffix == ".parquet" and not _parquet_engine():
+        raise ConfigError(f"--output {args.output}: Parquet needs pyarrow:"
+                          " pip install 'floewave[parquet]' (or write .csv)")
+    df = load(args.store)
     if suffix == ".csv":
         df.to_csv(args.output, index=False)
-    elif suffix == ".parquet":
-        try:
-            df.to_parquet(args.output, index=False)
-        except ImportError as exc:
-            _err(f"--output {args.output}: Parquet needs pyarrow ({exc}); use .csv")
-            return EXIT_CONFIG
     else:
-        _err(f"--output {args.output}: expected a .csv or .parquet file name")
-        return EXIT_CONFIG
-    print(f"sweep: wrote {len(df)} rows to {args.output}")
+        df.to_parquet(args.output, index=False)
+    print(f"sweep: wrote {plural(len(df), 'row')} to {args.output}")
     return EXIT_OK
+
+
+def _parquet_engine() -> bool:
+    """Whether pandas can write Parquet (pyarrow or fastparquet importable)."""
+    import importlib.util
+
+    return any(importlib.util.find_spec(m) is not None for m in ("pyarrow", "fastparquet"))
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
@@ -362,15 +431,18 @@ def cmd_merge(args: argparse.Namespace) -> int:
 def cmd_figures(args: argparse.Namespace) -> int:
     from .figures import KINDS, make_figures
 
-    if not args.store.exists():
-        raise FileNotFoundError(f"{args.store}: no such store")
     if args.max < 1:
         raise ConfigError(f"--max {args.max}: must be at least 1")
+    problem = output_dir_problem(args.out, "--out")
+    if problem:
+        raise ConfigError(problem)
+    if not args.store.exists():
+        raise FileNotFoundError(f"{args.store}: no such store")
     files = make_figures(args.store, args.out, max_figures=args.max,
                          kinds=args.only or KINDS)
     for f in files:
         print(f)
-    print(f"sweep: wrote {len(files)} figures to {args.out}")
+    print(f"sweep: wrote {plural(len(files), 'figure')} to {args.out}")
     return EXIT_OK
 
 
@@ -384,12 +456,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         args = build_parser().parse_args(argv)
     except SweepError as exc:  # a stop during the parser's imports
-        _err(str(exc))
+        _err(exc)
         return exc.exit_status
     try:
         return _COMMANDS[args.command](args)
     except SweepError as exc:  # ConfigError, StoreError, ...: each carries its exit status
-        _err(str(exc))
+        _err(exc)
         return exc.exit_status
     except (KeyError, FileNotFoundError) as exc:
         _err(str(exc))

@@ -24,6 +24,7 @@ from typing import Any
 
 import floewave
 from floewave import ModelConfig
+from floewave._help import did_you_mean
 
 from .errors import ConfigError
 from .identity import canonical_json, point_hash, sha256_hex
@@ -201,6 +202,10 @@ def parse_campaign(text: str, source: str = "<string>") -> Campaign:
             data[section] = {}
     if "sweep" not in data:
         errors.append(f"{source}: missing table [sweep] (the swept values)")
+    for key in sorted(set(data.get("base", {})) & set(data.get("sweep", {}))):
+        errors.append(f"{source}: {key} is set in both [base] ({key} ="
+                      f" {data['base'][key]!r}) and [sweep] ({key} = {data['sweep'][key]!r}):"
+                      " a swept value replaces the base one; keep it in one place")
     base = _parse_base(data.get("base", {}), source, errors)
     sweep = _parse_sweep(data.get("sweep", {}), base, source, errors)
     run = _parse_run(data.get("run", {}), source, errors)
@@ -242,7 +247,7 @@ def _parse_base(table: dict[str, Any], source: str, errors: list[str]) -> ModelC
     for key, value in table.items():
         if key not in _MODEL_FIELDS:
             errors.append(f"{source}: [base] {key} = {value!r}: unknown parameter"
-                          " (see floewave.ModelConfig)")
+                          f"{did_you_mean(key)} (the parameters: 'floewave run --help')")
             continue
         try:
             ModelConfig(**{key: value})

@@ -24,8 +24,8 @@ from __future__ import annotations
 
 __all__ = ["SweepError", "ConfigError", "StoreError", "StoreLockedError",
            "SchemaVersionError", "CampaignMismatchError", "LaunchError", "WorkerError",
-           "Interrupted", "EXIT_OK", "EXIT_INTERNAL", "EXIT_CONFIG", "EXIT_STORE",
-           "EXIT_LAUNCH", "EXIT_WORKER", "EXIT_INTERRUPTED"]
+           "Interrupted", "PointNotFoundError", "EXIT_OK", "EXIT_INTERNAL", "EXIT_CONFIG",
+           "EXIT_STORE", "EXIT_LAUNCH", "EXIT_WORKER", "EXIT_INTERRUPTED"]
 
 EXIT_OK = 0
 EXIT_INTERNAL = 1
@@ -68,6 +68,21 @@ class SchemaVersionError(StoreError):
 
 class CampaignMismatchError(StoreError):
     """The store belongs to a different campaign (use ``--extend`` to add grid values)."""
+
+
+class PointNotFoundError(SweepError, KeyError):
+    """No stored point (or no profile) matches a hash or a parameter selection; a
+    ``KeyError`` too, with a readable message (not the repr a plain ``KeyError`` shows)."""
+
+    exit_status = EXIT_STORE
+
+    def __init__(self, message: str, *, store: str = "", key: str = "") -> None:
+        self.store = store
+        self.key = key
+        super().__init__(message)
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else ""
 
 
 class LaunchError(SweepError, RuntimeError):

@@ -45,10 +45,11 @@ from floewave import ModelConfig
 from .config import Campaign, Point
 from .errors import ConfigError, Interrupted, LaunchError, SweepError, WorkerError
 from .identity import canonical_json
-from .progress import Progress
+from .progress import Progress, log_line
 from .provenance import environment, host
 from .schema import PROFILE_VARS, REPLICA_VARS, column
 from .store import Store, Unstorable, _jsonable, utc_now
+from .warmup import warm_up, warm_up_configs
 
 __all__ = ["run_campaign", "compute_point", "worker_loop", "Master", "InProcessTransport",
            "MPITransport", "RunSummary", "resolve_compute", "mpi_world", "check_launch",
@@ -260,6 +261,9 @@ def worker_loop(comm: Any, compute: str = DEFAULT_COMPUTE) -> None:
             return
         if fn is None:
             continue
+        if "warm_up" in task:  # before the campaign's clock starts (sweep.warmup)
+            comm.send(("warm", warm_up(task["warm_up"], compute)), dest=0, tag=_TAG_RESULT)
+            continue
         comm.send(("result", compute_point(task, fn, rank)), dest=0, tag=_TAG_RESULT)
 
 
@@ -271,6 +275,8 @@ class Transport(Protocol):
     worker_env: dict[int, dict[str, Any]]
 
     def send(self, worker: int, task: dict[str, Any]) -> None: ...
+
+    def warm_up(self, configs: list[dict[str, Any]]) -> tuple[float, str]: ...
 
     def poll(self, timeout: float) -> tuple[int, str, Any] | None: ...
 
@@ -284,12 +290,17 @@ class InProcessTransport:
 
     def __init__(self, compute: str = DEFAULT_COMPUTE) -> None:
         self.fn = resolve_compute(compute)
+        self.compute = compute
         self.workers = [0]
         self.worker_env = {0: environment(with_git=False)}
         self._tasks: collections.deque[dict[str, Any]] = collections.deque()
 
     def send(self, worker: int, task: dict[str, Any]) -> None:
         self._tasks.append(task)
+
+    def warm_up(self, configs: list[dict[str, Any]]) -> tuple[float, str]:
+        """Compile the kernels of ``configs`` here (:mod:`sweep.warmup`)."""
+        return warm_up(configs, self.compute)
 
     def poll(self, timeout: float) -> tuple[int, str, Any] | None:
         if not self._tasks:
@@ -336,6 +347,25 @@ class MPITransport:
     def send(self, worker: int, task: dict[str, Any]) -> None:
         self.comm.send(task, dest=worker, tag=_TAG_TASK)
 
+    def warm_up(self, configs: list[dict[str, Any]]) -> tuple[float, str]:
+        """Every worker compiles the kernels of ``configs`` (:mod:`sweep.warmup`); returns
+        the longest time and the first problem reported."""
+        if not configs:
+            return 0.0, ""
+        for w in self.workers:
+            self.comm.send({"warm_up": configs}, dest=w, tag=_TAG_TASK)
+        longest, problem = 0.0, ""
+        for _ in self.workers:
+            _wait_message(self.comm, self.MPI.ANY_SOURCE, _TAG_RESULT, self._status)
+            source = self._status.Get_source()
+            kind, payload = self.comm.recv(source=source, tag=_TAG_RESULT)
+            if kind != "warm":  # pragma: no cover - a protocol error
+                raise WorkerError(f"worker rank {source}: expected its warm-up reply, got"
+                                  f" {kind!r}")
+            longest = max(longest, payload[0])
+            problem = problem or (f"rank {source}: {payload[1]}" if payload[1] else "")
+        return longest, problem
+
     def poll(self, timeout: float) -> tuple[int, str, Any] | None:
         deadline = time.monotonic() + timeout
         while not _probe(self.comm, self.MPI.ANY_SOURCE, _TAG_RESULT, self._status):
@@ -373,6 +403,11 @@ class RunSummary:
     elapsed: float = 0.0
     master_cpu: float = 0.0
     loop_elapsed: float = 0.0
+    #: the master computed the points itself (no MPI workers): its CPU share is the
+    #: computation's, not the scheduling overhead, and is not reported
+    in_process: bool = False
+    #: [s] compiling or loading the kernels before the first point (:mod:`sweep.warmup`)
+    warm_up: float = 0.0
 
     @property
     def master_cpu_share(self) -> float:
@@ -382,9 +417,12 @@ class RunSummary:
 
     def __str__(self) -> str:
         counts = ", ".join(f"{k} {v}" for k, v in sorted(self.counts.items())) or "none"
-        return (f"{self.total} grid points: {self.skipped} already stored, {self.computed}"
-                f" stored now ({counts}) in {self.elapsed:.2f} s; master CPU"
-                f" {100 * self.master_cpu_share:.1f}% of a core")
+        noun = "grid point" if self.total == 1 else "grid points"
+        text = (f"{self.total} {noun}: {self.skipped} already stored, {self.computed}"
+                f" stored now ({counts}) in {self.elapsed:.2f} s")
+        if self.in_process:
+            return text + " (computed in-process)"
+        return text + f"; master CPU {100 * self.master_cpu_share:.1f}% of a core"
 
 
 class _StopSignals:
@@ -723,7 +761,7 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
         info = environment(with_mpi=comm is not None)
         info.update(mpi_size=comm.Get_size() if comm is not None else 1, command=command,
                     compute=compute)
-        summary = RunSummary(total=campaign.size)
+        summary = RunSummary(total=campaign.size, in_process=not mpi)
         with _StopSignals(campaign.run.grace_period, in_process=not mpi) as signals:
             store = Store(store_path, campaign, extend=extend, run_info=info)
             outcome = "complete"
@@ -771,6 +809,26 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
     return summary
 
 
+def _warm_up(master: Master, todo: list[Point], signals: _StopSignals,
+             summary: RunSummary) -> None:
+    """Compile the kernels on every worker before the progress clock starts, and say how
+    long it took on a line of its own (:mod:`sweep.warmup`)."""
+    configs = warm_up_configs(todo, master.compute)
+    if not configs:
+        return
+    try:
+        seconds, problem = master.transport.warm_up(configs)
+    except _GraceExpired:
+        signals.requested = signals.requested or "signal"
+        return  # the master loop stops at once (resumable)
+    summary.warm_up = seconds
+    n = len(master.transport.workers)
+    note = f"; warm-up problem (the points will report theirs): {problem}" if problem else ""
+    log_line(f"kernels ready in {seconds:.1f} s on {n} worker{'s' if n != 1 else ''}"
+             f" ({len(configs)} kernel variant{'s' if len(configs) != 1 else ''}: compiled,"
+             f" or loaded from the numba cache){note}")
+
+
 def _run_points(campaign: Campaign, store: Store, master: Master, signals: _StopSignals,
                 summary: RunSummary, retry_failed: bool, progress_bar: bool | None) -> None:
     """The campaign loop of :func:`run_campaign` (the store is open)."""
@@ -781,6 +839,7 @@ def _run_points(campaign: Campaign, store: Store, master: Master, signals: _Stop
             summary.skipped += 1
             continue
         todo.append(p)
+    _warm_up(master, todo, signals, summary)
     progress = Progress(len(todo), interval=campaign.run.progress_interval,
                         bar=progress_bar, skipped=summary.skipped)
     try:

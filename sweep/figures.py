@@ -67,8 +67,10 @@ def _title(keys: Sequence[str], values: Sequence[Any]) -> str:
 
 
 def _file(prefix: str, keys: Sequence[str], values: Sequence[Any]) -> str:
-    text = "_".join(f"{k}{v}" for k, v in zip(keys, values, strict=True))
-    return f"{prefix}_" + re.sub(r"[^A-Za-z0-9_.-]", "", text) + ".png"
+    """``fig5_T=1.2_a0=0.0125_C_sd=0.05….png``: name=value, so that ``a0`` and its value
+    do not run together (``a00.0125``)."""
+    text = "_".join(f"{k}={v}" for k, v in zip(keys, values, strict=True))
+    return f"{prefix}_" + re.sub(r"[^A-Za-z0-9_.=-]", "", text) + ".png"
 
 
 def _closeness(keys: Sequence[str], values: Sequence[Any]) -> tuple:
@@ -81,7 +83,7 @@ def _groups(df: pd.DataFrame, keys: Sequence[str], varying: str,
             min_values: int = 2) -> list[tuple[tuple, pd.DataFrame]]:
     """Groups of ``df`` by ``keys`` in which ``varying`` takes >= min_values values."""
     out = []
-    for key, sub in df.groupby(list(keys), sort=False):
+    for key, sub in df.groupby(list(keys), sort=False, observed=True):
         key = key if isinstance(key, tuple) else (key,)
         if sub[varying].nunique() >= min_values:
             out.append((key, sub))
@@ -112,10 +114,18 @@ def _colours(n: int) -> list:
 
 def _amplitude(ax, row: pd.Series, prof: dict[str, np.ndarray], colour, style: str = "-",
                label: str | None = None, band: bool = True, zone: bool = False) -> None:
-    """a/a0 versus x (with SE band); with ``zone``: the W_c dot and compact-ice line."""
+    """a/a0 versus x (with SE band); with ``zone``: the W_c dot and compact-ice line.
+
+    A ``not_converged`` point (``max_iterations`` reached: the mean so far) is drawn with
+    crosses and its label says so.
+    """
     a0 = float(row["a0"])
     x, a, se = prof["x"], prof["a"], prof["a_stderr"]
-    ax.plot(x, a / a0, style, color=colour, lw=1.3, label=label)
+    marks: dict[str, Any] = {}
+    if str(row.get("status", "")) == "not_converged":
+        marks = {"marker": "x", "ms": 4, "markevery": max(1, len(x) // 10)}
+        label = f"{label} (not converged)" if label else label
+    ax.plot(x, a / a0, style, color=colour, lw=1.3, label=label, **marks)
     if band and np.isfinite(se).any():
         ax.fill_between(x, (a - se) / a0, (a + se) / a0, color=colour, alpha=0.25, lw=0)
     if not zone:

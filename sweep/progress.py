@@ -11,7 +11,7 @@ import sys
 import time
 from typing import Any, TextIO
 
-__all__ = ["Progress", "format_duration"]
+__all__ = ["Progress", "format_duration", "log_line"]
 
 log = logging.getLogger("sweep")
 
@@ -24,6 +24,12 @@ def format_duration(seconds: float) -> str:
     h, rem = divmod(s, 3600)
     m, s = divmod(rem, 60)
     return f"{h}h{m:02d}m{s:02d}s" if h else (f"{m}m{s:02d}s" if m else f"{s}s")
+
+
+def log_line(text: str, stream: TextIO | None = None) -> None:
+    """``[sweep 2026-11-30 12:00:00] text`` on ``stream`` (default stderr)."""
+    stamp = time.strftime("%Y-%m-%d %H:%M:%S")
+    print(f"[sweep {stamp}] {text}", file=stream or sys.stderr, flush=True)
 
 
 class Progress:
@@ -60,7 +66,8 @@ class Progress:
                 self._bar = tqdm(total=total, file=self.stream, unit="pt", dynamic_ncols=True,
                                  smoothing=0.1)
         if not self._bar:
-            self._line(f"{total} points to compute ({skipped} already stored)")
+            noun = "point" if total == 1 else "points"
+            self._line(f"{total} {noun} to compute ({skipped} already stored)")
 
     @property
     def rate(self) -> float:
@@ -109,5 +116,4 @@ class Progress:
         self._line(self.summary())
 
     def _line(self, text: str) -> None:
-        stamp = time.strftime("%Y-%m-%d %H:%M:%S")
-        print(f"[sweep {stamp}] {text}", file=self.stream, flush=True)
+        log_line(text, self.stream)

@@ -152,15 +152,21 @@ def _as_list(by: str | Sequence[str] | None) -> list[str]:
 def collision_stats(df: pd.DataFrame, by: str | Sequence[str] | None = None, *,
                     L_sheet: float | None = None,
                     statuses: Sequence[str] = RESULT_STATUSES,
-                    layouts: Sequence[str] | None = None) -> pd.DataFrame:
+                    layouts: Sequence[str] | None = None,
+                    converged_only: bool = False) -> pd.DataFrame:
     """Collision-zone statistics of a campaign, one row per group of ``by``.
+
+    By default ``not_converged`` points (``max_iterations`` reached; their stored profile
+    is the mean so far, with its standard error) enter the statistics: ``n_not_converged``
+    counts them per group, and ``converged_only=True`` leaves them out.
 
     Parameters
     ----------
     df : the table of :func:`sweep.load` (one row per point).
     by : swept parameter(s) to group by; ``None`` summarises all points in one row.
     L_sheet : sheet length [m]; default: from each row's ``config_json``.
-    statuses : which points enter (default: all with results).
+    statuses : which points enter (default: all with results, ``not_converged`` included).
+    converged_only : shortcut for ``statuses=("converged", "converged_noisy")``.
 
     Returns
     -------
@@ -193,6 +199,8 @@ def collision_stats(df: pd.DataFrame, by: str | Sequence[str] | None = None, *,
     unknown = [k for k in keys if k not in df.columns]
     if unknown:
         raise KeyError(f"collision_stats: no column {unknown[0]!r} to group by")
+    if converged_only:
+        statuses = [s for s in statuses if s != "not_converged"]
     d = derived(df, L_sheet=L_sheet, statuses=statuses)
     if layouts is not None:
         d = d[d["compact_zone"].isin(list(layouts))]
@@ -202,7 +210,7 @@ def collision_stats(df: pd.DataFrame, by: str | Sequence[str] | None = None, *,
                  _inverted=d["compact_zone"] == "inverted",
                  _patchy=d["compact_zone"] == "patchy",
                  _legacy=d["compact_zone"] == "legacy")
-    grouped = d.groupby(keys or ["_all"], sort=True, dropna=False)
+    grouped = d.groupby(keys or ["_all"], sort=True, dropna=False, observed=True)
     agg = grouped.agg(
         n_points=("W_c", "size"),
         n_not_converged=("_nc", "sum"),
@@ -279,7 +287,8 @@ def alpha_omega(df: pd.DataFrame, alpha: str = "alpha_inner",
         raise ValueError("alpha_omega: T is the fitted variable, it cannot be a group key")
     d = df[df["status"].isin(statuses)] if "status" in df.columns else df
     rows = []
-    for key, g in (d.groupby(keys, sort=True, dropna=False) if keys else [((), d)]):
+    for key, g in (d.groupby(keys, sort=True, dropna=False, observed=True) if keys
+                   else [((), d)]):
         key = key if isinstance(key, tuple) else (key,)
         om = 2.0 * math.pi / g["T"].to_numpy(float)
         al = g[alpha].to_numpy(float)

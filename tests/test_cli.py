@@ -40,3 +40,47 @@ def test_bad_input_exits_2_and_writes_nothing(tmp_path, args, needle):
     assert needle in p.stderr
     assert p.stderr.count("error:") == 1
     assert not (tmp_path / "out.json").exists()
+
+
+@pytest.mark.parametrize("option", ["--json", "--plot"])
+def test_unwritable_output_is_refused_before_the_point_runs(tmp_path, option):
+    """Issue *first hour* 1: the point is not computed and then lost to a bad path."""
+    p = run(FAST + [option, "nodir/out.x"], tmp_path)
+    assert p.returncode == 2, p.stderr
+    assert f"{option} nodir/out.x: directory" in p.stderr and "does not exist" in p.stderr
+    assert p.stderr.count("error:") == 1 and "Traceback" not in p.stderr
+    assert "iteration" not in p.stderr and p.stdout == ""  # nothing ran
+
+
+def test_run_help_lists_every_field_with_default_and_units():
+    """Issue *first hour* 5: the list is read from ModelConfig (a new field appears)."""
+    from dataclasses import fields
+
+    from floewave import ModelConfig
+
+    p = subprocess.run([sys.executable, "-m", "floewave", "run", "--help"],
+                       capture_output=True, text=True, timeout=60)
+    assert p.returncode == 0
+    for f in fields(ModelConfig):
+        assert f"\n  {f.name} = " in p.stdout, f.name
+    assert "L_x = 0.5 [m] (float)" in p.stdout and "floe length" in p.stdout
+    assert "rho_w = 1000.0 [kg m^-3]" in p.stdout
+    assert "compact_min_length = 3.0 [m]" in p.stdout and "compact_min_pairs = 3 [-]" in p.stdout
+    assert "exit statuses: 0 success" in p.stdout
+
+
+def test_top_level_help_is_plain_text_and_versions_exist():
+    top = subprocess.run([sys.executable, "-m", "floewave", "--help"], capture_output=True,
+                         text=True, timeout=60)
+    assert top.returncode == 0 and "``" not in top.stdout
+    for prog in ("floewave", "sweep"):
+        v = subprocess.run([sys.executable, "-m", prog, "--version"], capture_output=True,
+                           text=True, timeout=60)
+        assert v.returncode == 0 and "model version" in v.stdout, (prog, v.stderr)
+
+
+def test_unknown_field_suggests_the_near_one(tmp_path):
+    p = run(["--set", "epsilon=0.5"], tmp_path)
+    assert p.returncode == 2
+    assert "unknown field 'epsilon' (did you mean 'eps'?)" in p.stderr
+    assert "L_x, T, a0" in p.stderr

@@ -115,6 +115,9 @@ BAD = [
     ("run_name_type", MINIMAL + "[run]\nname = 3\n", "name"),
     ("run_zero_interval", MINIMAL + "[run]\nprogress_interval = 0\n", "progress_interval"),
     ("not_toml", "[sweep\neps = [0.2]\n", "TOML"),
+    # issue *first hour* 2: a base value a [sweep] list silently replaced
+    ("base_and_sweep", "[base]\neps = 0.5\n[sweep]\neps = [0.6]\n",
+     "eps is set in both [base] (eps = 0.5) and [sweep] (eps = [0.6])"),
 ]
 
 

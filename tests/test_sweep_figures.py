@@ -58,8 +58,8 @@ def test_every_kind_from_a_hand_built_store(fake_store, tmp_path, capsys):
     # one per kind (fig6: one per d_f and one per a0) + the three summary figures
     assert len(names) == 8, names
     # groups closest to the paper's setup come first (only T differs: 1.0 sorts first)
-    assert "fig2_L_x0.5_T1.0_a00.0125_C_sd0.05_d_f0.005.png" in names
-    assert "fig3_L_x0.5_T1.0_a00.0125_C_sd0.05_d_f0.005_dispersionml.png" in names
+    assert "fig2_L_x=0.5_T=1.0_a0=0.0125_C_sd=0.05_d_f=0.005.png" in names
+    assert "fig3_L_x=0.5_T=1.0_a0=0.0125_C_sd=0.05_d_f=0.005_dispersion=ml.png" in names
     assert sum(n.startswith("fig5_") for n in names) == 1
     assert sum(n.startswith("fig6_df_") for n in names) == 1
     assert sum(n.startswith("fig6_a0_") for n in names) == 1
@@ -131,3 +131,50 @@ def test_figures_of_a_missing_store_is_an_error(tmp_path, capsys):
     assert main(["figures", str(tmp_path / "nope.h5"), "--out", str(tmp_path / "o")]) == 3
     assert "no such store" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
+
+
+def test_only_takes_one_argument_so_the_store_is_not_swallowed(fake_store, tmp_path):
+    """``--only fig5 STORE --out DIR`` (issue *first hour* 9): the store stays positional."""
+    out = tmp_path / "f"
+    assert main(["figures", "--only", "fig5", str(fake_store), "--out", str(out),
+                 "--max", "1"]) == 0
+    assert [n[:5] for n in _pngs(out)] == ["fig5_"]
+    out2 = tmp_path / "g"
+    assert main(["figures", "--only", "fig5,fig2", "--only", "summary", str(fake_store),
+                 "--out", str(out2), "--max", "1"]) == 0
+    assert {n[:4] for n in _pngs(out2)} == {"fig5", "fig2", "coll", "alph"}
+
+
+def test_unusable_out_is_refused_before_drawing(fake_store, tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    assert main(["figures", str(fake_store), "--out", str(blocker / "figs")]) == 2
+    assert "--out" in capsys.readouterr().err
+    assert main(["figures", str(fake_store), "--out", str(blocker)]) == 2
+    assert "not a directory" in capsys.readouterr().err
+
+
+def test_one_figure_is_singular(fake_store, tmp_path, capsys):
+    out = tmp_path / "one"
+    assert main(["figures", str(fake_store), "--out", str(out), "--only", "fig5",
+                 "--max", "1"]) == 0
+    assert f"wrote 1 figure to {out}" in capsys.readouterr().out
+
+
+def test_not_converged_curves_are_marked():
+    """Issue *first hour* 6: a not-converged point does not look like a converged one."""
+    import matplotlib.pyplot as plt
+    import pandas as pd
+
+    from sweep.figures import _amplitude
+
+    x = np.linspace(0.25, 9.75, 20)
+    prof = {"x": x, "a": 0.01 / (1 + x), "a_stderr": 1e-4 + 0 * x}
+    fig, ax = plt.subplots()
+    for status in ("converged", "not_converged"):
+        _amplitude(ax, pd.Series({"a0": 0.01, "status": status}), prof, "C0",
+                   label=f"eps {status}")
+    ok, bad = ax.get_lines()
+    assert ok.get_marker() in ("None", "", None) and ok.get_label() == "eps converged"
+    assert bad.get_marker() == "x" and bad.get_label().endswith("(not converged)")
+    plt.close(fig)

@@ -180,3 +180,164 @@ def test_cli_status_and_export(tmp_path, capsys, campaign):
     assert main(["export", str(store), "-o", str(tmp_path / "t.xlsx")]) == 2
     assert main(["validate", str(store)]) == 0
     assert main(["status", str(tmp_path / "none.h5")]) == 3
+
+
+def test_export_checks_its_output_before_reading(tmp_path, capsys, campaign, monkeypatch):
+    """Issue *first hour* 1, 7, 9: ``--out`` is accepted as in the guide, a bad path or a
+    missing Parquet engine is one line and exit 2, before the store is read."""
+    store = tmp_path / "s.h5"
+    run_campaign(campaign, str(store), compute="sweep.testing:fake_point")
+    capsys.readouterr()
+    assert main(["export", str(store), "--out", str(tmp_path / "t.csv")]) == 0
+    assert "wrote 12 rows" in capsys.readouterr().out
+    assert main(["export", str(tmp_path / "none.h5"), "--out",
+                 str(tmp_path / "nodir" / "t.csv")]) == 2  # the path first, not the store
+    err = capsys.readouterr().err
+    assert "nodir" in err and "does not exist" in err and err.count("\n") == 1
+    import sweep.cli
+
+    monkeypatch.setattr(sweep.cli, "_parquet_engine", lambda: False)
+    assert main(["export", str(store), "-o", str(tmp_path / "t.parquet")]) == 2
+    err = capsys.readouterr().err
+    assert "floewave[parquet]" in err and err.count("\n") == 1
+    assert not (tmp_path / "t.parquet").exists()
+
+
+def test_in_process_summary_reports_no_master_cpu_share(tmp_path, campaign, capsys):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(TOML)
+    assert main(["run", str(cfg), "--store", str(tmp_path / "s.h5"), "--compute",
+                 "sweep.testing:fake_point", "--no-bar"]) == 0
+    out = capsys.readouterr().out
+    assert "12 grid points" in out and "computed in-process" in out
+    assert "master CPU" not in out
+
+
+def test_a_requested_stop_is_not_reported_as_an_error(capsys):
+    from sweep.cli import _err
+    from sweep.errors import ConfigError, Interrupted
+
+    _err(Interrupted("campaign stopped by SIGINT: ... resumable"))
+    _err(ConfigError("bad"))
+    err = capsys.readouterr().err.splitlines()
+    assert err == ["sweep: stopped: campaign stopped by SIGINT: ... resumable",
+                   "sweep: error: bad"]
+
+
+def test_load_profiles_by_parameter(tmp_path, campaign):
+    """Issue *first hour*: one Dataset of every profile along the swept dimensions and a
+    floe dimension; missing points NaN; units on every variable; selection by value."""
+    from sweep.schema import PROFILE_VARS
+
+    store = tmp_path / "s.h5"
+    run_campaign(campaign.shard(0, 2), str(store), compute="sweep.testing:fake_point")
+    df = sweep.load(store)
+    ds = sweep.load_profiles(store)
+    assert ds["a"].dims == ("L_x", "eps", "dispersion", "floe")
+    assert dict(ds.sizes) == {"L_x": 2, "eps": 3, "dispersion": 2, "floe": 12}
+    for k, (units, _) in PROFILE_VARS.items():
+        assert ds[k].attrs["units"] == units and ds[k].attrs["long_name"]
+    # every stored point's profile is where its swept values say, padded with NaN
+    for row in df.itertuples():
+        one = sweep.load_profile(store, row.hash)
+        got = ds["a"].sel(L_x=row.L_x, eps=row.eps, dispersion=row.dispersion).values
+        n = one.sizes["floe"]
+        np.testing.assert_array_equal(got[:n], one["a"].values)
+        assert np.all(np.isnan(got[n:]))
+    missing = ds["status"].values == "missing"
+    assert missing.sum() == 12 - len(df) > 0
+    assert np.all(np.isnan(ds["a"].values[missing]))
+    # selection: a scalar drops its dimension, a list keeps it
+    sub = sweep.load_profiles(store, eps=0.4, dispersion="ml")
+    assert sub["a"].dims == ("L_x", "floe") and float(sub["eps"]) == 0.4
+    assert sweep.load_profiles(store, eps=[0.2, 0.6])["a"].sizes["eps"] == 2
+    with pytest.raises(sweep.PointNotFoundError, match="not a swept parameter"):
+        sweep.load_profiles(store, T=1.2)
+
+
+def test_load_profile_unknown_hash_is_a_clear_error(tmp_path, campaign):
+    store = tmp_path / "s.h5"
+    run_campaign(campaign, str(store), compute="sweep.testing:fake_point")
+    with pytest.raises(sweep.PointNotFoundError) as info:
+        sweep.load_profile(store, "0123456789ab")
+    assert str(info.value).startswith(f"{store}: 0 stored points have a hash")
+    assert isinstance(info.value, KeyError)  # callers catching KeyError still do
+
+
+def test_table_types(tmp_path, campaign):
+    """Times are datetimes, status and dispersion categoricals, integers stay integers."""
+    import pandas as pd
+
+    store = tmp_path / "s.h5"
+    run_campaign(campaign.shard(0, 2), str(store), compute="sweep.testing:fake_point")
+    df = sweep.load(store)
+    assert str(df["start_time"].dtype).startswith("datetime64") and df["end_time"].dt.tz
+    assert isinstance(df["status"].dtype, pd.CategoricalDtype)
+    assert isinstance(df["dispersion"].dtype, pd.CategoricalDtype)
+    assert (df["status"] == "converged").all()
+    ds = sweep.load_xarray(store)
+    assert ds["n_floes"].dtype == np.int64 and ds["iterations"].dtype == np.int64
+    assert (ds["n_floes"].values == -1).sum() == 12 - len(df)
+
+
+def test_status_names_the_swept_values_and_lists_runs(tmp_path, capsys):
+    """Issue *first hour* 6, 7: not-converged and failed points are traceable by their
+    parameters; the runs section the guide promises is printed."""
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(TOML)
+    store = tmp_path / "s.h5"
+    assert main(["run", str(cfg), "--store", str(store), "--compute",
+                 "sweep.testing:raising_point", "--no-bar"]) == 0
+    capsys.readouterr()
+    assert main(["status", str(store)]) == 0
+    out = capsys.readouterr().out
+    assert "failed / invalid:" in out and "L_x=" in out and "dispersion=" in out
+    assert "runs:\n  0: " in out and "12 points stored: complete" in out
+    assert main(["status", str(store), "--json"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    f = rep["failures"][0]
+    assert set(f["swept"]) == {"L_x", "eps", "dispersion"}
+    assert rep["runs"][0]["stored"] == 12 and rep["slowest"][0]["swept"]
+    assert rep["not_converged"] == []
+
+
+def test_status_lists_not_converged_points(tmp_path, capsys):
+    store = tmp_path / "s.h5"
+    small = parse_campaign(TOML.replace("[0.2, 0.4, 0.6]", "[0.2, 0.8]"), "test.toml")
+    run_campaign(small, str(store), compute="sweep.testing:power_point")
+    capsys.readouterr()
+    assert main(["status", str(store)]) == 0
+    out = capsys.readouterr().out
+    block = out.split("not converged (max_iterations reached")[1].split("slowest:")[0]
+    assert block.count("eps=0.8") == 4 and "eps=0.2" not in block
+
+
+REAL_TINY = """\
+[base]
+L_sheet = 2.0
+n0 = 1
+nT = 1
+max_iterations = 2
+[sweep]
+L_x = [0.5]
+eps = [0.2, 0.6]
+[run]
+progress_interval = 100.0
+"""
+
+
+def test_kernels_are_compiled_before_the_clock_starts(tmp_path, capsys):
+    """Issue *first hour* 4: the kernels are compiled (or loaded) on the workers first,
+    reported on a line of their own; fake compute functions are not warmed up."""
+    summary = run_campaign(parse_campaign(REAL_TINY, "t.toml"), str(tmp_path / "s.h5"),
+                           progress_bar=False)
+    err = capsys.readouterr().err
+    lines = err.splitlines()
+    ready = [i for i, ln in enumerate(lines) if "kernels ready in" in ln]
+    start = [i for i, ln in enumerate(lines) if "points to compute" in ln]
+    assert len(ready) == 1 and ready[0] < start[0], err
+    assert "1 worker (1 kernel variant" in lines[ready[0]]
+    assert summary.warm_up > 0
+    run_campaign(parse_campaign(TOML, "t.toml"), str(tmp_path / "f.h5"),
+                 compute="sweep.testing:fake_point", progress_bar=False)
+    assert "kernels ready" not in capsys.readouterr().err

@@ -236,3 +236,11 @@ def test_alpha_omega_weighted_when_every_point_has_an_error_bar(table):
     # exact power law with proportional errors: the weighted fit finds the same m exactly
     np.testing.assert_allclose(w.loc[ok, "m"], alpha_omega(table).loc[ok, "m"], rtol=1e-9)
     assert not alpha_omega(table)["weighted"].any()
+
+
+def test_converged_only_leaves_out_the_not_converged_points(table):
+    """Issue *first hour* 6: not-converged points enter by default (counted in
+    n_not_converged); ``converged_only`` is the filter."""
+    s = collision_stats(table, by="eps", converged_only=True).set_index("eps")
+    assert list(s.index) == [0.2]  # every eps 0.8 point is not_converged (power_point)
+    assert s.loc[0.2, "n_points"] == 24 and s.loc[0.2, "n_not_converged"] == 0
