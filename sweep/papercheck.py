@@ -176,7 +176,7 @@ def _diff(lo: Estimate, hi: Estimate) -> _Diff:
 
 
 def _zs(z: float) -> str:
-    return "n/a" if math.isnan(z) else f"{z:+.1f}"
+    return "n/a" if math.isnan(z) else f"{z + 0.0:+.1f}"        # + 0.0: no "-0.0"
 
 
 def _valued(estimates: Sequence[Estimate]) -> tuple[list[Estimate], str]:
