@@ -8,6 +8,8 @@
 - :func:`validate` — check a store against ``results_schema/``
 - :func:`collision_stats`, :func:`alpha_omega` — collision-zone statistics and alpha(omega)
   power laws across a campaign (:mod:`sweep.stats`)
+- :mod:`sweep.papercheck` — the paper's qualitative claims checked on the stores of the
+  shipped paper campaigns (``sweep paper-check``)
 
 The command line is ``sweep`` (:mod:`sweep.cli`); user docs are in ``sweep/README.md``.
 """
@@ -40,8 +42,8 @@ _LAZY = {
     "alpha_omega": "stats", "collision_stats": "stats", "derived": "stats",
 }
 _MODULES = {"analysis", "cli", "config", "errors", "executor", "figures", "identity",
-            "journal", "lock", "merge", "progress", "provenance", "schema", "stats", "store",
-            "testing", "writer"}
+            "journal", "lock", "merge", "papercheck", "progress", "provenance", "schema",
+            "stats", "store", "testing", "writer"}
 
 
 def __getattr__(name: str) -> Any:

@@ -1,4 +1,4 @@
-"""The ``sweep`` command: plan, run, status, export, validate, merge.
+"""The ``sweep`` command: plan, run, status, export, validate, merge, figures, paper-check.
 
 Exit statuses are those of :mod:`sweep.errors` (0 ok, 1 internal error, 2 bad input,
 3 store problem, 4 MPI launch problem, 5 worker failure, 6 interrupted but resumable).
@@ -140,6 +140,19 @@ def build_parser() -> argparse.ArgumentParser:
     fg.add_argument("--only", type=_kinds, action="extend", metavar="KIND[,KIND]",
                     default=None, help="only these kinds, comma-separated or repeated:"
                     " fig2,fig3,fig5,fig6,summary (default all)")
+
+    pc = sub.add_parser("paper-check", help="check the paper's qualitative claims on the"
+                        " stores of the shipped paper campaigns (one table)")
+    pc.add_argument("--stores", type=Path, default=Path("paper"), metavar="DIR",
+                    help="directory of the stores <name>.h5 (default: paper)")
+    pc.add_argument("--run", action="store_true", help="first run (or resume) the campaigns"
+                    " into DIR, in-process")
+    pc.add_argument("--configs", type=Path, default=None, metavar="DIR",
+                    help="campaign files <name>.toml for --run (default: this checkout's"
+                    " configs/)")
+    pc.add_argument("--compute", default=None, metavar="MODULE:FUNC",
+                    help="compute function for --run (tests; default floewave:run_point)")
+    pc.add_argument("--json", action="store_true", help="machine-readable output")
 
     m = sub.add_parser("merge", help="combine shard stores of one campaign (dedup by hash)")
     m.add_argument("output", type=Path, help="merged store (created or extended)")
@@ -446,8 +459,23 @@ def cmd_figures(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def cmd_paper_check(args: argparse.Namespace) -> int:
+    """Exit status 0 whatever the verdicts; 3 if a store is missing or unreadable (the
+    table is printed all the same, those claims inconclusive)."""
+    from .papercheck import check_stores, format_table
+
+    report = check_stores(args.stores, run=args.run, configs=args.configs,
+                          compute=args.compute,
+                          log=lambda msg: print(f"sweep: {msg}", file=sys.stderr))
+    print(report.to_json() if args.json else format_table(report.checks))
+    for name, problem in report.problems.items():
+        _err(f"{name}: {problem}")
+    return EXIT_STORE if report.problems else EXIT_OK
+
+
 _COMMANDS = {"run": cmd_run, "plan": cmd_plan, "status": cmd_status, "export": cmd_export,
-             "validate": cmd_validate, "merge": cmd_merge, "figures": cmd_figures}
+             "validate": cmd_validate, "merge": cmd_merge, "figures": cmd_figures,
+             "paper-check": cmd_paper_check}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

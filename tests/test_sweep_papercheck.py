@@ -1,0 +1,315 @@
+"""sweep.papercheck: each rule's three verdicts on hand-built inputs, the claims on
+hand-built tables (with and without the ensemble's *_stderr columns), and ``sweep
+paper-check`` end to end on stores of the shipped paper campaigns computed by a stand-in."""
+import json
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from sweep import papercheck as pc
+from sweep.cli import main
+from sweep.papercheck import FAILS, HOLDS, INCONCLUSIVE, Estimate
+
+
+def E(value, se=0.01, label="p"):
+    return Estimate(label, value, se, "replicas" if math.isfinite(se) else "none")
+
+
+# ---------------------------------------------------------------------- ordering (chain)
+def test_ordering_holds_when_every_step_has_the_sign_and_the_ends_differ():
+    verdict, evidence = pc.ordering([E(0.9), E(0.85), E(0.8), E(0.7)], increasing=False)
+    assert verdict == HOLDS, evidence
+    # a step of the right sign but within its error bar does not stop it
+    assert pc.ordering([E(0.9), E(0.895), E(0.7)], increasing=False)[0] == HOLDS
+
+
+def test_ordering_fails_on_one_significant_wrong_step():
+    verdict, evidence = pc.ordering([E(0.9), E(0.8), E(0.86), E(0.5)], increasing=False)
+    assert verdict == FAILS, evidence
+    assert "+7.1, -4.2, +25.5" in evidence
+
+
+def test_ordering_fails_when_the_ends_are_significantly_reversed():
+    # every step slightly wrong (|z| < 2), the ends clearly wrong
+    steps = [E(0.80 + 0.015 * i) for i in range(5)]
+    verdict, evidence = pc.ordering(steps, increasing=False)
+    assert verdict == FAILS, evidence
+
+
+def test_ordering_inconclusive_cases():
+    # right signs, ends within 2 combined SE
+    assert pc.ordering([E(0.8), E(0.81), E(0.82)], increasing=True)[0] == INCONCLUSIVE
+    # ends clear but one step the wrong way (not significantly)
+    assert pc.ordering([E(0.9), E(0.91), E(0.7)], increasing=False)[0] == INCONCLUSIVE
+    # no error bar and no floor: never decided, however large the effect
+    verdict, evidence = pc.ordering([E(10.0, math.nan), E(0.0, math.nan)], increasing=False)
+    assert verdict == INCONCLUSIVE and "no error bar" in evidence
+    # points without a value are left out; one left is not an ordering
+    verdict, evidence = pc.ordering([E(math.nan, label="a"), E(0.5, label="b")],
+                                    increasing=True)
+    assert verdict == INCONCLUSIVE and "left out (no value): a" in evidence
+
+
+def test_floor_decides_only_large_effects():
+    def floored(values):
+        return [Estimate(f"p{i}", v).floored(4.0) for i, v in enumerate(values)]
+
+    assert all(e.source == "floor" and e.se == 4.0 for e in floored([1.0]))
+    assert pc.ordering(floored([30.0, 15.0]), increasing=False)[0] == HOLDS      # z = 2.65
+    assert pc.ordering(floored([30.0, 25.0]), increasing=False)[0] == INCONCLUSIVE  # 0.9
+    assert pc.ordering(floored([15.0, 30.0]), increasing=False)[0] == FAILS
+    # a stored SE is kept, not replaced by the floor
+    assert E(1.0, 0.5).floored(4.0).se == 0.5
+
+
+# ---------------------------------------------------------------------- pairs
+def test_pairs_three_verdicts_and_stouffer():
+    assert pc.pairs([(E(0.7), E(0.8)), (E(0.6), E(0.75))])[0] == HOLDS
+    assert pc.pairs([(E(0.7), E(0.8)), (E(0.75), E(0.6))])[0] == FAILS
+    assert pc.pairs([(E(0.7), E(0.71))])[0] == INCONCLUSIVE
+    # each pair z = 1.5 alone is inconclusive; two independent ones combine to 2.1
+    one = (E(0.0, 0.1), E(0.15 * math.sqrt(2), 0.1))
+    assert pc.pairs([one])[0] == INCONCLUSIVE
+    verdict, evidence = pc.pairs([one, one])
+    assert verdict == HOLDS and "combined z = +2.1" in evidence
+    # significantly wrong in combination although no single pair is
+    bad = (one[1], one[0])
+    assert pc.pairs([bad, bad])[0] == FAILS
+    assert pc.pairs([(E(math.nan), E(1.0))])[0] == INCONCLUSIVE
+
+
+# ---------------------------------------------------------------------- ranges
+def test_in_range_three_verdicts():
+    assert pc.in_range([E(1.0, 0.05)], 0.8, 1.25)[0] == HOLDS
+    assert pc.in_range([E(1.5, 0.05)], 0.8, 1.25)[0] == FAILS
+    assert pc.in_range([E(1.2, 0.05)], 0.8, 1.25)[0] == INCONCLUSIVE
+    # over several points: one failing point fails the claim, one undecided leaves it open
+    assert pc.in_range([E(1.0, 0.05), E(0.5, 0.05)], 0.8, 1.25)[0] == FAILS
+    assert pc.in_range([E(1.0, 0.05), E(1.2, 0.05)], 0.8, 1.25)[0] == INCONCLUSIVE
+    # open-ended and exact values
+    assert pc.in_range([E(5.0, 0.1)], 4.0, math.inf)[0] == HOLDS
+    assert pc.in_range([E(3.0, 0.0)], 3.5, 4.5)[0] == FAILS
+    assert pc.in_range([E(4.0, math.nan)], 3.5, 4.5)[0] == INCONCLUSIVE
+
+
+def test_z_critical_uses_student_t_for_fitted_errors():
+    assert pc.z_critical(math.inf) == 2.0
+    assert pc.z_critical(2) == pytest.approx(4.53, abs=0.01)
+    assert pc.z_critical(1000) == pytest.approx(2.0, abs=0.01)
+    # a fitted SE with 2 degrees of freedom needs |z| >= 4.5
+    fitted = Estimate("m", 4.0 + 3.0 * 0.1, 0.1, "fit", 2)
+    assert pc.in_range([fitted], 3.5, 4.3)[0] == INCONCLUSIVE
+    assert pc.in_range([replace_dof(fitted, math.inf)], 4.5, 5.0)[0] == FAILS
+
+
+def replace_dof(e, dof):
+    from dataclasses import replace
+    return replace(e, dof=dof)
+
+
+# ---------------------------------------------------------------------- exponents
+def test_power_exponent_weighted_unweighted_and_too_few_periods():
+    om = 2 * np.pi / np.array([1.1, 1.2, 1.4, 1.5])
+    al = 0.3 * om ** 2.2
+    rng = np.random.default_rng(1)
+    noisy = al * np.exp(rng.normal(0.0, 0.01, al.size))
+    m = pc.power_exponent(om, noisy, 0.01 * noisy)
+    assert m.source == "fit" and abs(m.value - 2.2) < 4 * m.se
+    assert m.se == pytest.approx(0.01 / math.sqrt(((np.log(om) - np.log(om).mean()) ** 2)
+                                                  .sum()), rel=0.5)
+    # without SEs: the residuals' SE, n - 2 degrees of freedom
+    u = pc.power_exponent(om, noisy)
+    assert u.dof == 2 and math.isfinite(u.se)
+    # SEs too small for the scatter: inflated by sqrt(chi^2/dof), dof n - 2
+    s = pc.power_exponent(om, noisy, 1e-4 * noisy)
+    naive = 1e-4 / math.sqrt(((np.log(om) - np.log(om).mean()) ** 2).sum())
+    assert s.dof == 2 and s.se > 5 * naive
+    assert math.isnan(pc.power_exponent(om[:2], al[:2]).value)
+    # NaN and non-positive rates are left out
+    assert math.isnan(pc.power_exponent(om, np.array([1.0, np.nan, -1.0, 2.0])).value)
+
+
+# ---------------------------------------------------------------------- claims on tables
+def _row(h, **kw):
+    base = dict(hash=h, status="converged", L_x=0.5, T=1.2, a0=0.0125, C_sd=0.05, eps=0.6,
+                d_f=0.005, dispersion="ml", W_c=20.0, compact_zone="edge", compact_end=42.0,
+                alpha_all=0.4, alpha_all_resid=1e-3, alpha_edge=1.0, alpha_inner=0.4,
+                alpha_exp=0.01, alpha_exp_resid=2e-3, alpha_c=0.4, a_end=0.01, L_sheet=42.0)
+    base.update(kw)
+    return base
+
+
+def _fig2(W_c, *, ensemble=True, a_end=None):
+    rows = []
+    for disp in ("ml", "ep"):
+        for i, eps in enumerate((0.2, 0.4, 0.6, 0.8)):
+            r = _row(f"{disp}{eps}", eps=eps, dispersion=disp, W_c=W_c[i],
+                     a_end=(a_end or [0.011, 0.010, 0.009, 0.008])[i]
+                     * (1.0 if disp == "ml" else 1.1),
+                     alpha_inner=0.4 * (1.0 + 0.05 * i))
+            if ensemble:
+                r.update(W_c_stderr=0.5, W_c_n=8, a_end_stderr=2e-5,
+                         alpha_inner_stderr=0.01, replicas=8)
+            rows.append(r)
+    return pd.DataFrame(rows)
+
+
+def _by(checks, claim, campaign=None):
+    out = [c for c in checks if c.claim.startswith(claim)
+           and (campaign is None or c.campaign == campaign)]
+    assert out, claim
+    return out
+
+
+def test_claims_use_the_ensemble_columns():
+    checks = pc.paper_checks({"fig2": _fig2([30.0, 25.0, 20.0, 15.0])})
+    w = _by(checks, "higher eps -> narrower collisional zone W_c (ml)")[0]
+    assert w.verdict == HOLDS, w.evidence
+    assert all(e.source == "replicas" and e.se == 0.5 for e in w.estimates)
+    assert "n=8" in w.estimates[0].label
+    a = _by(checks, "higher eps -> lower a/a0 (ml)")[0]
+    assert a.verdict == HOLDS and a.estimates[0].se == pytest.approx(2e-5 / 0.0125)
+    assert "R=8" in a.estimates[0].label
+    assert _by(checks, "ep attenuates less than ml", "fig2")[0].verdict == HOLDS
+    inner = _by(checks, "inner zone attenuates like confined ice (ml)")[0]
+    # ratios 1.0, 1.05, 1.1, 1.15 +- 0.025: all inside [0.8, 1.25] by >= 2 SE except 1.15
+    assert [round(e.value, 2) for e in inner.estimates] == [1.0, 1.05, 1.1, 1.15]
+    assert inner.verdict == HOLDS, inner.evidence
+
+
+def test_claims_fail_when_the_data_contradict_them():
+    checks = pc.paper_checks({"fig2": _fig2([15.0, 20.0, 25.0, 30.0],
+                                            a_end=[0.008, 0.009, 0.010, 0.011])})
+    assert _by(checks, "higher eps -> narrower collisional zone W_c (ml)")[0].verdict == FAILS
+    assert _by(checks, "higher eps -> lower a/a0 (ep)")[0].verdict == FAILS
+
+
+def test_without_ensemble_columns_the_floors_and_profiles_decide():
+    t = _fig2([24.0, 22.0, 20.0, 18.0], ensemble=False)
+    prof = {h: {"a_stderr": np.full(84, 1e-5), "a": np.full(84, 0.01),
+                "x_mean": np.arange(84) * 0.505 + 0.25,
+                "F_w_mean": np.full(84, 100.0),
+                "F_d_mean": np.where(np.arange(84) * 0.505 < 20.0, 10.0, 1.0)}
+            for h in t["hash"]}
+    checks = pc.paper_checks({"fig2": t}, lambda name, h: prof[h])
+    w = _by(checks, "higher eps -> narrower collisional zone W_c (ml)")[0]
+    assert w.verdict == INCONCLUSIVE and all(e.source == "floor" for e in w.estimates)
+    a = _by(checks, "higher eps -> lower a/a0 (ml)")[0]
+    assert {e.source for e in a.estimates} == {"profile"} and a.verdict == HOLDS
+    inner = _by(checks, "inner zone attenuates like confined ice (ml)")[0]
+    assert inner.verdict == INCONCLUSIVE and "(floor)" in pc.format_table([inner])
+    force = _by(checks, "Fig. 3: drag about two orders")[0]
+    assert [e.value for e in force.estimates] == [2.0] * 4 and force.verdict == HOLDS
+    near = _by(checks, "Fig. 3: drag a larger part")[0]
+    assert near.verdict == HOLDS, near.evidence          # 1 decade vs 2 decades
+    # profiles unavailable: the force claims cannot be decided
+    bare = pc.paper_checks({"fig2": t})
+    assert _by(bare, "Fig. 3: drag about two orders")[0].verdict == INCONCLUSIVE
+
+
+def test_fig6a_reversal_and_near_edge():
+    rows = []
+    for T in (1.2, 1.8):
+        for i, d_f in enumerate((0.005, 0.01, 0.02, 0.05)):
+            short = T == 1.2
+            # near the edge a/a0 grows with d_f at both periods; at the far end it falls
+            # with d_f for short waves (the reversal) and grows for long waves
+            a_end = (0.010 - 0.001 * i) if short else (0.013 + 0.0005 * i)
+            rows.append(_row(f"{T}{d_f}", T=T, d_f=d_f, a0=0.015, a_end=a_end,
+                             a_end_stderr=1e-5))
+    t = pd.DataFrame(rows)
+    prof = {r["hash"]: {"x_mean": np.arange(84) * 0.5, "a_stderr": np.full(84, 1e-5),
+                        "a": np.full(84, 0.012 + 0.0005 * (i % 4))}
+            for i, r in enumerate(rows)}
+    checks = pc.paper_checks({"fig6a": t}, lambda name, h: prof[h])
+    near = _by(checks, "smaller d_f attenuates more near the edge")
+    assert [c.verdict for c in near] == [HOLDS, HOLDS]
+    assert _by(checks, "Fig. 6a reversal")[0].verdict == HOLDS
+    assert _by(checks, "Fig. 6a: no reversal")[0].verdict == HOLDS
+    # no reversal at the short period: the reversal claim fails, it is not hidden
+    t2 = t.copy()
+    t2.loc[t2["T"] == 1.2, "a_end"] = [0.010, 0.011, 0.012, 0.013]
+    assert _by(pc.paper_checks({"fig6a": t2}, lambda n, h: prof[h]),
+               "Fig. 6a reversal")[0].verdict == FAILS
+
+
+def test_exponents_from_the_periods_table():
+    rows = []
+    for disp, m in (("ow", 4.0), ("ml", 4.6), ("ep", 2.2)):
+        for T in (1.1, 1.2, 1.4, 1.5, 1.6):
+            om = 2 * np.pi / T
+            rows.append(_row(f"{disp}{T}", T=T, dispersion=disp, alpha_c=1e-3 * om ** m,
+                             alpha_inner=1.1e-3 * om ** m, alpha_inner_stderr=1e-5 * om ** m))
+    checks = pc.paper_checks({"periods": pd.DataFrame(rows)})
+    verdicts = {c.claim: c.verdict for c in checks if c.campaign == "periods"}
+    assert set(verdicts.values()) == {HOLDS}, verdicts
+    m = _by(checks, "alpha_inner (DEM) ~ omega^m")[0].estimates[0]
+    assert m.value == pytest.approx(2.2) and m.source == "fit" and m.dof == math.inf
+
+
+def test_missing_tables_are_inconclusive_not_hidden():
+    checks = pc.paper_checks({}, missing={"fig2": "no store x.h5"})
+    assert checks and {c.verdict for c in checks} == {INCONCLUSIVE}
+    assert {c.campaign for c in checks} == set(pc.PAPER_CAMPAIGNS)
+    assert any("no store x.h5" in c.evidence for c in checks)
+    assert "0 hold, 0 fail" in pc.format_table(checks)
+
+
+def test_table_marks_failures_in_its_count_line():
+    c = pc.Check("c", "§4", "fig2", "pts", "q", "range", (E(1.5, 0.05),),
+                 *pc.in_range([E(1.5, 0.05)], 0.8, 1.25))
+    table = pc.format_table([c, c])
+    assert table.count("| fails |") == 2 and "0 hold, 2 fail (#1, #2)" in table
+
+
+# ---------------------------------------------------------------------- end to end
+@pytest.fixture(scope="module")
+def stores(tmp_path_factory):
+    """The five shipped paper campaigns run with the stand-in fake_point."""
+    d = tmp_path_factory.mktemp("paper")
+    assert main(["paper-check", "--stores", str(d), "--run", "--compute",
+                 "sweep.testing:fake_point", "--json"]) == 0
+    return d
+
+
+def test_cli_runs_and_checks_the_paper_campaigns(stores, capsys):
+    for name in pc.PAPER_CAMPAIGNS:
+        assert (stores / f"{name}.h5").exists()
+    assert main(["paper-check", "--stores", str(stores), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["problems"] == {} and sum(out["counts"].values()) == len(out["checks"]) == 26
+    by = {(c["claim"], c["campaign"]): c for c in out["checks"]}
+    # fake_point: W_c = x[N_f // 3] whatever eps -> no difference at all
+    w = by["higher eps -> narrower collisional zone W_c (ml)", "fig2"]
+    assert w["verdict"] == INCONCLUSIVE and "ends z = +0.0" in w["evidence"]
+    # fake_point: alpha doubles for ml; a_stderr = 1 % of a
+    assert by["ep attenuates less than ml (all else equal)", "fig2"]["verdict"] == HOLDS
+    assert main(["paper-check", "--stores", str(stores)]) == 0
+    table = capsys.readouterr().out
+    assert table.startswith("| # | claim") and "hold," in table.splitlines()[-1]
+
+
+def test_cli_missing_store_exits_3_and_still_prints(stores, tmp_path, capsys):
+    import shutil
+
+    for name in ("fig2", "fig5"):
+        shutil.copy(stores / f"{name}.h5", tmp_path / f"{name}.h5")
+    assert main(["paper-check", "--stores", str(tmp_path)]) == 3
+    cap = capsys.readouterr()
+    assert "no store" in cap.err and "fig6a" in cap.err
+    assert "higher eps -> lower a/a0 (ml)" in cap.out and "not checked" in cap.out
+
+
+def test_cli_bad_input_exits_2(tmp_path, capsys):
+    assert main(["paper-check", "--stores", str(tmp_path / "nowhere")]) == 2
+    assert main(["paper-check", "--stores", str(tmp_path), "--run", "--configs",
+                 str(tmp_path)]) == 2
+    assert "no such campaign file" in capsys.readouterr().err
+
+
+def test_cli_unreadable_store_exits_3(tmp_path, capsys):
+    (tmp_path / "fig2.h5").write_text("not hdf5")
+    assert main(["paper-check", "--stores", str(tmp_path)]) == 3
+    assert "cannot read" in capsys.readouterr().err
