@@ -11,10 +11,13 @@ directory; ``--skip-runs`` reuses the stores there) and prints, labelled as in t
 - the demo's ``collision_stats`` table and the periods' ``alpha_omega`` tables;
 - W_c, layout and alpha_inner / alpha_c of the Fig. 2 points.
 
-Which numbers are *stochastic*: every result is one chaotic floe trajectory per point. On
-one machine it is reproduced bit for bit (README "Reproducibility"); a rounding-level
-change (another CPU, compiler, numba or glibc) moves it, and W_c then moves by metres
-(measured: README). Such numbers are marked "(single trajectory)" in the docs.
+- the ``sweep paper-check`` table on those stores.
+
+Which numbers are *stochastic*: every result is an ensemble of chaotic floe trajectories
+(the default R = 8 replicas). On one machine it is reproduced bit for bit (README
+"Reproducibility"); another seed or a rounding-level change (another CPU, compiler, numba
+or glibc) gives other trajectories, and the numbers then move within their standard
+errors (README "Ensembles and error bars"). They are printed, and quoted, with them.
 """
 from __future__ import annotations
 
@@ -59,7 +62,7 @@ def main() -> int:
         mpiexec = shutil.which("mpiexec")
         launcher = [mpiexec, "-n", "3"] if mpiexec else []
         t = run("demo", out, launcher)
-        print(f"[timing] demo campaign ({'mpiexec -n 2' if mpiexec else 'in-process'}),"
+        print(f"[timing] demo campaign ({'mpiexec -n 3' if mpiexec else 'in-process'}),"
               f" cache warm: {t:.1f} s")
         with ThreadPoolExecutor(2) as pool:
             times = dict(zip(CAMPAIGNS, pool.map(lambda n: run(n, out, []), CAMPAIGNS),
@@ -72,26 +75,36 @@ def main() -> int:
 
     df = sweep.load(out / "demo.h5")
     stats = sweep.collision_stats(df, by=["L_x", "eps"])
-    print("[single trajectory] demo: sweep.collision_stats(df, by=['L_x', 'eps'])")
+    print("[ensemble of 4, stochastic] demo: sweep.collision_stats(df, by=['L_x', 'eps'])")
     print(stats[["L_x", "eps", "n_points", "n_W_c", "n_no_compact", "W_c_mean",
-                 "W_c_rel_mean", "inner_over_c_mean", "edge_over_inner_mean",
-                 "frac_prefers_n2"]].round(3).to_string())
+                 "W_c_mean_stderr", "W_c_rel_mean", "inner_over_c_mean",
+                 "edge_over_inner_mean", "frac_prefers_n2"]].round(3).to_string())
 
     p = sweep.load(out / "periods.h5")
-    print("\n[single trajectory] periods: sweep.alpha_omega(p) (alpha_inner, per curve)")
-    cols = ["dispersion", "m", "m_stderr", "n_periods", "n_dropped_nan", "m_c"]
+    print("\n[ensemble, stochastic] periods: sweep.alpha_omega(p) (alpha_inner, per curve)")
+    cols = ["dispersion", "m", "m_stderr", "weighted", "chi2_dof", "n_periods",
+            "n_dropped_no_zone", "n_dropped_nan", "m_c"]
     print(sweep.alpha_omega(p)[cols].round(3).to_string())
-    print("\n[single trajectory] periods: sweep.alpha_omega(p, 'alpha_all', by='dispersion')")
+    print("\n[ensemble, stochastic] periods: sweep.alpha_omega(p, 'alpha_all', by='dispersion')")
     print(sweep.alpha_omega(p, "alpha_all", by="dispersion")[cols].round(3).to_string())
     lay = sweep.derived(p).pivot_table(index="T", columns="dispersion", values="compact_zone",
                                        aggfunc="first")
-    print("\n[single trajectory] periods: compact-zone layout per T and dispersion")
+    print("\n[ensemble, stochastic] periods: compact-zone layout per T and dispersion")
     print(lay.to_string())
 
     f2 = sweep.derived(sweep.load(out / "fig2.h5")).sort_values(["dispersion", "eps"])
-    print("\n[single trajectory] Fig. 2 points: W_c [m], layout, alpha_inner / alpha_c")
-    print(f2[["dispersion", "eps", "W_c", "compact_zone", "inner_over_c", "status",
-              "iterations"]].round(2).to_string(index=False))
+    f2["a_end/a0"] = f2["a_end"] / f2["a0"]
+    f2["SE(a_end)/a0"] = f2["a_end_stderr"] / f2["a0"]
+    f2["Mfloe_steps"] = f2["floe_steps"] / 1e6
+    print("\n[ensemble, stochastic] Fig. 2 points: W_c +- SE [m], layout, alpha_inner / "
+          "alpha_c +- SE, a_end / a0 +- SE, cost")
+    print(f2[["dispersion", "eps", "W_c", "W_c_stderr", "W_c_n", "compact_zone",
+              "inner_over_c", "inner_over_c_stderr", "a_end/a0", "SE(a_end)/a0", "status",
+              "iterations", "Mfloe_steps"]].round(3).to_string(index=False))
+    print("\n[ensemble, stochastic] sweep paper-check --stores", out)
+    proc = subprocess.run([sys.executable, "-m", "sweep", "paper-check", "--stores", str(out)],
+                          capture_output=True, text=True)
+    print(proc.stdout + proc.stderr)
     return 0
 
 

@@ -12,7 +12,9 @@ reductions so that the whole walk takes about a minute (issue *first hour*):
   3 ranks (plain ``sweep run`` without a launcher installed);
 - not run, and listed in :data:`NOT_RUN` (a new kind of command fails the test until it
   is added there or made runnable): ``pip install`` (the environment is installed),
-  ``python -m pytest`` (this is it), ``sbatch`` (Slurm: ``tests/test_slurm.py``).
+  ``python -m pytest`` (this is it), ``sbatch`` (Slurm: ``tests/test_slurm.py``),
+  ``python benchmarks/…`` (minutes to hours of computing);
+- ``sweep paper-check --run`` runs the reduced configs with ``power_point``.
 
 Inline commands (``sweep …``/``floewave …`` in backticks) are parsed by the real
 argument parsers. The *numbers* the docs quote (timings, single-trajectory results) are
@@ -35,6 +37,7 @@ ROOT = Path(__file__).resolve().parent.parent
 DOCS = ("README.md", "docs/guide.md")
 #: Commands not run, by their first word(s), and why.
 NOT_RUN = {"pip install": "the environment is already installed",
+           "python benchmarks/": "benchmarks: minutes to hours of computing, run by hand",
            "python -m pytest": "this test suite itself",
            "sbatch": "needs Slurm (tests/test_slurm.py runs the scripts)"}
 SMALL_RUN = ["--set", "n0=1", "--set", "nT=1", "--set", "max_iterations=2"]
@@ -91,6 +94,8 @@ def _transform(part: str) -> str | None:
         words = words[words.index("-n") + 2:]
     if words[:2] == ["sweep", "run"]:
         words += ["--compute", "sweep.testing:power_point", "--no-bar"]
+    elif words[:2] == ["sweep", "paper-check"] and "--run" in words:
+        words += ["--compute", "sweep.testing:power_point", "--configs", "configs"]
     elif words[:2] == ["sweep", "plan"]:
         words += ["--rate", "1e8"]
     elif words[:2] == ["floewave", "run"]:
