@@ -80,7 +80,8 @@ def _other_value(name, value):
         return not value
     if isinstance(value, str):
         options = {"dispersion": "ep", "contact": "linear", "damping": "exact",
-                   "drag_integration": "exact", "integrator": "half_step"}
+                   "drag_integration": "exact", "integrator": "half_step",
+                   "placement": "uniform", "coupling": "independent"}
         return options[name] if value != options[name] else "ml"
     if name in ("relax", "eps"):
         return 0.4 if value != 0.4 else 0.6
