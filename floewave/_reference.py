@@ -13,16 +13,9 @@ import numpy as np
 from . import _kernels as K
 
 
-def forces(x: np.ndarray, v: np.ndarray, a: np.ndarray, x0: np.ndarray, wt: float,
-           P: K.KernelParams, cxi: np.ndarray, sxi: np.ndarray) -> np.ndarray:
-    """(1 + C_m) F_w + F_d + F_c + F_s on every floe [N] (eq. 8, left-hand-side scaled)."""
-    th = P.k * x - wt
-    s, c = np.sin(th), np.cos(th)
-    Fw = P.c_wave * a * s
-    ur = (a * P.u_amp)[:, None] * (c[:, None] * cxi[None, :] - s[:, None] * sxi[None, :]) \
-        - v[:, None]
-    Fd = P.c_drag * np.sum(np.abs(ur) * ur, axis=1)
-    F = P.one_cm * Fw + Fd
+def pair_contact(x: np.ndarray, v: np.ndarray, P: K.KernelParams) -> np.ndarray:
+    """Contact force between floes i and i + 1 (N_f - 1 values, > 0 pushes them apart) [N]:
+    the contact law of :mod:`._kernels` (stiffness, damping, optional clipping)."""
     delta = -(x[1:] - x[:-1] - P.L_x)
     touch = delta > 0
     d = np.where(touch, delta, 0.0)
@@ -37,6 +30,20 @@ def forces(x: np.ndarray, v: np.ndarray, a: np.ndarray, x0: np.ndarray, wt: floa
     Fc = np.where(touch, kn * d - gamma * (v[1:] - v[:-1]), 0.0)
     if P.clip:
         Fc = np.maximum(Fc, 0.0)
+    return Fc
+
+
+def forces(x: np.ndarray, v: np.ndarray, a: np.ndarray, x0: np.ndarray, wt: float,
+           P: K.KernelParams, cxi: np.ndarray, sxi: np.ndarray) -> np.ndarray:
+    """(1 + C_m) F_w + F_d + F_c + F_s on every floe [N] (eq. 8, left-hand-side scaled)."""
+    th = P.k * x - wt
+    s, c = np.sin(th), np.cos(th)
+    Fw = P.c_wave * a * s
+    ur = (a * P.u_amp)[:, None] * (c[:, None] * cxi[None, :] - s[:, None] * sxi[None, :]) \
+        - v[:, None]
+    Fd = P.c_drag * np.sum(np.abs(ur) * ur, axis=1)
+    F = P.one_cm * Fw + Fd
+    Fc = pair_contact(x, v, P)
     F[:-1] -= Fc
     F[1:] += Fc
     F[0] -= P.k_s * (x[0] - x0[0])

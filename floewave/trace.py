@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from . import _kernels as K
+from ._reference import pair_contact
 from .config import ConfigError, ModelConfig
 from .forces import cell_offsets
 
@@ -85,19 +86,7 @@ def instantaneous(x: np.ndarray, u: np.ndarray, a: np.ndarray, wt: float, P: K.K
     th = P.k * (x[:, None] + xi[None, :]) - wt
     u_rel = (a * P.u_amp)[:, None] * np.cos(th) - u[:, None]
     S_sd = -cfg.rho_w * cfg.C_sd * np.mean(np.abs(u_rel) ** 3, axis=1)
-    delta = -(x[1:] - x[:-1] - P.L_x)
-    touch = delta > 0
-    d = np.where(touch, delta, 0.0)
-    if P.contact == K.CONTACT_LINEAR:
-        kn = np.full_like(d, P.kn_lin)
-    else:
-        s = d * P.s_scale
-        kn = P.kn_disk * (0.9117 * s**2 + 0.2722 * s + 0.003324) / (s**2 + 1.524 * s + 0.03159)
-    coef = math.sqrt(5.0) if P.damping == K.DAMPING_LIGGGHTS else 2.0
-    gamma = -P.beta * coef * np.sqrt(kn * P.m_star)
-    pair = np.where(touch, kn * d - gamma * (u[1:] - u[:-1]), 0.0)
-    if P.clip:
-        pair = np.maximum(pair, 0.0)
+    pair = pair_contact(x, u, P)
     F_c = np.zeros_like(x)
     F_c[:-1] -= pair
     F_c[1:] += pair
