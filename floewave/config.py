@@ -121,7 +121,7 @@ class ModelConfig:
         ``replicas``, seed, r), so a point is bit-reproducible and replica r starts the
         same whatever R
     placement : ``"uniform"`` (the paper's: every gap d_f; replicas r >= 1 perturbed by
-        1e-9 of the random gaps' deviation, so that chaos separates them) or ``"random"``
+        1e-6 of the random gaps' deviation, so that chaos separates them) or ``"random"``
         (gaps (N_f - 1) d_f w_i with w uniform on the simplex: i.i.d. exponential gaps of
         mean d_f conditioned on their sum, so the ice extent is the paper's, no overlaps)
         (:func:`floewave.ensemble.initial_positions`)
@@ -277,8 +277,14 @@ class ModelConfig:
 
     @property
     def n_chains(self) -> int:
-        """Floe chains that run: ``replicas`` (1 when ``confined``: deterministic)."""
-        return 1 if self.confined else self.replicas
+        """Floe chains that run: ``replicas``, or 1 when the replicas could not differ:
+        ``confined`` (deterministic), d_f = 0 (every arrangement is the touching one) or
+        two floes (one gap, which must be d_f). One chain reports the single trajectory's
+        error bars (the iteration standard error of a; NaN for the scalars), never the
+        zero spread of identical copies."""
+        if self.confined or self.d_f == 0.0 or self.n_floes <= 2:
+            return 1
+        return self.replicas
 
     def floe_steps_per_iteration(self) -> int:
         """(n0 + nT) n_t N_f: the cost unit of MODEL.md §4 for the first iteration."""

@@ -57,9 +57,11 @@ def initial_positions(cfg: ModelConfig) -> np.ndarray:
     gap is >= 0 (no overlap), their mean is d_f and the ice extent is the uniform
     arrangement's.
     ``uniform`` (the paper's): g_i = d_f. Replica 0 is exactly that; replicas r >= 1 are
-    that arrangement perturbed at the rounding level, g_i = d_f + 1e-9 (g_i^random - d_f)
-    (nanometre-scale moves of micrometre size at most), which the chaotic collisions
-    amplify: an ensemble of the paper's arrangement. (With d_f = 0 the replicas coincide.)
+    that arrangement perturbed, g_i = d_f + 1e-6 (g_i^random - d_f) (a few nanometres per
+    gap at d_f = 5 mm), which the chaotic collisions amplify: an ensemble of the paper's
+    arrangement. Replica 0 is the same for every seed, so two uniform ensembles are not
+    independent (compare uniform with random, not uniform with uniform). With d_f = 0 or
+    two floes nothing can differ: one chain runs (``ModelConfig.n_chains``).
     ``confined`` points run one chain at the uniform arrangement.
     """
     n = cfg.n_floes
@@ -76,7 +78,7 @@ def initial_positions(cfg: ModelConfig) -> np.ndarray:
         e = -np.log1p(-u)
         gaps = (n - 1) * cfg.d_f * (e / e.sum())
         if cfg.placement == "uniform":
-            gaps = cfg.d_f + 1e-9 * (gaps - cfg.d_f)
+            gaps = cfg.d_f + 1e-6 * (gaps - cfg.d_f)
         out[r, 1:] = cfg.L_x / 2.0 + np.arange(1, n) * cfg.L_x + np.cumsum(gaps)
     return out
 
@@ -166,15 +168,22 @@ def estimate_point(cfg: ModelConfig, rec: Records, c_g: float, k: float) -> dict
     replica mean), ``W_c``, ``W_c_stderr``, ``W_c_n``, ``compact_zone``, ``compact_end``,
     ``ice_extent``, the per-replica ``W_c_replicas`` / ``compact_end_replicas`` and the
     fits ``alpha_*`` with ``alpha_*_resid`` and ``alpha_*_stderr`` and ``a_end`` with
-    ``a_end_stderr``. With R = 1 every standard error is NaN (the caller supplies the
-    single trajectory's iteration standard error of ``a``).
+    ``a_end_stderr``. ``W_c_n`` is the number of replicas whose W_c entered the mean (0
+    when the point's layout is ``none``: W_c is then NaN whatever some windows saw).
+    Leave-one-out estimates recompute everything, the layout included; a leave-one-out
+    value that is NaN (e.g. the layout flips to ``none``) makes that standard error NaN:
+    the estimator is not stable enough for an error bar. With R = 1 every standard error
+    is NaN (the caller supplies the single trajectory's iteration standard error of ``a``).
     """
     R = rec.S.shape[1]
     prof = rec.profiles
     # W_c as the paper defines it is a property of one nT-period window (the mean gaps over
     # that window): found per window and replica, averaged over a replica's windows (so its
     # expectation does not depend on how many iterations were averaged), then over replicas
-    layout = _majority([lay for row in rec.layouts for lay in row])
+    def layout_of(sub: np.ndarray) -> str:
+        return _majority([row[r] for row in rec.layouts for r in np.flatnonzero(sub)])
+
+    layout = layout_of(np.ones(R, dtype=bool))
     with np.errstate(invalid="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)          # all-NaN columns
         W_r = np.nanmean(rec.W_c, axis=0)
@@ -190,14 +199,17 @@ def estimate_point(cfg: ModelConfig, rec: Records, c_g: float, k: float) -> dict
         x = prof["x_mean"][sub].mean(axis=0)
         ice = float(x[-1] + 0.5 * cfg.L_x)
         s = sub & has
-        if layout == "none" or not s.any():
+        lay = layout_of(sub)          # the whole estimator, the layout included
+        if lay == "none" or not s.any():
             W_c = end = math.nan
         else:
             W_c, end = float(W_r[s].mean()), float(end_r[s].mean())
-        zone = fit_zone(x, cfg.L_x, layout, W_c, end, ice)
+        zone = fit_zone(x, cfg.L_x, lay, W_c, end, ice)
         al, rl = fit_inverse(x, a, cfg.a0)
         ae, re_, ai, ri = zone_fits(x, a, cfg.a0, zone, min_floes=cfg.fit_min_floes,
                                     min_length=cfg.fit_min_length)
+        if lay != layout:             # another layout: not the same zone fits (no SE)
+            ae = re_ = ai = ri = math.nan
         ax, rx = fit_exponential(x, a, cfg.a0)
         return {"a": a, "x": x, "ice": ice, "W_c": W_c, "end": end,
                 "alpha_all": (al, rl), "alpha_edge": (ae, re_), "alpha_inner": (ai, ri),
@@ -209,7 +221,8 @@ def estimate_point(cfg: ModelConfig, rec: Records, c_g: float, k: float) -> dict
     out.update(x_mean_replicas=prof["x_mean"], gap_mean_replicas=prof["gap_mean"],
                S_sd_replicas=rec.S.mean(axis=0))
     out.update(a=full["a"], x_mean=full["x"], ice_extent=full["ice"], compact_zone=layout,
-               W_c=full["W_c"], compact_end=full["end"], W_c_n=int(has.sum()),
+               W_c=full["W_c"], compact_end=full["end"],
+               W_c_n=int(has.sum()) if layout != "none" else 0,
                W_c_replicas=W_r, compact_end_replicas=end_r, a_end=float(full["a"][-1]))
     fits = ("alpha_all", "alpha_edge", "alpha_inner", "alpha_exp")
     for name in fits:

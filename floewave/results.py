@@ -54,8 +54,9 @@ class PointResult:
 
     Ensemble (``replicas`` = R chains, :mod:`floewave.ensemble`): profiles and scalars
     are the ensemble's estimates; ``a_stderr`` and every ``*_stderr`` are jackknife
-    standard errors over the replicas (R = 1: ``a_stderr`` is the iteration standard
-    error and the scalar ones are NaN: one trajectory has no error bar for them).
+    standard errors over the replicas (R = 1: ``a_stderr`` and ``a_end_stderr`` are the
+    iteration standard error and the other scalar ones are NaN: one trajectory has no
+    error bar for them).
     ``W_c`` is the mean of the per-replica ``W_c_replicas`` over the ``W_c_n`` replicas
     with a compact zone, a replica's W_c the mean over its averaging windows of the
     window's W_c (the paper's W_c is that of one nT-period window; so is the layout),

@@ -332,8 +332,10 @@ def summary(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> lis
             sub = sub.sort_values("eps")
             label = _title([keys[i] for i in vary], [key[i] for i in vary]) or None
             line, = ax.plot(sub["eps"], sub["W_c"], "o-", ms=4, lw=1, label=label)
-            if "W_c_stderr" in sub.columns and sub["W_c_stderr"].notna().any():
-                ax.errorbar(sub["eps"], sub["W_c"], yerr=sub["W_c_stderr"].fillna(0.0),
+            se = sub["W_c_stderr"] if "W_c_stderr" in sub.columns else None
+            if se is not None and se.notna().any():   # bars only where there is an SE
+                ok = se.notna() & sub["W_c"].notna()
+                ax.errorbar(sub.loc[ok, "eps"], sub.loc[ok, "W_c"], yerr=se[ok],
                             fmt="none", ecolor=line.get_color(), capsize=3, lw=1)
             none = sub["W_c"].isna()
             if none.any():      # no compact zone: marked at the top, not a width

@@ -299,7 +299,8 @@ def alpha_omega(df: pd.DataFrame, alpha: str = "alpha_inner",
         n_per = int(len(np.unique(om[ok])))
         se_col = alpha + "_stderr"
         se = g[se_col].to_numpy(float) if se_col in g.columns else np.full(len(g), np.nan)
-        weighted = bool(ok.any() and np.all(np.isfinite(se[ok]) & (se[ok] > 0)))
+        weighted = bool(n_per >= min_periods
+                        and np.all(np.isfinite(se[ok]) & (se[ok] > 0)))
         chi2 = math.nan
         if n_per >= min_periods:
             m, c, m_se, rms = power_law(om[ok], al[ok])

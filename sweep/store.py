@@ -358,6 +358,7 @@ class Store:
                                                  f" {step} to {SCHEMA_VERSION}")
                     step = MIGRATIONS[step][0]
                 info["campaign_json"] = _text(f.attrs.get("campaign_json", ""))
+                self._file_schema = version
                 table = f["table"]
                 n = int(table.attrs["n_rows"])
                 len(table["hash"][:n])  # readable?
@@ -385,6 +386,15 @@ class Store:
         if sha256_hex(canonical_json(old)) == campaign.definition_hash():
             return
         new = campaign.definition()
+        if str(old.get("model_version")) != str(new.get("model_version")):
+            # another model version: none of its points is a point of this model
+            raise CampaignMismatchError(
+                f"{self.path}: the {where} holds points of model version"
+                f" {old.get('model_version')} (store schema"
+                f" {getattr(self, '_file_schema', '?')}); this"
+                f" sweep computes model version {new.get('model_version')} (schema"
+                f" {SCHEMA_VERSION}), whose points have other hashes. Use another --store;"
+                " the old one stays readable (sweep.load, sweep status, sweep export)")
         if not extend:
             diff = sorted(k for k in set(old["base"]) | set(new["base"])
                           if old["base"].get(k) != new["base"].get(k))

@@ -106,10 +106,20 @@ def normalise_record(record: dict[str, Any]) -> dict[str, Any]:
             arr = np.asarray(value, dtype=np.float64)
         except (TypeError, ValueError, OverflowError) as exc:
             raise Unstorable(f"profile {name}: {exc}") from None
-        want = len(REPLICA_VARS[name][2]) if name in REPLICA_VARS else 1
-        if arr.ndim > want:
-            raise Unstorable(f"profile {name}: {arr.ndim}-D, expected {want}-D")
-        profiles[str(name)] = arr.reshape(-1) if want == 1 else arr
+        if name in REPLICA_VARS:
+            # exactly the schema's shape, (R,) or (R, N_f), as `sweep validate` checks it
+            dims = REPLICA_VARS[name][2]
+            sizes = {"R": row.get("replicas"), "N_f": row.get("n_floes")}
+            want = tuple(sizes[d] for d in dims)
+            if arr.ndim != len(dims) or any(w is None or w < 1 for w in want) \
+                    or arr.shape != want:
+                raise Unstorable(f"profile {name}: shape {arr.shape}, expected"
+                                 f" {'x'.join(dims)} = {want} (columns replicas, n_floes)")
+            profiles[str(name)] = arr
+            continue
+        if arr.ndim > 1:
+            raise Unstorable(f"profile {name}: {arr.ndim}-D, expected 1-D")
+        profiles[str(name)] = arr.reshape(-1)
     try:
         hist = np.asarray(record.get("residual_history", ()), dtype=np.float64).reshape(-1)
     except (TypeError, ValueError, OverflowError) as exc:

@@ -107,3 +107,32 @@ def test_schema_2_store_read_as_single_trajectories_and_migrated(store, tmp_path
     assert (new["replicas"] == 1).all() and (new["W_c_n"] == -1).all()
     assert new["hash"].tolist() == old["hash"].tolist()
     assert math.isnan(new["alpha_all_stderr"].iloc[0])
+
+
+def test_a_store_of_an_older_model_version_is_refused_naming_both_versions(store, tmp_path):
+    """A store written by model version 3 (schema 2) holds none of this model's points:
+    ``sweep run`` refuses it (exit 3) naming both model and schema versions, and leaves
+    it untouched and readable."""
+    import json
+    import shutil
+
+    import floewave
+    from sweep.cli import main
+    from sweep.identity import canonical_json, sha256_hex
+    path = tmp_path / "old.h5"
+    shutil.copy(store, path)
+    with h5py.File(path, "r+") as f:
+        camp = json.loads(f.attrs["campaign_json"])
+        camp["model_version"] = "3"
+        f.attrs["campaign_json"] = canonical_json(camp)
+        f.attrs["campaign_hash"] = sha256_hex(canonical_json(camp))
+        f.attrs["schema_version"] = 2
+    (tmp_path / "e.toml").write_text(TOML)
+    before = path.read_bytes()
+    with pytest.raises(sweep.CampaignMismatchError,
+                       match=r"model version 3 \(store schema 2\).*model version "
+                             + floewave.MODEL_VERSION + r" \(schema 3\)"):
+        run_campaign(parse_campaign(TOML, "e.toml"), str(path))
+    assert main(["run", str(tmp_path / "e.toml"), "--store", str(path)]) == 3
+    assert path.read_bytes() == before
+    assert len(sweep.load(path)) == 2
