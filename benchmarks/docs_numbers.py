@@ -1,6 +1,6 @@
 """Every number quoted in README.md and docs/guide.md about results, regenerated.
 
-    python benchmarks/docs_numbers.py [--out DIR] [--skip-runs]
+    python benchmarks/docs_numbers.py [--out DIR] [--skip-runs] [--record docs/numbers.txt]
 
 Runs the shipped campaigns the docs quote (``configs/demo.toml`` under ``mpiexec -n 3``
 when a launcher is available, else in-process; ``fig2``, ``fig5``, ``fig6a``, ``fig6b``,
@@ -12,6 +12,12 @@ directory; ``--skip-runs`` reuses the stores there) and prints, labelled as in t
 - W_c, layout and alpha_inner / alpha_c of the Fig. 2 points.
 
 - the ``sweep paper-check`` table on those stores.
+
+``--record FILE`` also writes the output to FILE under a header naming the model version
+and the SHA-256 of the campaign files (:func:`stamp`). ``docs/numbers.txt`` is that record
+for the numbers the docs quote: ``tests/test_docs.py`` fails when it was made for another
+model version or other campaign files (rerun this script) or when a results table quoted
+in README.md or docs/guide.md is not in it (the docs drifted from their source).
 
 Which numbers are *stochastic*: every result is an ensemble of chaotic floe trajectories
 (the default R = 8 replicas). On one machine it is reproduced bit for bit (README
@@ -34,6 +40,31 @@ ROOT = Path(__file__).resolve().parent.parent
 CAMPAIGNS = ("fig2", "fig5", "fig6a", "fig6b", "periods")
 
 
+def stamp() -> str:
+    """The header line of a record: model version and the campaign files' SHA-256."""
+    import hashlib
+
+    import floewave
+    h = hashlib.sha256()
+    for name in ("demo", *CAMPAIGNS):
+        h.update(name.encode() + b"\0" + (ROOT / "configs" / f"{name}.toml").read_bytes())
+    return f"# docs_numbers: model_version {floewave.MODEL_VERSION}, configs {h.hexdigest()}"
+
+
+class _Tee:
+    def __init__(self, *streams):
+        self.streams = streams
+
+    def write(self, text: str) -> int:
+        for s in self.streams:
+            s.write(text)
+        return len(text)
+
+    def flush(self) -> None:
+        for s in self.streams:
+            s.flush()
+
+
 def run(name: str, out: Path, launcher: list[str]) -> float:
     store = out / f"{name}.h5"
     t = time.perf_counter()
@@ -49,7 +80,12 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=None)
     ap.add_argument("--skip-runs", action="store_true")
+    ap.add_argument("--record", type=Path, default=None, metavar="FILE")
     args = ap.parse_args()
+    if args.record is not None:
+        record = open(args.record, "w", encoding="utf-8")  # noqa: SIM115 - closed at exit
+        record.write(stamp() + f" ({time.strftime('%Y-%m-%d', time.gmtime())})\n")
+        sys.stdout = _Tee(sys.__stdout__, record)
     out = args.out or Path(tempfile.mkdtemp(prefix="docs_numbers-"))
     out.mkdir(parents=True, exist_ok=True)
     import pandas as pd

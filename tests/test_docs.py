@@ -189,3 +189,33 @@ def test_inline_commands_parse():
                 pytest.fail(f"{doc}: `{text}` is not accepted by {words[0]}'s parser")
             checked += 1
     assert checked >= 4  # as of 2026-11-30: the docs name 4 complete inline calls
+
+
+def test_quoted_numbers_come_from_the_current_record():
+    """The results the docs quote are the output of ``benchmarks/docs_numbers.py --record
+    docs/numbers.txt``: the record must be for this model version and these campaign files
+    (else: rerun the script and update the docs), and every results table quoted in the
+    docs (a fenced block without a language) must appear in it line by line."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        import docs_numbers
+    finally:
+        sys.path.pop(0)
+    record = (ROOT / "docs" / "numbers.txt").read_text(encoding="utf-8")
+    header = record.splitlines()[0]
+    assert header.startswith(docs_numbers.stamp()), (
+        "docs/numbers.txt was made for another model version or other campaign files:"
+        " run python benchmarks/docs_numbers.py --record docs/numbers.txt and update the"
+        f" numbers the docs quote\n  record: {header}\n  now:    {docs_numbers.stamp()}")
+    lines = {line.rstrip() for line in record.splitlines()}
+    quoted = 0
+    for doc in DOCS:
+        for lang, text in code_blocks(ROOT / doc):
+            if lang:
+                continue
+            for line in text.splitlines():
+                line = line.split("   # ")[0].rstrip()
+                if line.strip():
+                    assert line in lines, f"{doc}: quoted line not in docs/numbers.txt: {line!r}"
+                    quoted += 1
+    assert quoted >= 10
