@@ -135,7 +135,7 @@ def main(argv: list[str] | None = None) -> int:
     zs: dict[str, list[np.ndarray]] = {"a": [], **{s: [] for s in SCALARS}}
     print(f"\n{'point':44s} {'W_c 1 +- se':>15s} {'W_c 2 +- se':>15s} {'z_Wc':>6s} "
           f"{'rms z_a':>7s} {'SE(a)/a0':>8s} {'iters':>7s} status")
-    cost_R, cost_1, cost_eq = [], [], []
+    cost_R, cost_1, cost_eq, se_R, se_1 = [], [], [], [], []
     statuses = []
     for p, (k1, k2), ks in ens:
         r1, r2 = cache[k1], cache[k2]
@@ -153,12 +153,15 @@ def main(argv: list[str] | None = None) -> int:
               f"{math.sqrt(np.mean(za**2)) if za.size else math.nan:7.2f} {se_a:8.4f} "
               f"{r1['iterations']:3d}/{r2['iterations']:<3d} {r1['status']}/{r2['status']}")
         statuses += [r1["status"], r2["status"]]
-        if ks in cache:
+        if ks in cache and cache[ks]["status"] == r1["status"] == "converged_noisy":
+            # both averaged at a noise floor: their standard errors are comparable
             rs = cache[ks]
             med_R = np.nanmedian(r1["a_stderr"])
             med_1 = np.nanmedian(rs["a_stderr"])
             cost_R.append(r1["floe_steps"])
             cost_1.append(rs["floe_steps"])
+            se_R.append(med_R / ModelConfig(**p).a0)
+            se_1.append(med_1 / ModelConfig(**p).a0)
             if med_R > 0 and np.isfinite(med_1):
                 cost_eq.append((r1["floe_steps"], rs["floe_steps"] * (med_1 / med_R) ** 2))
     print("\nRMS z (target 0.6-1.5; n = number of z values):")
@@ -169,10 +172,14 @@ def main(argv: list[str] | None = None) -> int:
     nc = sum(s == "not_converged" for s in statuses)
     print(f"\nnot_converged: {nc} of {len(statuses)} ensemble runs")
     if cost_R:
-        print(f"floe-steps per point (median over points): ensemble {np.median(cost_R):.3g}, "
-              f"single trajectory {np.median(cost_1):.3g}, single trajectory at the "
-              f"ensemble's SE(a) {np.median([c for _, c in cost_eq]):.3g} (median ratio "
-              f"ensemble / that {np.median([e / c for e, c in cost_eq]):.2f})")
+        ratios = [e / c for e, c in cost_eq]
+        print(f"cost on the {len(cost_R)} points where the single trajectory and the first "
+              "ensemble both ended converged_noisy (medians over points): floe-steps "
+              f"ensemble {np.median(cost_R):.3g}, single trajectory {np.median(cost_1):.3g}; "
+              f"median SE(a)/a0 ensemble {np.median(se_R):.4f}, single {np.median(se_1):.4f};"
+              f" single trajectory run to the ensemble's SE(a) (SE ~ 1/sqrt(iterations)) "
+              f"{np.median([c for _, c in cost_eq]):.3g}: ensemble / that = "
+              f"{np.median(ratios):.2f} (range {min(ratios):.2f}-{max(ratios):.2f})")
     return 0
 
 
