@@ -154,6 +154,21 @@ def test_each_bad_value_gives_its_own_message():
         assert any(key in m and value in m for m in msgs), (key, msgs)
 
 
+def test_field_messages_come_from_the_error_not_its_text():
+    """The problem shown is floewave's ``problem`` for the field, whatever the value's repr
+    holds (a string with a space or ': ' once cut the parsed message in the wrong place)."""
+    text = "[base]\ndispersion = 'elastic plate'\nh = 'a: b'\n[sweep]\neps = [0.5]\n"
+    with pytest.raises(ConfigError) as info:
+        parse_campaign(text)
+    assert info.value.messages == [
+        "<string>: [base] dispersion = 'elastic plate': must be one of ('ep', 'ml', 'ow')",
+        "<string>: [base] h = 'a: b': expected float"]
+    # another field at fault: its whole message
+    with pytest.raises(ConfigError) as info:
+        parse_campaign("[base]\nrho_w = 800.0\n" + MINIMAL)
+    assert info.value.messages == ["<string>: [base] rho_w = 800.0: ModelConfig.rho_i ="
+                                   " 910.0 must not exceed rho_w (floes float)"]
+
 def test_missing_file_and_bad_cli(run_main, tmp_path):
     assert main(["plan", str(tmp_path / "nope.toml"), "--rate", "1e7"]) == 2
     proc = run_main(main, ["run", CONFIGS / "demo.toml"])
