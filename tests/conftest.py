@@ -2,7 +2,8 @@
 
 ``campaign``: the module's ``TOML`` parsed as a campaign (file name ``CAMPAIGN_FILE`` of the
 module, default ``t.toml``). ``power_store``: a store of a campaign computed by the hand-set
-``sweep.testing:power_point`` (each TOML text run once per session).
+``sweep.testing:power_point`` (each TOML text run once per session). ``run_main``: a
+command-line ``main(argv)`` run in-process as a subprocess would run it.
 """
 from __future__ import annotations
 
