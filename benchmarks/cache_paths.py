@@ -46,8 +46,13 @@ def main() -> int:
                         str(store), "--no-bar"], env=env, check=True, capture_output=True,
                        cwd=tmp)    # not this checkout's directory: it would shadow --rev
         stores.append(store)
-    sys.path.insert(0, str(ROOT / "tests"))
-    from test_sweep_torture import compare
+    import importlib.util
+    spec = importlib.util.spec_from_file_location(
+        "torture_driver", ROOT / "tests" / "sweep" / "test_torture.py")
+    torture = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = torture
+    spec.loader.exec_module(torture)
+    compare = torture.compare
 
     import floewave
     import sweep

@@ -15,8 +15,8 @@ import time
 
 from floewave import run_point
 from floewave.cli import config_from_sets
-from sweep.cli import _calibrate, _kernel_key, plan_seconds
 from sweep.config import load_campaign
+from sweep.plan import calibrate, core_seconds, kernel_shape
 
 
 def main() -> None:
@@ -36,8 +36,8 @@ def main() -> None:
             object.__setattr__(pt, "config", pt.config.replace(**over))
             object.__setattr__(pt, "cost", float(pt.config.floe_steps_of(
                 campaign.expected_iterations(pt.config))))
-    rates, how = _calibrate(points)
-    grid_hours = plan_seconds(points, rates) / 3600
+    rates, how = calibrate(points)
+    grid_hours = core_seconds(points, rates) / 3600
     print(f"plan: {len(points)} points, {grid_hours:.2f} core-hours projected ({how})")
     sample = random.Random(args.seed).sample([q for q in points if not q.invalid], args.n)
     tot_pred = tot_meas = 0.0
@@ -45,7 +45,7 @@ def main() -> None:
     print(f"{'L_x':>4}{'T':>5}{'a0':>7}{'C_sd':>6}{'eps':>5}{'d_f':>6}{'disp':>5}"
           f"{'it':>5}{'status':>17}{'pred[s]':>9}{'meas[s]':>9}")
     for q in sample:
-        pred = q.cost / rates[_kernel_key(q.config)]
+        pred = q.cost / rates[kernel_shape(q.config)]
         t = time.perf_counter()
         r = run_point(q.config)
         meas = time.perf_counter() - t

@@ -7,7 +7,7 @@ Runs the campaign uninterrupted into a reference store, then kills the whole cam
 (launcher, master, workers: SIGKILL to its process group) at random moments, resuming it
 each time with the same command, finishes it and compares every point with the reference
 (hashes, every result column and profile array exactly, duplicates in table and journal,
-``sweep validate``). The driver is :func:`torture` in tests/test_sweep_torture.py.
+``sweep validate``). The driver is :func:`torture` in tests/sweep/test_torture.py.
 """
 from __future__ import annotations
 
@@ -19,9 +19,21 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT / "tests"))
 
-from test_sweep_torture import MPIEXEC, torture  # noqa: E402
+
+def _load_torture():
+    """tests/sweep/test_torture.py as a module, without putting the checkout on sys.path."""
+    import importlib.util
+    spec = importlib.util.spec_from_file_location(
+        "torture_driver", ROOT / "tests" / "sweep" / "test_torture.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+_torture = _load_torture()
+MPIEXEC, torture = _torture.MPIEXEC, _torture.torture
 
 
 def main() -> int:

@@ -8,7 +8,7 @@ reads during writes; hostile inputs. Prints one table.
 Every phase ends by running the same command to completion and comparing the store,
 point by point, with an uninterrupted reference (hashes, every result column, every
 profile array; duplicates in table and journal; ``sweep validate``), using
-:func:`compare` of tests/test_sweep_torture.py. A store is *ruined* when the command
+:func:`compare` of tests/sweep/test_torture.py. A store is *ruined* when the command
 that should finish it does not exit 0. Compute functions are the deterministic fakes of
 :mod:`sweep.testing` (the store is what is tortured, not the model).
 """
@@ -28,10 +28,23 @@ from collections import Counter
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT / "tests"))
+
+
+def _load_torture():
+    """tests/sweep/test_torture.py as a module, without putting the checkout on sys.path."""
+    import importlib.util
+    spec = importlib.util.spec_from_file_location(
+        "torture_driver", ROOT / "tests" / "sweep" / "test_torture.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+_torture = _load_torture()
+MPIEXEC, compare = _torture.MPIEXEC, _torture.compare
 
 import h5py  # noqa: E402
-from test_sweep_torture import MPIEXEC, compare  # noqa: E402
 
 import sweep  # noqa: E402
 from sweep.journal import decode, encode, journal_path  # noqa: E402

@@ -2,7 +2,7 @@
 
 Every shipped config writes out every model and numerics parameter. When floewave adds
 a field (which changes every point hash), run ``python configs/generate.py`` and commit
-the result; ``tests/test_sweep_config.py`` fails until then.
+the result; ``tests/sweep/test_config.py`` fails until then.
 """
 from __future__ import annotations
 

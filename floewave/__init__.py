@@ -8,8 +8,9 @@ Herman, Cheng & Shen (2019, The Cryosphere 13, 2887). Public API:
 - :func:`alpha_confined` — the confined-ice attenuation rate (eq. 24)
 - :func:`run_point` — the attenuation iteration for one point -> :class:`PointResult`
 """
-from .config import SWEPT_FIELDS, ConfigError, FloewaveError, InvalidPointError, ModelConfig
-from .dispersion import DispersionError, alpha_confined, solve_dispersion
+from .config import SWEPT_FIELDS, ModelConfig
+from .dispersion import alpha_confined, solve_dispersion
+from .errors import ConfigError, DispersionError, FloewaveError, InvalidPointError, NumericalError
 from .results import PointResult
 
 __version__ = "0.1.0"
@@ -20,6 +21,7 @@ MODEL_VERSION = "4"
 
 __all__ = ["ModelConfig", "PointResult", "run_point", "solve_dispersion", "alpha_confined",
            "FloewaveError", "ConfigError", "InvalidPointError", "DispersionError",
+           "NumericalError",
            "SWEPT_FIELDS", "MODEL_VERSION", "__version__"]
 
 

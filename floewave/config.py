@@ -19,6 +19,8 @@ import math
 from dataclasses import dataclass, fields
 from typing import Any
 
+from .errors import ConfigError, FloewaveError, InvalidPointError
+
 __all__ = [
     "ModelConfig",
     "FloewaveError",
@@ -40,18 +42,6 @@ DRAG_INTEGRATIONS = ("quadrature", "exact")
 INTEGRATORS = ("predictor", "half_step")
 PLACEMENTS = ("uniform", "random")
 COUPLINGS = ("mean", "independent")
-
-
-class FloewaveError(Exception):
-    """Base class of every error raised by floewave."""
-
-
-class ConfigError(FloewaveError, ValueError):
-    """A configuration value is malformed (wrong type, out of range, unknown name)."""
-
-
-class InvalidPointError(FloewaveError, ValueError):
-    """A well-formed configuration that describes a physically impossible point."""
 
 
 @dataclass(frozen=True)
@@ -347,26 +337,30 @@ _FIELD_NAMES = tuple(f.name for f in fields(ModelConfig))
 
 def _require(cfg: ModelConfig, name: str, ok: bool, what: str) -> None:
     if not ok:
-        raise ConfigError(f"ModelConfig.{name} = {getattr(cfg, name)!r} {what}")
+        raise ConfigError(f"ModelConfig.{name} = {getattr(cfg, name)!r} {what}", field=name,
+                          problem=what)
 
 
 def _require_integral(name: str, value: float, step: float, step_name: str) -> None:
     n = value / step
     if round(n) < 1 or abs(n - round(n)) > 1e-9 * max(1.0, abs(n)):
         raise InvalidPointError(
-            f"{name} / {step_name} = {value!r} / {step!r} = {n!r} is not an integer")
+            f"{name} / {step_name} = {value!r} / {step!r} = {n!r} is not an integer",
+            field=name)
 
 
 def _coerce(name: str, type_name: Any, value: Any) -> Any:
     """Check one field's type; ints are accepted for floats (1 == 1.0)."""
     type_name = type_name if isinstance(type_name, str) else type_name.__name__
-    bad = ConfigError(f"ModelConfig.{name} = {value!r}: expected {type_name}")
+    bad = ConfigError(f"ModelConfig.{name} = {value!r}: expected {type_name}", field=name,
+                      problem=f"expected {type_name}")
     if type_name == "float":
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise bad
         value = float(value)
         if not math.isfinite(value):
-            raise ConfigError(f"ModelConfig.{name} = {value!r}: must be finite")
+            raise ConfigError(f"ModelConfig.{name} = {value!r}: must be finite", field=name,
+                              problem="must be finite")
         return value
     if type_name == "int":
         if isinstance(value, bool) or not isinstance(value, int):

@@ -6,14 +6,11 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
-from .config import G, InvalidPointError, ModelConfig
+from .config import G, ModelConfig
+from .errors import DispersionError
 
 __all__ = ["coefficients", "dispersion_residual", "omega_of_k", "group_velocity",
            "solve_dispersion", "alpha_confined", "confined_rate_factor", "DispersionError"]
-
-
-class DispersionError(InvalidPointError):
-    """Eq. 6 has no admissible root (e.g. ``ml`` beyond its mass-loading cutoff)."""
 
 
 def coefficients(cfg: ModelConfig) -> tuple[float, float]:

@@ -8,18 +8,15 @@ from collections.abc import Callable
 import numpy as np
 
 from . import _kernels as K
-from .config import FloewaveError, ModelConfig
+from .config import ModelConfig
 from .dispersion import alpha_confined, solve_dispersion
 from .ensemble import Records, estimate_point, initial_positions, march_rows, zone_of
+from .errors import NumericalError
 from .forces import cell_offsets, kernel_params
 from .results import PointResult
 
 __all__ = ["FloeChain", "NumericalError", "march_amplitude", "dissipation", "residual",
            "run_point", "Window"]
-
-
-class NumericalError(FloewaveError, ArithmeticError):
-    """The DEM diverged (non-finite state) or floes passed through each other."""
 
 
 class FloeChain:

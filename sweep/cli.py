@@ -10,7 +10,6 @@ import json
 import os
 import signal
 import sys
-import time
 import traceback
 from collections.abc import Sequence
 from pathlib import Path
@@ -221,73 +220,15 @@ def cmd_run(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _kernel_key(cfg: Any) -> tuple:
-    """What the kernel speed depends on: floe count, drag cells and mode, confinement."""
-    n_x = cfg.n_x if cfg.drag_integration == "quadrature" else 0
-    return (cfg.n_floes, n_x, cfg.drag_integration, cfg.confined)
-
-
-def _calibrate(points: list[Any]) -> tuple[dict[tuple, float], str]:
-    """Floe-steps per second of the kernel for every kernel shape in the grid.
-
-    For each distinct :func:`_kernel_key` the costliest point of that shape runs 2
-    iterations (1 spin-up period and 3 averaging periods, then 3 more averaging periods:
-    with the default ``n0_warm = 0`` nearly every step of a real run accumulates the
-    averaging statistics, which is the slower kind of step) for about 0.5 s after a
-    compile/warm-up run.
-    """
-    import floewave
-
-    try:
-        run_point = floewave.run_point
-    except (AttributeError, ImportError) as exc:
-        return {}, f"no calibration: floewave.run_point unavailable ({exc})"
-    shapes: dict[tuple, Any] = {}
-    for p in points:
-        if not p.invalid:
-            key = _kernel_key(p.config)
-            if key not in shapes or p.cost > shapes[key].cost:
-                shapes[key] = p
-    if not shapes:
-        return {}, "no calibration: no valid point"
-    rates: dict[tuple, float] = {}
-    notes = []
-    for key, p in sorted(shapes.items(), key=lambda kv: str(kv[0])):
-        cfg = p.config.replace(max_iterations=2, n0=1, n0_warm=0, nT=3)
-        run_point(cfg.replace(L_sheet=min(cfg.L_sheet, 4 * cfg.L_x)))  # compile / warm up
-        steps = 0
-        t0 = time.perf_counter()
-        while time.perf_counter() - t0 < 0.5:
-            steps += int(run_point(cfg).floe_steps)
-        rates[key] = steps / (time.perf_counter() - t0)
-        notes.append(f"{key[0]} floes/{key[2]}: {rates[key] / 1e6:.1f}M")
-    return rates, "calibrated " + ", ".join(notes) + " floe-steps/s"
-
-
-def plan_seconds(points: list[Any], rates: dict[tuple, float]) -> float:
-    """Projected core-seconds: sum over valid points of cost / rate of the point's shape."""
-    total = 0.0
-    for p in points:
-        if not p.invalid:
-            rate = rates.get(_kernel_key(p.config), float("nan"))
-            total += p.cost / rate
-    return total
-
-
 def cmd_plan(args: argparse.Namespace) -> int:
     from .config import DEFAULT_EXPECTED_ITERATIONS, load_campaign
+    from .plan import plan
 
     campaign = load_campaign(args.config)  # a SweepError is reported by main
     points = campaign.points()
-    invalid = sum(1 for p in points if p.invalid)
-    cost = sum(p.cost for p in points if not p.invalid)
-    if args.rate:
-        rates = {_kernel_key(p.config): args.rate for p in points}
-        how = "rate given with --rate"
-    else:
-        rates, how = _calibrate(points)
-    hours = plan_seconds(points, rates) / 3600 if rates else float("nan")
-    mean_rate = cost / (hours * 3600) if hours == hours and hours > 0 else float("nan")
+    projected = plan(points, args.rate)
+    invalid, cost, how = projected.invalid_points, projected.floe_steps, projected.calibration
+    hours, mean_rate = projected.core_hours, projected.floe_steps_per_s
     assumed = campaign.run.expected_iterations or (
         f"min(max_iterations, {DEFAULT_EXPECTED_ITERATIONS})")
     out = {"config": str(args.config), "points": len(points), "invalid_points": invalid,

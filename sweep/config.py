@@ -230,15 +230,12 @@ def parse_campaign(text: str, source: str = "<string>") -> Campaign:
     return campaign
 
 
-def _field_problem(exc: Exception, key: str) -> str:
-    """The part of a floewave ConfigError message after the field name and value."""
-    msg = str(exc)
-    prefix = f"ModelConfig.{key}"
-    if msg.startswith(prefix):
-        msg = msg[len(prefix):].strip()
-        if msg.startswith("="):  # "= <value>: problem" or "= <value> problem"
-            msg = msg.split(": ", 1)[1] if ": " in msg else msg[1:].strip().partition(" ")[2]
-    return msg
+def _field_problem(exc: Exception, key: str | None) -> str:
+    """What is wrong with ``key``'s value: the floewave error's ``problem`` when ``key`` is
+    the field at fault, else the whole message (another field, or no field, at fault)."""
+    if key is not None and isinstance(exc, floewave.FloewaveError) and exc.field == key:
+        return exc.problem
+    return str(exc)
 
 
 def _parse_base(table: dict[str, Any], source: str, errors: list[str]) -> ModelConfig | None:
@@ -260,9 +257,10 @@ def _parse_base(table: dict[str, Any], source: str, errors: list[str]) -> ModelC
     try:
         return ModelConfig(**ok)
     except (floewave.ConfigError, TypeError) as exc:  # a cross-field rule
-        key = next((k for k in ok if str(exc).startswith(f"ModelConfig.{k} ")), None)
+        field = getattr(exc, "field", None)
+        key = field if field in ok else None
         shown = f"{key} = {ok[key]!r}" if key else "(combination)"
-        errors.append(f"{source}: [base] {shown}: {_field_problem(exc, key or '')}")
+        errors.append(f"{source}: [base] {shown}: {_field_problem(exc, key)}")
         return None
 
 

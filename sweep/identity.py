@@ -10,7 +10,7 @@ only, and every number that belongs to a float field written as a float by Pytho
 as ``0.0``; NaN and infinities are refused. The hash is the lower-case hex SHA-256 of the
 UTF-8 bytes (64 characters); :func:`short_hash` shows its first 12. Same physics gives
 the same hash on any machine; any change of a field or of the model version gives a new
-one. The definition is pinned by tests of known values (``tests/test_sweep_identity.py``)
+one. The definition is pinned by tests of known values (``tests/sweep/test_identity.py``)
 and documented in ``results_schema/``.
 """
 from __future__ import annotations

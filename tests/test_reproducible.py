@@ -96,7 +96,7 @@ def test_campaign_bits_in_process_mpi_and_after_kill_and_resume(tmp_path):
     import signal
     import time
 
-    from test_sweep_torture import MPIEXEC, TORTURE_TOML, _command, _env, _group_gone, compare
+    from tests.sweep.test_torture import MPIEXEC, TORTURE_TOML, _command, _env, _group_gone, compare
 
     if MPIEXEC is None:
         pytest.skip("no mpiexec (pip install mpich)")

@@ -28,11 +28,11 @@ from pathlib import Path
 
 import h5py
 import pytest
-from slurm_cluster import SlurmCluster, SlurmError, missing_programs
-from test_sweep_torture import compare
 
 import sweep
 from sweep.store import journal_path, read_journal
+from tests.slurm_cluster import SlurmCluster, SlurmError, missing_programs
+from tests.sweep.test_torture import compare
 
 ROOT = Path(__file__).resolve().parents[1]
 MPI_SCRIPT = ROOT / "slurm" / "sweep_mpi.sbatch"

@@ -19,7 +19,7 @@ RULE = dict(gap_threshold=CFG.gap_threshold, min_pairs=CFG.compact_min_pairs,
             min_length=CFG.compact_min_length, bridge=CFG.compact_bridge,
             bridge_gap=CFG.compact_bridge_gap)
 FIT = dict(min_floes=CFG.fit_min_floes, min_length=CFG.fit_min_length)
-DATA = json.loads((Path(__file__).parent / "data" / "measured_gaps.json").read_text())
+DATA = json.loads((Path(__file__).resolve().parents[1] / "data" / "measured_gaps.json").read_text())
 
 COLL = 3e-3       # a colliding pair's mean gap [m]
 COMP = -5e-5      # a compact pair's

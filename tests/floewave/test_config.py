@@ -29,6 +29,39 @@ def test_bad_values_name_the_field(field, value):
         ModelConfig(**{field: value})
 
 
+@pytest.mark.parametrize("field,value,problem", [
+    ("eps", 1.2, "must be in (0, 1]"), ("dispersion", "a b", "must be one of ('ep', 'ml', 'ow')"),
+    ("L_x", "0.5", "expected float"), ("L_x", float("inf"), "must be finite"),
+    ("n0", 2.5, "expected int"), ("rho_i", 1100.0, "must not exceed rho_w (floes float)"),
+])
+def test_errors_carry_the_field_and_the_problem(field, value, problem):
+    with pytest.raises(ConfigError) as info:
+        ModelConfig(**{field: value})
+    assert (info.value.field, info.value.problem) == (field, problem)
+    assert str(info.value).startswith(f"ModelConfig.{field} = {value!r}")
+    assert str(info.value).endswith(problem)
+
+
+def test_errors_live_in_one_module_and_keep_their_old_homes():
+    import pickle
+
+    import floewave
+    from floewave import config, dispersion, errors, model
+
+    assert config.ConfigError is floewave.ConfigError is errors.ConfigError
+    assert config.FloewaveError is errors.FloewaveError
+    assert config.InvalidPointError is errors.InvalidPointError
+    assert dispersion.DispersionError is floewave.DispersionError is errors.DispersionError
+    assert model.NumericalError is floewave.NumericalError is errors.NumericalError
+    assert issubclass(errors.DispersionError, errors.InvalidPointError)
+    with pytest.raises(InvalidPointError) as info:
+        ModelConfig(T=1.23456).check_physics()
+    assert info.value.field == "T" and info.value.problem == str(info.value)
+    assert errors.NumericalError("x").field is None
+    again = pickle.loads(pickle.dumps(info.value))   # errors cross process boundaries
+    assert (type(again), again.args, again.field) == (InvalidPointError, info.value.args, "T")
+
+
 def test_unknown_field_rejected():
     with pytest.raises(ConfigError, match="'L_z'"):
         ModelConfig.from_dict({"L_z": 1.0})

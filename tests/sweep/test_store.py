@@ -18,13 +18,8 @@ from sweep.cli import main
 from sweep.schema import SCHEMA_VERSION, schema_document
 from sweep.store import Store
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 TOML = "[base]\nL_sheet = 6.0\n[sweep]\nL_x = [0.5, 1.5]\neps = [0.2, 0.4, 0.6]\n"
-
-
-@pytest.fixture
-def campaign():
-    return parse_campaign(TOML, "t.toml")
 
 
 def fill(campaign, path, compute="sweep.testing:fake_point"):

@@ -3,13 +3,13 @@ import math
 
 import numpy as np
 import pytest
-from helpers import collision_config, two_floe_collision
 from scipy.integrate import solve_ivp
 
 from floewave import ModelConfig, solve_dispersion
 from floewave import _kernels as K
 from floewave.forces import froude_krylov_coefficient, kernel_params, slope_force, wave_force
 from floewave.model import FloeChain
+from tests.floewave.helpers import collision_config, two_floe_collision
 
 
 @pytest.mark.parametrize("T", [1.1, 1.6, 2.0])

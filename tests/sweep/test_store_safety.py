@@ -23,11 +23,6 @@ TOML = "[base]\nL_sheet = 6.0\n[sweep]\nL_x = [0.5, 1.5]\neps = [0.2, 0.4, 0.6, 
 FAKE = "sweep.testing:fake_point"
 
 
-@pytest.fixture
-def campaign():
-    return parse_campaign(TOML, "t.toml")
-
-
 def table(path):
     df = sweep.load(path).set_index("hash").sort_index()
     return df.drop(columns=["seq", "run", "host", "pid", "start_time", "end_time",

@@ -1,19 +1,25 @@
-"""``floewave run``: summary, JSON and plot output, bad input -> exit 2 with one message."""
+"""``floewave run``: summary, JSON and plot output, bad input -> exit 2 with one message.
+
+``floewave.cli.main`` runs in-process (the ``run_main`` fixture); the entry points themselves
+(``python -m floewave``/``sweep``) by a subprocess in the help and version test."""
 import json
 import subprocess
 import sys
 
 import pytest
 
+from floewave.cli import main
+
 FAST = ["--set", "L_x=3.0", "--set", "n0=1", "--set", "nT=1", "--set", "max_iterations=3"]
 
 
-def run(args, tmp_path):
-    return subprocess.run([sys.executable, "-m", "floewave", "run", *args], cwd=tmp_path,
-                          capture_output=True, text=True, timeout=300)
+@pytest.fixture
+def run(run_main):
+    """``run(args, cwd)``: ``floewave run ARGS`` in ``cwd``."""
+    return lambda args, cwd: run_main(main, ["run", *args], cwd)
 
 
-def test_run_prints_summary_and_writes_json_and_plot(tmp_path):
+def test_run_prints_summary_and_writes_json_and_plot(run, tmp_path):
     pytest.importorskip("matplotlib")
     p = run(FAST + ["--json", "out.json", "--plot", "out.png"], tmp_path)
     assert p.returncode == 0, p.stderr
@@ -34,7 +40,7 @@ def test_run_prints_summary_and_writes_json_and_plot(tmp_path):
     (["--set", "confined=maybe"], "confined"),
     (["--set", "noequals"], "NAME=VALUE"),
 ])
-def test_bad_input_exits_2_and_writes_nothing(tmp_path, args, needle):
+def test_bad_input_exits_2_and_writes_nothing(run, tmp_path, args, needle):
     p = run(args + ["--json", "out.json"], tmp_path)
     assert p.returncode == 2
     assert needle in p.stderr
@@ -43,7 +49,7 @@ def test_bad_input_exits_2_and_writes_nothing(tmp_path, args, needle):
 
 
 @pytest.mark.parametrize("option", ["--json", "--plot"])
-def test_unwritable_output_is_refused_before_the_point_runs(tmp_path, option):
+def test_unwritable_output_is_refused_before_the_point_runs(run, tmp_path, option):
     """Issue *first hour* 1: the point is not computed and then lost to a bad path."""
     p = run(FAST + [option, "nodir/out.x"], tmp_path)
     assert p.returncode == 2, p.stderr
@@ -52,14 +58,13 @@ def test_unwritable_output_is_refused_before_the_point_runs(tmp_path, option):
     assert "iteration" not in p.stderr and p.stdout == ""  # nothing ran
 
 
-def test_run_help_lists_every_field_with_default_and_units():
+def test_run_help_lists_every_field_with_default_and_units(run_main):
     """Issue *first hour* 5: the list is read from ModelConfig (a new field appears)."""
     from dataclasses import fields
 
     from floewave import ModelConfig
 
-    p = subprocess.run([sys.executable, "-m", "floewave", "run", "--help"],
-                       capture_output=True, text=True, timeout=60)
+    p = run_main(main, ["run", "--help"])
     assert p.returncode == 0
     for f in fields(ModelConfig):
         assert f"\n  {f.name} = " in p.stdout, f.name
@@ -79,7 +84,7 @@ def test_top_level_help_is_plain_text_and_versions_exist():
         assert v.returncode == 0 and "model version" in v.stdout, (prog, v.stderr)
 
 
-def test_unknown_field_suggests_the_near_one(tmp_path):
+def test_unknown_field_suggests_the_near_one(run, tmp_path):
     p = run(["--set", "epsilon=0.5"], tmp_path)
     assert p.returncode == 2
     assert "unknown field 'epsilon' (did you mean 'eps'?)" in p.stderr

@@ -44,11 +44,8 @@ def _pngs(out):
 
 
 @pytest.fixture(scope="module")
-def fake_store(tmp_path_factory):
-    store = tmp_path_factory.mktemp("fig") / "fake.h5"
-    run_campaign(parse_campaign(FAKE, "f.toml"), str(store),
-                 compute="sweep.testing:power_point")
-    return store
+def fake_store(power_store):
+    return power_store(FAKE, "f.toml")
 
 
 def test_every_kind_from_a_hand_built_store(fake_store, tmp_path, capsys):

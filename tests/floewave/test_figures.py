@@ -1,14 +1,10 @@
 """floewave.figures (the paper's Fig. 1) and ``floewave figures --out DIR``."""
 import math
-import os
-import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-import floewave
 from floewave import cli
 from floewave.config import G
 from floewave.dispersion import coefficients, solve_dispersion
@@ -109,18 +105,10 @@ def test_dispersion_curves_accepts_a_mapping():
     np.testing.assert_array_equal(a.R, b.R)
 
 
-def _cli(args, cwd):
-    env = dict(os.environ)
-    root = str(Path(floewave.__file__).resolve().parents[1])
-    env["PYTHONPATH"] = os.pathsep.join([root, env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
-    return subprocess.run([sys.executable, "-m", "floewave", *args], cwd=cwd, env=env,
-                          capture_output=True, text=True, timeout=300)
-
-
-def test_figures_cli_writes_png(tmp_path):
+def test_figures_cli_writes_png(run_main, tmp_path):
     pytest.importorskip("matplotlib")
     out = tmp_path / "figs" / "nested"
-    p = _cli(["figures", "--out", str(out)], tmp_path)
+    p = run_main(cli.main, ["figures", "--out", str(out)], tmp_path)
     assert p.returncode == 0, p.stderr
     png = out / "fig1_dispersion.png"
     data = png.read_bytes()
@@ -131,11 +119,11 @@ def test_figures_cli_writes_png(tmp_path):
     assert p.stdout.count("m = ") == 6
 
 
-def test_figures_cli_unwritable_out_exits_2(tmp_path):
+def test_figures_cli_unwritable_out_exits_2(run_main, tmp_path):
     blocker = tmp_path / "a_file"
     blocker.write_text("not a directory")
     for out in (blocker / "sub", blocker):
-        p = _cli(["figures", "--out", str(out)], tmp_path)
+        p = run_main(cli.main, ["figures", "--out", str(out)], tmp_path)
         assert p.returncode == 2
         lines = p.stderr.strip().splitlines()
         assert len(lines) == 1 and lines[0].startswith("floewave: error: cannot create")

@@ -1,8 +1,6 @@
 """floewave.trace: the opt-in time series of selected floes (the paper's Fig. 4)."""
 import json
 import math
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -10,6 +8,7 @@ import pytest
 from floewave import ModelConfig
 from floewave import _kernels as K
 from floewave._reference import forces as reference_forces
+from floewave.cli import main
 from floewave.forces import cell_offsets
 from floewave.model import FloeChain, Window, dissipation
 from floewave.trace import floes_at, instantaneous, trace_point
@@ -71,12 +70,11 @@ def test_trace_point_records_the_chosen_floes():
     assert floes_at(np.array([0.25, 0.75, 1.25]), [0.7]).tolist() == [1]
 
 
-def test_floewave_run_trace_writes_json_and_fig4(tmp_path):
+def test_floewave_run_trace_writes_json_and_fig4(run_main, tmp_path):
     pytest.importorskip("matplotlib")
-    p = subprocess.run([sys.executable, "-m", "floewave", "run", *[f"--set={k}={v}" for k, v
-                        in SMALL.items()], "--trace", "1,4", "--trace-every", "50",
-                        "--json", "o.json", "--trace-plot", "fig4.png"], cwd=tmp_path,
-                       capture_output=True, text=True, timeout=300)
+    p = run_main(main, ["run", *[f"--set={k}={v}" for k, v in SMALL.items()], "--trace", "1,4",
+                   "--trace-every", "50", "--json", "o.json", "--trace-plot", "fig4.png"],
+            tmp_path)
     assert p.returncode == 0, p.stderr
     assert "trace: floes" in p.stdout
     data = json.loads((tmp_path / "o.json").read_text())
@@ -85,7 +83,6 @@ def test_floewave_run_trace_writes_json_and_fig4(tmp_path):
     assert (tmp_path / "fig4.png").stat().st_size > 5000
 
 
-def test_trace_plot_without_trace_is_bad_input(tmp_path):
-    p = subprocess.run([sys.executable, "-m", "floewave", "run", "--trace-plot", "f.png"],
-                       cwd=tmp_path, capture_output=True, text=True, timeout=120)
+def test_trace_plot_without_trace_is_bad_input(run_main, tmp_path):
+    p = run_main(main, ["run", "--trace-plot", "f.png"], tmp_path)
     assert p.returncode == 2 and "--trace-plot needs --trace" in p.stderr

@@ -20,11 +20,7 @@ dispersion = ["ml", "ep"]
 [run]
 progress_interval = 100.0
 """
-
-
-@pytest.fixture
-def campaign():
-    return parse_campaign(TOML, "test.toml")
+CAMPAIGN_FILE = "test.toml"
 
 
 def test_run_stores_every_point(tmp_path, campaign):

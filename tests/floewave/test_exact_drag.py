@@ -4,7 +4,7 @@ MODEL.md §3: the exact mode must agree with the quadrature mode as dx -> 0. Uni
 sums are the quadrature sums' limit in the same units, s = n_x / (kL) * int f(phi) dphi over
 [theta - kL/2, theta + kL/2], f = |w| w (s2) or |w|^3 (s3), w = A cos(phi) - v.
 
-Run ``python tests/test_exact_drag.py`` for the ns/call benchmark against ``drag_sums``.
+Run ``python tests/floewave/test_exact_drag.py`` for the ns/call benchmark against ``drag_sums``.
 """
 from __future__ import annotations
 

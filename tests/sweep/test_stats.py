@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from sweep import alpha_omega, collision_stats, derived, load, parse_campaign, run_campaign
+from sweep import alpha_omega, collision_stats, derived, load
 from sweep.testing import POWER_M
 
 TOML = """\
@@ -25,10 +25,8 @@ dispersion = ["ep", "ml"]
 
 
 @pytest.fixture(scope="module")
-def table(tmp_path_factory):
-    store = tmp_path_factory.mktemp("stats") / "s.h5"
-    run_campaign(parse_campaign(TOML, "t.toml"), str(store), compute="sweep.testing:power_point")
-    return load(store)
+def table(power_store):
+    return load(power_store(TOML))
 
 
 def test_derived_columns_per_point(table):

@@ -1,6 +1,5 @@
 """Campaign files: grid expansion and counts, shipped configs, validation of bad input."""
-import subprocess
-import sys
+import math
 from pathlib import Path
 
 import pytest
@@ -11,25 +10,33 @@ from sweep import ConfigError, load_campaign, parse_campaign
 from sweep.cli import main
 from sweep.config import DEFAULT_EXPECTED_ITERATIONS
 
-CONFIGS = Path(__file__).resolve().parent.parent / "configs"
+CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 MINIMAL = "[sweep]\neps = [0.2, 0.6]\n"
 
 
-def test_herman2019_grid_is_24192_points():
-    c = load_campaign(CONFIGS / "herman2019.toml")
+@pytest.fixture(scope="module")
+def herman2019():
+    """The paper's campaign, loaded (and so its 24,192 points expanded) once."""
+    return load_campaign(CONFIGS / "herman2019.toml")
+
+
+def test_herman2019_grid_is_24192_points(herman2019):
+    c = herman2019
     assert c.size == 24192
-    points = c.points()
-    assert len(points) == 24192
-    assert len({p.hash for p in points}) == 24192
-    assert not any(p.invalid for p in points)
     assert c.swept_fields == floewave.SWEPT_FIELDS
-    assert {p.config.L_x for p in points} == {0.5, 1.5, 3.0}
-    assert sum(1 for p in points if p.config.dispersion == "ml") == 24192 // 3
+    # the grid's definition: a product of distinct values per dimension, three dispersions
+    assert math.prod(len(v) for v in c.sweep.values()) == 24192
+    assert all(len(set(v)) == len(v) for v in c.sweep.values())
+    assert set(c.sweep["L_x"]) == {0.5, 1.5, 3.0}
+    assert len(c.sweep["dispersion"]) == 3 and "ml" in c.sweep["dispersion"]
+    # the expansion loading made (cached): as many points and hashes, none invalid
+    points = c.points()
+    assert len(points) == len({p.hash for p in points}) == 24192
+    assert not any(p.invalid for p in points)
 
 
-def test_herman2019_base_is_modelconfig_defaults():
-    c = load_campaign(CONFIGS / "herman2019.toml")
-    assert c.base == ModelConfig()
+def test_herman2019_base_is_modelconfig_defaults(herman2019):
+    assert herman2019.base == ModelConfig()
 
 
 @pytest.mark.parametrize("name, n", [("demo", 16), ("fig2", 8), ("fig5", 6), ("fig6a", 8),
@@ -147,14 +154,27 @@ def test_each_bad_value_gives_its_own_message():
         assert any(key in m and value in m for m in msgs), (key, msgs)
 
 
-def test_missing_file_and_bad_cli(tmp_path):
+def test_field_messages_come_from_the_error_not_its_text():
+    """The problem shown is floewave's ``problem`` for the field, whatever the value's repr
+    holds (a string with a space or ': ' once cut the parsed message in the wrong place)."""
+    text = "[base]\ndispersion = 'elastic plate'\nh = 'a: b'\n[sweep]\neps = [0.5]\n"
+    with pytest.raises(ConfigError) as info:
+        parse_campaign(text)
+    assert info.value.messages == [
+        "<string>: [base] dispersion = 'elastic plate': must be one of ('ep', 'ml', 'ow')",
+        "<string>: [base] h = 'a: b': expected float"]
+    # another field at fault: its whole message
+    with pytest.raises(ConfigError) as info:
+        parse_campaign("[base]\nrho_w = 800.0\n" + MINIMAL)
+    assert info.value.messages == ["<string>: [base] rho_w = 800.0: ModelConfig.rho_i ="
+                                   " 910.0 must not exceed rho_w (floes float)"]
+
+def test_missing_file_and_bad_cli(run_main, tmp_path):
     assert main(["plan", str(tmp_path / "nope.toml"), "--rate", "1e7"]) == 2
-    proc = subprocess.run([sys.executable, "-m", "sweep", "run", str(CONFIGS / "demo.toml")],
-                          capture_output=True, text=True)
+    proc = run_main(main, ["run", CONFIGS / "demo.toml"])
     assert proc.returncode == 2 and "--store" in proc.stderr
-    proc = subprocess.run([sys.executable, "-m", "sweep", "run", str(CONFIGS / "demo.toml"),
-                           "--store", str(tmp_path / "s.h5"), "--shard", "5/3"],
-                          capture_output=True, text=True)
+    proc = run_main(main, ["run", CONFIGS / "demo.toml", "--store", tmp_path / "s.h5",
+                           "--shard", "5/3"])
     assert proc.returncode == 2 and "shard" in proc.stderr
     assert not (tmp_path / "s.h5").exists()
 
