@@ -259,7 +259,7 @@ def schema_document() -> dict[str, Any]:
             "canonical_json": "keys sorted, separators ',' and ':', ASCII, numbers of float "
                               "fields written as floats by Python repr (1 and 1.0 alike), "
                               "-0.0 written as 0.0, NaN/inf refused",
-            "example": "see tests/test_sweep_identity.py for pinned values",
+            "example": "see tests/sweep/test_identity.py for pinned values",
         },
         "journal": "<store>.journal beside the store: one JSON line per event, each ending "
                    "in a CRC-32 member \"crc32\" of the line without it: a campaign line "
