@@ -30,18 +30,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def _load_torture():
-    """tests/sweep/test_torture.py as a module, without putting the checkout on sys.path."""
-    import importlib.util
-    spec = importlib.util.spec_from_file_location(
-        "torture_driver", ROOT / "tests" / "sweep" / "test_torture.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    return module
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from torture import _torture  # noqa: E402  (tests/sweep/test_torture.py, loaded by path)
 
-
-_torture = _load_torture()
 MPIEXEC, compare = _torture.MPIEXEC, _torture.compare
 
 import h5py  # noqa: E402
