@@ -206,6 +206,8 @@ def main(argv: list[str] | None = None) -> int:
         cfg = config_from_sets(args.set)
         cfg.check_physics()
         _check_outputs(args)
+        if args.trace is not None and cfg.confined:
+            raise ValueError("--trace: a confined point has no floe motion to trace")
     except (FloewaveError, ValueError) as exc:
         print(f"floewave: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -231,11 +233,22 @@ def main(argv: list[str] | None = None) -> int:
                                 periods=args.trace_periods)
         except FloewaveError as exc:
             print(f"floewave: trace failed: {exc}", file=sys.stderr)
+            _write_outputs(args, cfg, r, None)      # the point itself is kept
             return EXIT_FAILED
         print(f"trace: floes {', '.join(str(int(i) + 1) for i in trace.floes)} at x ="
               f" {', '.join(f'{d:.1f}' for d in trace.distance)} m, {len(trace.t)} samples"
               f" every {trace.every} steps; max |S_sd| ="
               f" {', '.join(f'{v:.3g}' for v in np.abs(trace.S_sd).max(axis=0))} W m-2")
+    _write_outputs(args, cfg, r, trace)
+    if args.trace_plot:
+        from .figures import figure4
+
+        figure4(trace, cfg, args.trace_plot)
+    return EXIT_OK
+
+
+def _write_outputs(args: argparse.Namespace, cfg: ModelConfig, r: Any, trace: Any) -> None:
+    """The ``--json`` and ``--plot`` outputs of a computed point."""
     if args.json:
         out = {"config": cfg.to_dict(), "result": {k: _jsonable(v)
                                                    for k, v in r.to_dict().items()}}
@@ -244,11 +257,6 @@ def main(argv: list[str] | None = None) -> int:
         args.json.write_text(json.dumps(out, indent=1))
     if args.plot:
         plot(cfg, r, args.plot)
-    if args.trace_plot:
-        from .figures import figure4
-
-        figure4(trace, cfg, args.trace_plot)
-    return EXIT_OK
 
 
 def figures_main(out: Path) -> int:

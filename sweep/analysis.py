@@ -175,13 +175,16 @@ def _load(path: str | Path) -> pd.DataFrame:
 
 def _typed(df: pd.DataFrame) -> pd.DataFrame:
     """Times as UTC datetimes (NaT where unset), status and dispersion as categoricals
-    (statuses in :data:`STATUS_ORDER`; dispersions as stored, sorted)."""
+    (statuses in :data:`STATUS_ORDER`; dispersions: ep, ml, ow, whatever the store holds)."""
     for name in ("start_time", "end_time"):
         df[name] = pd.to_datetime(df[name].replace("", None), utc=True, format="ISO8601")
     extra = sorted(set(df["status"]) - set(STATUS_ORDER))
     df["status"] = pd.Categorical(df["status"], categories=list(STATUS_ORDER) + extra)
-    df["dispersion"] = pd.Categorical(df["dispersion"],
-                                      categories=sorted(set(df["dispersion"])))
+    # every dispersion relation floewave knows, so tables of two stores concatenate as
+    # categoricals (categories taken from each store's data would differ)
+    from floewave.config import DISPERSIONS
+    df["dispersion"] = pd.Categorical(
+        df["dispersion"], categories=sorted(set(DISPERSIONS) | set(df["dispersion"])))
     return df
 
 

@@ -355,9 +355,11 @@ def _col(row: pd.Series, name: str) -> float:
     """``row[name]`` as float; NaN where the column is absent (an older schema)."""
     v = row.get(name, math.nan)
     try:
-        return float(v)
+        v = float(v)
     except (TypeError, ValueError):
         return math.nan
+    # -1 is the store's fill value of its integer columns (replicas, W_c_n): unknown
+    return math.nan if (name in ("replicas", "W_c_n") and v < 0) else v
 
 
 def _label(row: pd.Series | None, key: str, value: Any) -> str:
@@ -582,6 +584,11 @@ def paper_checks(tables: Mapping[str, pd.DataFrame | None],
                     (Ts[-1], "Fig. 6a: no reversal for long waves (collisional zone spans"
                      " the domain)", False)):
                 dfs = _sorted_values(df, "d_f", T=T)
+                if len(dfs) < 2:
+                    checks.append(Check(claim, "§4.2, Fig. 6a", "fig6a", f"T {T} s", "a_end/a0",
+                                        "pair", (), INCONCLUSIVE,
+                                        f"fewer than 2 values of d_f stored at T {T} s"))
+                    continue
                 lo, hi = (_a_end(_point(df, T=T, d_f=v), f"d_f={v}", profile, "fig6a")
                           for v in (dfs[0], dfs[-1]))
                 pair = (hi, lo) if reverse else (lo, hi)

@@ -39,6 +39,8 @@ def test_run_prints_summary_and_writes_json_and_plot(run, tmp_path):
     (["--set", "T=1.23456", "--set", "dt=0.001"], "T / dt"),
     (["--set", "confined=maybe"], "confined"),
     (["--set", "noequals"], "NAME=VALUE"),
+    # a trace of a confined point is refused before the point runs, not after it
+    (["--set", "confined=true", "--set", "d_f=0", "--trace", "1"], "confined point"),
 ])
 def test_bad_input_exits_2_and_writes_nothing(run, tmp_path, args, needle):
     p = run(args + ["--json", "out.json"], tmp_path)

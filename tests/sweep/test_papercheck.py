@@ -313,3 +313,26 @@ def test_cli_unreadable_store_exits_3(tmp_path, capsys):
     (tmp_path / "fig2.h5").write_text("not hdf5")
     assert main(["paper-check", "--stores", str(tmp_path)]) == 3
     assert "cannot read" in capsys.readouterr().err
+
+
+def test_fill_values_are_not_read_as_replica_counts():
+    """-1 in replicas / W_c_n is the store's 'unknown' (failed points, older schemas)."""
+    row = pd.Series({"replicas": -1, "W_c_n": -1, "W_c": 3.0, "W_c_stderr": np.nan})
+    assert math.isnan(pc._col(row, "replicas")) and math.isnan(pc._col(row, "W_c_n"))
+    assert "R=" not in pc._label(row, "eps", 0.4)
+    assert "n=" not in pc._W_c(row, "eps=0.4").label
+
+
+def test_a_partial_fig6a_store_is_not_compared_with_itself():
+    t = pd.DataFrame({"L_x": 0.5, "T": [1.2, 1.8, 1.8], "a0": 0.015, "C_sd": 0.05,
+                      "eps": 0.6, "d_f": [0.02, 0.005, 0.05], "dispersion": "ml",
+                      "status": "converged_noisy", "a_end": [0.01, 0.012, 0.013],
+                      "a_end_stderr": 1e-4, "replicas": 8, "L_sheet": 42.0, "W_c": np.nan,
+                      "compact_zone": "none", "alpha_inner": np.nan, "alpha_c": 0.4,
+                      "alpha_edge": np.nan, "alpha_all": 0.5, "alpha_exp": 0.01,
+                      "alpha_all_resid": 0.01, "alpha_exp_resid": 0.02})
+    checks = [c for c in pc.paper_checks({"fig6a": t}) if "Fig. 6a" in c.claim
+              and "reversal" in c.claim]
+    short = [c for c in checks if "1.2" in c.points]
+    assert short and short[0].verdict == INCONCLUSIVE
+    assert "fewer than 2 values" in short[0].evidence
