@@ -381,9 +381,8 @@ def load_profiles(path: str | Path, **selectors: Any) -> xr.Dataset:
         status[where(row)] = str(row.status)
         hash_[where(row)] = row.hash
     for k, (units, long_name) in PROFILE_VARS.items():
-        if k not in shapes:
-            continue
-        lead = shapes[k][:-1]
+        # a variable no selected point has (all failed): all NaN, still there
+        lead = shapes.get(k, (n_floe,))[:-1]
         arr = np.full(grid_shape + lead + (n_floe,), np.nan)
         for row in df.itertuples():
             v = data.get(row.hash, {}).get(k)
