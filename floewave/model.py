@@ -209,6 +209,7 @@ def run_point(cfg: ModelConfig,
     phase = "iterate"
     status = "not_converged"
     last: tuple | None = None
+    stop_est: dict | None = None
     a_new = a
     a_prev = a
     for it in range(1, cfg.max_iterations + 1):
@@ -233,7 +234,9 @@ def run_point(cfg: ModelConfig,
             a_new = march_rows(cfg, S, c_g, k)
         if not np.all(np.isfinite(a_new)):
             raise NumericalError(f"non-finite amplitude at iteration {it}")
-        res = max(residual(a[r], a_new[r]) for r in range(R))
+        # (coupling "mean": every row is the same profile, one residual says it)
+        rows = range(1) if cfg.coupling == "mean" else range(R)
+        res = max(residual(a[r], a_new[r]) for r in rows)
         history.append(res)
         # the paper's W_c is a property of one averaging window: found per window and replica
         zones = [zone_of(cfg, w.x_mean, w.gap_mean) for w in windows]
@@ -255,14 +258,17 @@ def run_point(cfg: ModelConfig,
             # samples start the average
             samples.extend(recent)
         elif phase == "average" and len(samples) >= cfg.n_average:
-            if _precise_enough(cfg, samples, c_g, k):
+            enough, stop_est = _precise_enough(cfg, samples, c_g, k)
+            if enough:
                 status = "converged_noisy"
                 break
     iterations = len(history)
     assert last is not None
 
     kept = samples if samples else [last]
-    est = estimate_point(cfg, _records(kept), c_g, k)
+    # the estimate that ended the averaging is the point's (same samples): not recomputed
+    est = (stop_est if status == "converged_noisy" and stop_est is not None
+           else estimate_point(cfg, _records(kept), c_g, k))
     if R == 1:   # one trajectory: the iteration standard error (as the paper's model)
         if samples:
             est["a_stderr"] = (stderr([s[1][0] for s in samples]) if len(samples) > 1
@@ -323,18 +329,21 @@ def _records(kept: list[tuple]) -> Records:
                    [[z.layout for z in row] for row in zones])
 
 
-def _precise_enough(cfg: ModelConfig, samples: list, c_g: float, k: float) -> bool:
+def _precise_enough(cfg: ModelConfig, samples: list, c_g: float,
+                    k: float) -> tuple[bool, dict | None]:
     """May the averaging stop? max_i SE(a_i) <= ``target_stderr`` a0 (the iteration
     standard error for one trajectory, the jackknife over replicas for an ensemble) and,
     for an ensemble with a compact zone in at least two replicas, SE(W_c) <=
-    ``target_W_c_stderr``. A target <= 0 is no condition."""
+    ``target_W_c_stderr``. A target <= 0 is no condition. Also returns the ensemble's
+    estimate when it was computed (the point's, if the averaging stops here)."""
     if cfg.n_chains == 1:
         return (cfg.target_stderr <= 0
-                or max_stderr([s[1][0] for s in samples]) <= cfg.target_stderr * cfg.a0)
+                or max_stderr([s[1][0] for s in samples]) <= cfg.target_stderr * cfg.a0), None
     if cfg.target_stderr <= 0 and cfg.target_W_c_stderr <= 0:
-        return True
+        return True, None
     est = estimate_point(cfg, _records(samples), c_g, k)
     if cfg.target_stderr > 0 and float(np.max(est["a_stderr"])) > cfg.target_stderr * cfg.a0:
-        return False
+        return False, est
     se_w = est["W_c_stderr"]
-    return cfg.target_W_c_stderr <= 0 or not math.isfinite(se_w) or se_w <= cfg.target_W_c_stderr
+    return (cfg.target_W_c_stderr <= 0 or not math.isfinite(se_w)
+            or se_w <= cfg.target_W_c_stderr), est
