@@ -25,7 +25,8 @@ import numpy as np
 
 import sweep
 from floewave import ModelConfig
-from floewave.results import _runs, compact_zones
+from floewave.ensemble import zone_of
+from floewave.results import _runs
 
 
 def main(paths: list[str]) -> int:
@@ -42,10 +43,7 @@ def main(paths: list[str]) -> int:
             for i0, i1 in _runs(~compact):
                 if i0 > 0 and i1 < len(gaps):
                     interruptions.append((i1 - i0, float(gaps[i0:i1].max())))
-            z = compact_zones(x, g, row["L_x"], gap_threshold=thr,
-                              min_pairs=cfg.compact_min_pairs,
-                              min_length=cfg.compact_min_length, bridge=cfg.compact_bridge,
-                              bridge_gap=cfg.compact_bridge_gap)
+            z = zone_of(cfg.replace(L_x=float(row["L_x"])), x, g)
             # the rule's own result: zones (bridges included) and the raw compact runs it
             # left out
             for i0, i1 in _runs(z.compact):

@@ -22,6 +22,23 @@ __all__ = ["fake_point", "raising_point", "nan_point", "trivial_point", "sleepy_
            "sleepy_trivial_point", "POWER_M"]
 
 
+#: ``[base]`` of the small real campaigns of the kill/resume tests (torture, Slurm): 4 or
+#: 8 floes of a 24 m sheet, 1 + 1 periods per iteration, at most 10 iterations, ensembles
+#: of 2 replicas: ~0.1-0.4 s per point on one core.
+SMALL_REAL_BASE = """\
+[base]
+L_sheet = 24.0
+n0 = 1
+nT = 1
+max_iterations = 10
+noise_window = 2
+n_average = 2
+n0_warm = 1
+replicas = 2
+target_W_c_stderr = 0.0
+"""
+
+
 def fake_point(cfg: ModelConfig) -> dict[str, Any]:
     """A deterministic PointResult-like dict: a = 1 / (1/a0 + alpha x)."""
     n = cfg.n_floes

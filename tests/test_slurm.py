@@ -31,6 +31,7 @@ import pytest
 
 import sweep
 from sweep.store import journal_path, read_journal
+from sweep.testing import SMALL_REAL_BASE
 from tests.slurm_cluster import SlurmCluster, SlurmError, missing_programs
 from tests.sweep.test_torture import compare
 
@@ -40,18 +41,7 @@ ARRAY_SCRIPT = ROOT / "slurm" / "sweep_array.sbatch"
 REQUIRE = os.environ.get("FLOEWAVE_REQUIRE_SLURM", "") not in ("", "0")
 #: 16 real points of ~0.1-0.4 s (4 or 8 floes of a 24 m sheet, as in the torture test):
 #: ~3 s of computing under 3 ranks on 2 cores, after a start-up of 3-6 s.
-CAMPAIGN = """\
-[base]
-L_sheet = 24.0
-n0 = 1
-nT = 1
-max_iterations = 10
-noise_window = 2
-n_average = 2
-n0_warm = 1
-replicas = 2
-target_W_c_stderr = 0.0
-
+CAMPAIGN = SMALL_REAL_BASE + """
 [sweep]
 L_x = [3.0, 1.5]
 T = [1.2, 1.6]

@@ -30,25 +30,14 @@ import sweep
 from sweep.journal import BadLine, decode
 from sweep.schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, REPLICA_VARS
 from sweep.store import journal_path, lock_path, read_journal
-from sweep.testing import find_mpiexec
+from sweep.testing import SMALL_REAL_BASE, find_mpiexec
 
 MPIEXEC = find_mpiexec()
 
 #: 24 real points of ~0.1-0.4 s each (4 or 8 floes of a 24 m sheet, 1 + 1 periods per
 #: iteration, at most 10 iterations): ~6 s under ``mpiexec -n 3`` on 2 cores, start-up
 #: (imports, numba cache) ~2 s of it.
-TORTURE_TOML = """\
-[base]
-L_sheet = 24.0
-n0 = 1
-nT = 1
-max_iterations = 10
-noise_window = 2
-n_average = 2
-n0_warm = 1
-replicas = 2
-target_W_c_stderr = 0.0
-
+TORTURE_TOML = SMALL_REAL_BASE + """
 [sweep]
 L_x = [3.0, 1.5]
 T = [1.2, 1.6]
