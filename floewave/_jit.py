@@ -30,8 +30,13 @@ source's order.
 from __future__ import annotations
 
 #: Flags of every jitted kernel: cached on disk, IEEE arithmetic (see the module docstring),
-#: the GIL released.
-JIT = dict(cache=True, fastmath=False, nogil=True)
+#: the GIL released, and numpy's error model: a float division by zero gives inf or nan as
+#: IEEE says instead of raising ZeroDivisionError. Same bits for every other division; but
+#: Python's model puts a test and an exception path on every division, and a loop with an
+#: exception path is not vectorised (measured: the prefix-sum drag and the contact loop,
+#: 2026-12-01). The kernels check their results for non-finite values instead
+#: (``FloeChain.check``).
+JIT = dict(cache=True, fastmath=False, nogil=True, error_model="numpy")
 
 #: Per-step functions that never allocate: compiled without numba's reference counting
 #: (``_nrt=False``). With it, every call of ``eval_forces`` paid ~40 atomic NRT

@@ -1,10 +1,25 @@
-"""Numba kernels: the DEM time loop (private; use :mod:`floewave.model`).
+"""Numba kernels: the DEM time loop of an ensemble of floe chains (private; use
+:mod:`floewave.model`).
 
 Everything here is nopython, cached, without fast-math (flags and why:
-:mod:`floewave._jit`). The kernels see only numpy arrays and a
-:class:`KernelParams` named tuple of numbers built once per point from the frozen
-:class:`~floewave.config.ModelConfig`; option switches are small integers fixed for the
-whole call (loop-invariant branches, no Python objects in the time loop).
+:mod:`floewave._jit`). The kernels see only numpy arrays and a :class:`KernelParams` named
+tuple of numbers built once per point from the frozen :class:`~floewave.config.ModelConfig`.
+
+**One kernel for R replicas.** The R chains of an ensemble (MODEL.md §4 'Ensembles') run in
+lockstep: their states are rows of (R, N_f) arrays, and the kernel loops over the flattened
+index ``j = r N_f + i``. Every per-floe loop (drift, drag, wave force, kick) has no
+neighbour dependency and is vectorised across floes *and* replicas; the contact loop runs
+over the N_f - 1 pairs of each replica. Nothing couples replicas: every number of replica r
+is computed by the same operations on the same inputs whatever R is (tested bit for bit).
+
+**Built from frozen options.** :func:`make_advance` builds the time loop for one
+:class:`KernelOptions` (contact law, damping, clipping, integrator, drag mode, accumulate or
+not) and caches it, as PyMPDATA's ``make_step_impl`` does: the options are constants of the
+compiled code, so no option is tested inside the time loop, and the force evaluation is
+written once. The built function is a closure over plain numbers only, so numba's on-disk
+cache keys it by those numbers and loads it in a new process (a closure over another
+*jitted* function would not be: numba pickles a dispatcher with a per-process id, and every
+process would compile again). Helpers it calls are module-level functions.
 
 Time integration (velocity Verlet, MODEL.md §3), per step n -> n+1::
 
@@ -16,16 +31,27 @@ Time integration (velocity Verlet, MODEL.md §3), per step n -> n+1::
 with velocity-dependent forces (drag, contact damping) evaluated at
 ``v* = u_n + dt acc_n`` (``integrator = "predictor"``, second order) or at
 ``v* = u_half`` (``"half_step"``, as LIGGGHTS does; first order in the damping).
+
+**Quadrature drag in O(1) per floe** (:func:`drag_pass`, :func:`prefix_sums`). The paper's
+drag and dissipation are sums over the n_x = L_x/dx cells of a floe of |w| w and |w|^3,
+``w_j = A cos(theta + phi_j) - v`` at the cell phases ``phi_j = -h + j k dx``. A floe where
+w has one sign is summed in closed form from the cell tables' central moments; on the
+others the sign of w changes only at the roots of ``A cos(theta + phi) = v``, so the sum is
+the whole-floe sum plus, per root, twice a prefix sum of the cells before it (prefix tables
+of the cell phases in closed form, :func:`prefix_sums`): a handful of operations per root instead of a
+loop over n_x cells (50-300 at the paper's dx). Equal to the cell loop to rounding (relative
+1e-15 of the floe's scale (|A| + |v|)^m n_x, tested against :func:`drag_sums`).
 """
 from __future__ import annotations
 
+import functools
 import math
 from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
-from ._exact import drag_force_exact, drag_pass_exact, drag_sums_exact, general_floes
+from ._exact import drag_pass_exact, drag_sums_exact, general_floes
 from ._jit import JIT, JITN
 
 # option codes (decided once from ModelConfig)
@@ -38,7 +64,7 @@ INTEG_HALF_STEP = 1
 DRAG_QUADRATURE = 0
 DRAG_EXACT = 1
 
-# rows of the per-window statistics array ``stats`` (shape (N_STATS, N_f))
+# rows of the per-window statistics array ``stats`` (shape (N_STATS, R N_f))
 ST_S3 = 0        # sum over steps and cells of |u_rel|^3            [m^3 s^-3]
 ST_X = 1         # sum over steps of x_i                            [m]
 ST_GAP = 2       # sum over steps of gap_i (pair i, i+1)            [m]
@@ -49,24 +75,30 @@ ST_FC = 6        # sum over steps of |net contact force on i|       [N]
 ST_FD = 7        # sum over steps of |F_d,i|                        [N]
 N_STATS = 8
 
-# rows of the drag scratch ``sc`` (shape (N_SC, N_f)) of drag_pass / drag_pass_exact
+# rows of the drag scratch ``sc`` (shape (N_SC, R N_f + LANES)) of drag_pass /
+# drag_pass_exact
 SC_C = 0         # cos theta_i
 SC_S = 1         # sin theta_i
 SC_S2 = 2        # drag sum of |u_rel| u_rel
 SC_S3 = 3        # drag sum of |u_rel|^3 (accumulating steps only)
 SC_FLAG = 4      # 1: the floe needs the general evaluation
-SC_GATHER = 5    # rows 5-10: the general floes gathered by cell_sums (A, c, s, v, s2, s3)
-N_SC = 11
-N_WORK = 5 + N_SC   # rows of advance's scratch ``work``
-LANES = 16          # cell_sums pads its gathered floes to a multiple of this
-
-# steps of the plain per-floe drag loop after a two-pass step that found >3/4 of the floes
-# needing the general evaluation (see advance)
-TWO_PASS_RETRY = 64
+SC_SIG = 5       # sign the closed form gave the floe's whole-floe sums
+SC_GATHER = 6    # rows 6-16: the general floes gathered by cell_sums / prefix_sums
+N_GATHER = 11
+N_SC = SC_GATHER + N_GATHER
+W_UH = 0         # rows of advance's scratch ``work``: half-step velocity,
+W_VS = 1         # velocity v* of the forces,
+W_F = 2          # force,
+W_CK = 3         # cos(k x), sin(k x),
+W_SK = 4
+W_FC = 5         # contact force of pair (j, j+1),
+W_SC = 6         # then the drag scratch sc (N_SC rows)
+N_WORK = W_SC + N_SC
+LANES = 16       # gathered floes are padded to a multiple of this (vector body)
 
 
 class KernelParams(NamedTuple):
-    """Numbers the time loop needs, SI units (built by ``model.kernel_params``)."""
+    """Numbers the time loop needs, SI units (built by ``forces.kernel_params``)."""
 
     dt: float          # time step [s]
     n_t: int           # steps per period [-]
@@ -92,37 +124,69 @@ class KernelParams(NamedTuple):
     geom: tuple        # floewave._exact.exact_geometry(k L_x, n_x) (used when drag = EXACT)
 
 
-@njit(**JITN)
-def contact_stiffness(delta, P):
-    """k_n for overlap ``delta`` [N m^-1] (MODEL.md §3: hertz_disk f(s) or linear)."""
-    if P.contact == CONTACT_LINEAR:
-        return P.kn_lin
-    s = delta * P.s_scale
-    f = (0.9117 * s * s + 0.2722 * s + 0.003324) / (s * s + 1.524 * s + 0.03159)
-    return P.kn_disk * f
+class KernelOptions(NamedTuple):
+    """The frozen choices a time loop is built for (:func:`make_advance`)."""
+
+    contact: int
+    damping: int
+    clip: int
+    integrator: int
+    drag: int
+    accumulate: bool   # add every step to the window statistics
+
+
+def kernel_options(P: KernelParams, accumulate: bool) -> KernelOptions:
+    """The options of ``P`` (its option codes) for a spin-up or an averaging loop."""
+    return KernelOptions(int(P.contact), int(P.damping), int(P.clip), int(P.integrator),
+                         int(P.drag), bool(accumulate))
 
 
 @njit(**JITN)
-def contact_force(delta, v_n, P):
-    """Normal contact force [N] pushing a pair apart: F = k_n delta - gamma_n v_n.
+def contact_law(delta, v_n, P, contact, damping, clip):
+    """Normal contact force [N] pushing a pair apart at overlap ``delta`` > 0:
+    F = k_n delta - gamma_n v_n, ``v_n = u_{i+1} - u_i`` (positive while separating).
 
-    ``v_n = u_{i+1} - u_i`` (positive while separating); gamma_n = -beta sqrt(5 k_n m*)
-    (liggghts) or -2 beta sqrt(k_n m*) (exact); clipped at 0 if ``P.clip``.
+    k_n: ``hertz_disk`` f(s) (MODEL.md §3) or ``linear``; gamma_n = -beta sqrt(5 k_n m*)
+    (liggghts) or -2 beta sqrt(k_n m*) (exact); clipped at 0 if ``clip``. The option codes
+    are arguments so that a caller with constant options (the built time loop) gets them
+    folded away.
     """
-    kn = contact_stiffness(delta, P)
-    if P.damping == DAMPING_LIGGGHTS:
+    if contact == CONTACT_LINEAR:
+        kn = P.kn_lin
+    else:
+        s = delta * P.s_scale
+        kn = P.kn_disk * ((0.9117 * s * s + 0.2722 * s + 0.003324)
+                          / (s * s + 1.524 * s + 0.03159))
+    if damping == DAMPING_LIGGGHTS:
         gamma = -P.beta * math.sqrt(5.0 * kn * P.m_star)
     else:
         gamma = -2.0 * P.beta * math.sqrt(kn * P.m_star)
     F = kn * delta - gamma * v_n
-    if P.clip == 1 and F < 0.0:
+    if clip == 1 and F < 0.0:
         F = 0.0
     return F
 
 
 @njit(**JITN)
+def contact_stiffness(delta, P):
+    """k_n for overlap ``delta`` [N m^-1] (the stiffness of :func:`contact_law`)."""
+    if P.contact == CONTACT_LINEAR:
+        return P.kn_lin
+    s = delta * P.s_scale
+    return P.kn_disk * ((0.9117 * s * s + 0.2722 * s + 0.003324)
+                        / (s * s + 1.524 * s + 0.03159))
+
+
+@njit(**JITN)
+def contact_force(delta, v_n, P):
+    """:func:`contact_law` with the options of ``P``."""
+    return contact_law(delta, v_n, P, P.contact, P.damping, P.clip)
+
+
+@njit(**JITN)
 def drag_sums(A, c, s, v, cxi, sxi):
-    """Sums over the floe-bottom cells of |u_rel| u_rel and |u_rel|^3 (eqs. 15, 19).
+    """Sums over the floe-bottom cells of |u_rel| u_rel and |u_rel|^3 (eqs. 15, 19): the
+    paper's quadrature, cell by cell (the reference of the fast evaluation in the kernel).
 
     u_rel_j = A cos(theta + k xi_j) - v = A (c cxi_j - s sxi_j) - v, with c, s the cosine
     and sine of the phase theta at the floe centre.
@@ -135,16 +199,6 @@ def drag_sums(A, c, s, v, cxi, sxi):
         s2 += au * ur
         s3 += au * ur * ur
     return s2, s3
-
-
-@njit(**JITN)
-def drag_force_sum(A, c, s, v, cxi, sxi):
-    """Sum over the floe-bottom cells of |u_rel| u_rel only (see :func:`drag_sums`)."""
-    s2 = 0.0
-    for j in range(cxi.shape[0]):
-        ur = A * (c * cxi[j] - s * sxi[j]) - v
-        s2 += abs(ur) * ur
-    return s2
 
 
 # entries of the cell-table moments of :func:`drag_tables`
@@ -161,14 +215,29 @@ M_TSSS = 9
 M_CMAX = 10      # cos h (h: offset of the outer cell midpoints), -2 if h >= pi
 M_CH = 11        # cos h
 M_SH = 12        # sin h
-M_FAST = 13      # 1: closed form for one-sign floes usable (tables as built by FloeChain)
-N_MOM = 14
+M_FAST = 13      # 1: tables as built by FloeChain (closed forms and prefix sums usable)
+M_H = 14         # h = k (L_x - dx) / 2, phase offset of the outer cell midpoints
+M_KDX = 15       # delta = k dx, phase step between cells
+M_INV_KDX = 16   # 1 / delta
+M_NROOT = 17     # most roots of one family on a floe: floor(2 h / 2 pi) + 1
+M_HE = 18        # k L_x / 2 = h + delta / 2, phase offset of the floe's ends
+M_CHE = 19       # cos, sin of M_HE
+M_SHE = 20
+M_T1 = 21        # 1 / (2 sin(m delta / 2)), m = 1, 2, 3 (geometric sums of cos(m psi_j))
+M_T2 = 22
+M_T3 = 23
+N_MOM = 24
+# the geometric sums are evaluated with Taylor series of sin, cos of m d, |d| <= delta / 2:
+# the closed forms of drag_pass need delta up to this (k dx; 0.035 in the paper's grid)
+KDX_MAX = 0.2
+
+_TWO_PI = 2.0 * math.pi
 
 
 @njit(**JIT)
 def drag_tables(cxi, sxi, P):
-    """Moments of the cell tables for the closed-form sums of one-sign floes
-    (:func:`drag_pass`); built once per chain (``FloeChain.mom``)."""
+    """Moments of the cell tables for the closed-form sums of one-sign floes and the
+    prefix sums of the others (:func:`drag_pass`); built once per chain."""
     n = cxi.shape[0]
     mom = np.zeros(N_MOM)
     cb = 0.0
@@ -191,37 +260,49 @@ def drag_tables(cxi, sxi, P):
     mom[M_N] = n
     mom[M_CB] = cb
     mom[M_SB] = sb
-    # the cells are at offsets k xi_j in [-h, h], h = k (L_x - dx) / 2 (tables of
+    # the cells are at offsets k xi_j = -h + j k dx, h = k (L_x - dx) / 2 (tables of
     # FloeChain: cxi = cos(k xi), sxi = sin(k xi), symmetric; anything else: no fast path)
     h = 0.5 * P.k * P.L_x * (n - 1) / n
     ch = cxi[n - 1]
     sh = sxi[n - 1]
     fast = 1.0
-    if (abs(math.cos(h) - ch) > 1e-9 or abs(math.sin(h) - sh) > 1e-9
-            or abs(cxi[0] - ch) > 1e-9 or abs(sxi[0] + sh) > 1e-9):
+    if (n < 2 or abs(math.cos(h) - ch) > 1e-9 or abs(math.sin(h) - sh) > 1e-9
+            or abs(cxi[0] - ch) > 1e-9 or abs(sxi[0] + sh) > 1e-9 or h <= 0.0):
         fast = 0.0
+    else:
+        kdx = 2.0 * h / (n - 1)
+        if kdx > KDX_MAX:
+            fast = 0.0
+        for j in range(n):
+            if (abs(math.cos(-h + j * kdx) - cxi[j]) > 1e-9
+                    or abs(math.sin(-h + j * kdx) - sxi[j]) > 1e-9):
+                fast = 0.0
     mom[M_CH] = ch
     mom[M_SH] = sh
     mom[M_CMAX] = ch if h < math.pi - 1e-6 else -2.0
     mom[M_FAST] = fast
+    kdx = 2.0 * h / (n - 1) if n > 1 else 0.0
+    mom[M_H] = h
+    mom[M_KDX] = kdx
+    mom[M_INV_KDX] = 1.0 / kdx if kdx > 0.0 else 0.0
+    mom[M_NROOT] = math.floor(2.0 * h / _TWO_PI) + 1.0
+    he = h + 0.5 * kdx
+    mom[M_HE] = he
+    mom[M_CHE] = math.cos(he)
+    mom[M_SHE] = math.sin(he)
+    for mm in range(1, 4):
+        sm = math.sin(0.5 * mm * kdx)
+        mom[M_T1 + mm - 1] = 0.5 / sm if sm != 0.0 else 0.0
     return mom
 
 
 @njit(**JITN)
 def cell_sums(sc, idx, m, a, ua, vs, cxi, sxi, accumulate):
-    """:func:`drag_sums` (``accumulate``) or :func:`drag_force_sum` of the ``m`` floes
-    ``idx[:m]`` into ``sc[2]`` (and ``sc[3]``), vectorised across floes.
-
-    Bit for bit the per-floe functions (tested): the kernels are compiled without
-    fast-math (:mod:`floewave._jit`), so a sum over cells cannot be vectorised along the
-    cells (that needs re-association). Instead the floes' A = a u_amp, cos theta,
-    sin theta, v are gathered into contiguous rows of ``sc`` (rows SC_GATHER ...; lanes
-    padded with zeros to a multiple of LANES, which the loop vectoriser needs for its
-    vector body), the loop over cells is outside and the loop over floes inside: no
-    reduction in the inner loop, so it vectorises across floes, and each floe's sum runs
-    over the cells in the source's order with the source's expression. Four cells per
-    pass keep each floe's running sums in registers for four additions.
-    """
+    """:func:`drag_sums` of the ``m`` floes ``idx[:m]`` into ``sc[2]`` (and ``sc[3]`` if
+    ``accumulate``), bit for bit, vectorised across floes (the loop over cells outside, the
+    loop over the gathered floes inside: no reduction in the inner loop, and each floe's sum
+    runs over the cells in the source's order). Used on cell tables the prefix sums cannot
+    take (``mom[M_FAST] = 0``)."""
     gA = sc[SC_GATHER]
     gc = sc[SC_GATHER + 1]
     gs = sc[SC_GATHER + 2]
@@ -243,120 +324,242 @@ def cell_sums(sc, idx, m, a, ua, vs, cxi, sxi, accumulate):
     for t in range(mp):
         g2[t] = 0.0
         g3[t] = 0.0
-    nx = cxi.shape[0]
-    nb = nx - nx % 4
-    if accumulate:
-        for jb in range(0, nb, 4):
-            c0 = cxi[jb]
-            c1 = cxi[jb + 1]
-            c2 = cxi[jb + 2]
-            c3 = cxi[jb + 3]
-            s0 = sxi[jb]
-            s1 = sxi[jb + 1]
-            s2 = sxi[jb + 2]
-            s3 = sxi[jb + 3]
-            for t in range(mp):
-                A = gA[t]
-                c = gc[t]
-                s = gs[t]
-                v = gv[t]
-                p = g2[t]
-                q = g3[t]
-                ur = A * (c * c0 - s * s0) - v
-                au = abs(ur)
-                p += au * ur
-                q += au * ur * ur
-                ur = A * (c * c1 - s * s1) - v
-                au = abs(ur)
-                p += au * ur
-                q += au * ur * ur
-                ur = A * (c * c2 - s * s2) - v
-                au = abs(ur)
-                p += au * ur
-                q += au * ur * ur
-                ur = A * (c * c3 - s * s3) - v
-                au = abs(ur)
-                p += au * ur
-                q += au * ur * ur
-                g2[t] = p
-                g3[t] = q
-        for j in range(nb, nx):
-            cj = cxi[j]
-            sj = sxi[j]
-            for t in range(mp):
-                ur = gA[t] * (gc[t] * cj - gs[t] * sj) - gv[t]
-                au = abs(ur)
-                g2[t] += au * ur
-                g3[t] += au * ur * ur
-        for t in range(m):
-            sc[SC_S2, idx[t]] = g2[t]
+    for j in range(cxi.shape[0]):
+        cj = cxi[j]
+        sj = sxi[j]
+        for t in range(mp):
+            ur = gA[t] * (gc[t] * cj - gs[t] * sj) - gv[t]
+            au = abs(ur)
+            g2[t] += au * ur
+            g3[t] += au * ur * ur
+    for t in range(m):
+        sc[SC_S2, idx[t]] = g2[t]
+        if accumulate:
             sc[SC_S3, idx[t]] = g3[t]
-    else:
-        for jb in range(0, nb, 4):
-            c0 = cxi[jb]
-            c1 = cxi[jb + 1]
-            c2 = cxi[jb + 2]
-            c3 = cxi[jb + 3]
-            s0 = sxi[jb]
-            s1 = sxi[jb + 1]
-            s2 = sxi[jb + 2]
-            s3 = sxi[jb + 3]
-            for t in range(mp):
-                A = gA[t]
-                c = gc[t]
-                s = gs[t]
-                v = gv[t]
-                p = g2[t]
-                ur = A * (c * c0 - s * s0) - v
-                p += abs(ur) * ur
-                ur = A * (c * c1 - s * s1) - v
-                p += abs(ur) * ur
-                ur = A * (c * c2 - s * s2) - v
-                p += abs(ur) * ur
-                ur = A * (c * c3 - s * s3) - v
-                p += abs(ur) * ur
-                g2[t] = p
-        for j in range(nb, nx):
-            cj = cxi[j]
-            sj = sxi[j]
-            for t in range(mp):
-                ur = gA[t] * (gc[t] * cj - gs[t] * sj) - gv[t]
-                g2[t] += abs(ur) * ur
-        for t in range(m):
-            sc[SC_S2, idx[t]] = g2[t]
 
 
 @njit(**JITN)
-def drag_pass(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc, idx, everyone):
-    """Quadrature drag sums of every floe (:func:`drag_sums` / :func:`drag_force_sum`);
-    returns the number of floes that needed the cell loop.
+def _angle(x, y):
+    """atan2(y, x) of a point on the unit circle, branch-free for the vectoriser:
+    2 atan(y / (1 + x)) by the half-angle identity on the half with x >= 0, mirrored
+    otherwise; both through an odd rational atan on |t| <= tan(pi/8) after one reduction."""
+    ax = abs(x)
+    # angle of (ax, |y|) in [0, pi/2]: t = |y| / (1 + ax) = tan(angle / 2) in [0, 1]
+    t = abs(y) / (1.0 + ax)
+    # atan(t), t in [0, 1]: reduce t > tan(pi/8) by atan(t) = pi/4 + atan((t-1)/(t+1))
+    big = t > 0.41421356237309503
+    u = (t - 1.0) / (t + 1.0) if big else t
+    z = u * u
+    # atan(u) for |u| <= tan(pi/8): u + u z P(z) / Q(z) (Cephes atan, relative error ~2e-16)
+    p = ((((-8.750608600031904122785e-1 * z - 1.615753718733365076637e1) * z
+           - 7.500855792314704667340e1) * z - 1.228866684490136173410e2) * z
+         - 6.485021904942025371773e1)
+    q = (((((z + 2.485846490142306297962e1) * z + 1.650270098316988542046e2) * z
+           + 4.328810604912902668951e2) * z + 4.853903996359136964868e2) * z
+         + 1.945506571482613964425e2)
+    at = u + u * z * p / q
+    if big:
+        at += 0.25 * math.pi
+    b = 2.0 * at
+    if x < 0.0:
+        b = math.pi - b
+    return math.copysign(b, y)
+
+
+@njit(**JITN)
+def _sin_cos_small(x):
+    """(sin x, cos x) for |x| <= 0.3 by Taylor series (error < 1e-17)."""
+    x2 = x * x
+    sx = x * (1.0 - x2 * (1.0 / 6.0) * (1.0 - x2 * (1.0 / 20.0) * (
+        1.0 - x2 * (1.0 / 42.0) * (1.0 - x2 * (1.0 / 72.0) * (1.0 - x2 * (1.0 / 110.0))))))
+    cx = 1.0 - x2 * 0.5 * (1.0 - x2 * (1.0 / 12.0) * (1.0 - x2 * (1.0 / 30.0) * (
+        1.0 - x2 * (1.0 / 56.0) * (1.0 - x2 * (1.0 / 90.0) * (1.0 - x2 * (1.0 / 132.0))))))
+    return sx, cx
+
+
+@njit(**JITN)
+def prefix_sums(sc, idx, m, a, ua, vs, mom, accumulate):
+    """Quadrature drag sums of the ``m`` floes ``idx[:m]`` whose w may change sign on the
+    floe (equal to :func:`drag_sums` to rounding), into ``sc[2]`` (and ``sc[3]`` if
+    ``accumulate``); on entry ``sc[SC_S2]``, ``sc[SC_S3]`` hold the closed form's signed
+    whole-floe sums and ``sc[SC_SIG]`` its sign.
+
+    Roots. With psi = theta + phi, w = A cos psi - v > 0 between a root of the family
+    ``psi = -alpha`` and the next of ``+alpha`` (``cos alpha = v/A``), < 0 after it.
+    Telescoping the signed sums over the segments between roots, with ``F(b) = sum_{j<b}
+    w_j^2`` (G: w^3) and b the number of cells before a root::
+
+        s2 = sigma_last F(n) + 2 sum_{+ roots} F(b) - 2 sum_{- roots} F(b)
+
+    sigma_last the sign after the last root; F(n) is the closed form's whole-floe sum
+    (central moments, no cancellation). A cell within rounding of a root may land on
+    either side: its w is then ~1e-13 of A, its share nothing.
+
+    Prefix sums without tables. ``w^2 = A^2/2 (1 + cos 2 psi) - 2 A v cos psi + v^2`` and
+    ``w^3`` likewise in cos m psi, m <= 3; over cells ``psi_j = psi_0 + j delta``,
+    ``sum_{j<b} cos(m psi_j) = [sin(m e_b) - sin(m e_0)] / (2 sin(m delta / 2))`` with
+    ``e_b`` the left edge of cell b. The edge next to a root lies within delta/2 of it,
+    and cos, sin of the root are (p, +-q): ``sin(m e_b)`` follows from Chebyshev's
+    multiple angles and Taylor series of the offset (:func:`_sin_cos_small`); ``e_0`` is
+    the floe's end, theta - k L_x / 2. No table, no gather, no library call: the loops
+    over the gathered floes vectorise (tables read at a computed index do not).
+    """
+    h = mom[M_H]
+    kdx = mom[M_KDX]
+    inv_kdx = mom[M_INV_KDX]
+    nroot = int(mom[M_NROOT])
+    nx = mom[M_N]
+    cb = mom[M_CB]
+    sbb = mom[M_SB]
+    he = mom[M_HE]
+    che = mom[M_CHE]
+    she = mom[M_SHE]
+    t1 = mom[M_T1]
+    t2 = mom[M_T2]
+    t3 = mom[M_T3]
+    gA = sc[SC_GATHER]         # |A|
+    gc = sc[SC_GATHER + 1]     # cos, sin theta of |A| (theta + pi if A < 0)
+    gs = sc[SC_GATHER + 2]
+    gv = sc[SC_GATHER + 3]
+    gp = sc[SC_GATHER + 4]     # first '+' root offset from the floe centre (1e300: none)
+    gm = sc[SC_GATHER + 5]     # first '-' root offset
+    g2 = sc[SC_GATHER + 6]
+    g3 = sc[SC_GATHER + 7]
+    gl = sc[SC_GATHER + 8]     # sign after the last root
+    gpp = sc[SC_GATHER + 9]    # p = cos alpha = v / |A|, q = sin alpha
+    gqq = sc[SC_GATHER + 10]
+    mp = ((m + LANES - 1) // LANES) * LANES
+    for t in range(m):
+        i = idx[t]
+        A = a[i] * ua
+        flip = A < 0.0             # A < 0 is |A| at theta + pi
+        gA[t] = abs(A)
+        gc[t] = -sc[SC_C, i] if flip else sc[SC_C, i]
+        gs[t] = -sc[SC_S, i] if flip else sc[SC_S, i]
+        gv[t] = vs[i]
+    for t in range(m, mp):      # padding lanes: A = v = 0, results unused
+        gA[t] = 0.0
+        gc[t] = 1.0
+        gs[t] = 0.0
+        gv[t] = 0.0
+    for t in range(mp):
+        A = gA[t]
+        c = gc[t]
+        s = gs[t]
+        p = gv[t] / A if A > 0.0 else 0.0
+        p = min(max(p, -1.0), 1.0)
+        q = math.sqrt((1.0 - p) * (1.0 + p))
+        gpp[t] = p
+        gqq[t] = q
+        bp = _angle(p * c + q * s, q * c - p * s)          # alpha - theta
+        bm = _angle(p * c - q * s, -q * c - p * s)         # -alpha - theta
+        rp = bp + _TWO_PI * math.ceil((-h - bp) * (1.0 / _TWO_PI))
+        rm = bm + _TWO_PI * math.ceil((-h - bm) * (1.0 / _TWO_PI))
+        none = q == 0.0 or A == 0.0     # tangent (|v| = |A|) or w constant: no sign change
+        gp[t] = 1e300 if none else rp
+        gm[t] = 1e300 if none else rm
+    for t in range(mp):
+        rp = gp[t]
+        rm = gm[t]
+        # roots on the floe (the same expression decides below which roots count) and the
+        # sign after the last one; none: the sign of w's mean
+        n_p = math.floor((h - rp) * (1.0 / _TWO_PI)) + 1.0 if rp <= h else 0.0
+        n_m = math.floor((h - rm) * (1.0 / _TWO_PI)) + 1.0 if rm <= h else 0.0
+        lp = rp + _TWO_PI * (n_p - 1.0) if n_p > 0.0 else -1e300
+        lm = rm + _TWO_PI * (n_m - 1.0) if n_m > 0.0 else -1e300
+        mu = gA[t] * (gc[t] * cb - gs[t] * sbb) - gv[t]
+        last = 1.0 if mu > 0.0 else -1.0
+        if lp > lm:
+            last = -1.0
+        elif lm > lp:
+            last = 1.0
+        gl[t] = last
+        g2[t] = 0.0
+        g3[t] = 0.0
+    for fam in range(2):
+        rows = gp if fam == 0 else gm
+        w = 2.0 if fam == 0 else -2.0
+        ssign = 1.0 if fam == 0 else -1.0      # sin psi at the root: +q ('+'), -q ('-')
+        for kk in range(nroot):
+            off = _TWO_PI * kk
+            fk = float(kk)
+            for t in range(mp):
+                r0 = rows[t]
+                n_r = math.floor((h - r0) * (1.0 / _TWO_PI)) + 1.0 if r0 <= h else 0.0
+                on = fk < n_r
+                r = r0 + off if on else 0.0
+                b = math.floor((r + h) * inv_kdx) + 1.0
+                b = min(max(b, 0.0), nx)
+                d = (b * kdx - he) - r                   # edge of cell b minus the root
+                A = gA[t]
+                v = gv[t]
+                p = gpp[t]
+                q = ssign * gqq[t]
+                s1, c1 = _sin_cos_small(d)
+                s2d = 2.0 * s1 * c1
+                c2d = (c1 - s1) * (c1 + s1)
+                s3d = s1 * (3.0 - 4.0 * s1 * s1)
+                c3d = c1 * (4.0 * c1 * c1 - 3.0)
+                S1 = (q * c1 + p * s1) * t1
+                S2 = (2.0 * p * q * c2d + (p - q) * (p + q) * s2d) * t2
+                F = (0.5 * A * A + v * v) * b + 0.5 * A * A * S2 - 2.0 * A * v * S1
+                g2[t] += w * F if on else 0.0
+                if accumulate:
+                    S3 = (q * (3.0 - 4.0 * q * q) * c3d + p * (4.0 * p * p - 3.0) * s3d) * t3
+                    G = (0.25 * A * A * A * (3.0 * S1 + S3) - 1.5 * A * A * v * (b + S2)
+                         + 3.0 * A * v * v * S1 - v * v * v * b)
+                    g3[t] += w * G if on else 0.0
+    for t in range(mp):
+        # the floe's start edge e_0 = theta - k L_x / 2, weighted by the net root weight
+        rp = gp[t]
+        rm = gm[t]
+        n_p = math.floor((h - rp) * (1.0 / _TWO_PI)) + 1.0 if rp <= h else 0.0
+        n_m = math.floor((h - rm) * (1.0 / _TWO_PI)) + 1.0 if rm <= h else 0.0
+        wnet = 2.0 * (n_p - n_m)
+        A = gA[t]
+        v = gv[t]
+        c = gc[t]
+        s = gs[t]
+        se = s * che - c * she
+        ce = c * che + s * she
+        S1 = se * t1
+        S2 = 2.0 * se * ce * t2
+        g2[t] -= wnet * (0.5 * A * A * S2 - 2.0 * A * v * S1)
+        if accumulate:
+            S3 = se * (3.0 - 4.0 * se * se) * t3
+            g3[t] -= wnet * (0.25 * A * A * A * (3.0 * S1 + S3) - 1.5 * A * A * v * S2
+                             + 3.0 * A * v * v * S1)
+    for t in range(m):
+        i = idx[t]
+        sig = sc[SC_SIG, i]
+        last = gl[t]
+        sc[SC_S2, i] = last * (sig * sc[SC_S2, i]) + g2[t]
+        if accumulate:
+            sc[SC_S3, i] = max(last * (sig * sc[SC_S3, i]) + g3[t], 0.0)
+
+
+@njit(**JITN)
+def drag_pass(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc, idx):
+    """Quadrature drag sums of every floe of the flattened ensemble (equal to
+    :func:`drag_sums` floe by floe, to rounding); returns the number of floes where w
+    changes sign.
 
     ``theta_i`` from ``ck, sk = cos, sin(k x_i)`` and ``cwt, swt = cos, sin(omega t)``;
     fills ``sc[0], sc[1] = cos, sin theta_i``, ``sc[2] = s2``, ``sc[3] = s3`` (only if
-    ``accumulate``); ``sc`` has N_SC rows, the others and ``idx`` are scratch; ``mom`` from
+    ``accumulate``); the other rows of ``sc`` and ``idx`` are scratch; ``mom`` from
     :func:`drag_tables`.
 
-    Two passes: a branch-free (vectorised) loop over all floes bounds u_rel on the floe
-    (the cosine over the span [theta - h, theta + h] lies between its end values, or
-    reaches +-1 inside) and evaluates the sums of the floes where u_rel has one sign in
-    closed form from the table moments: with mu the mean of u_j and d_j = u_j - mu,
-    ``sum u^2 = n mu^2 + sum d^2``, ``sum u^3 = n mu^3 + 3 mu sum d^2 + sum d^3``
-    (sums of non-negative terms up to the small third moment: no cancellation; equal to
-    the cell loop to rounding). Only the other floes run the cell loop
-    (:func:`cell_sums`, vectorised across them). ``everyone``: no closed forms, every floe
-    by the cell loop (long floes, where one-sign floes are rare).
+    A branch-free (vectorised) loop over all floes bounds w on the floe (the cosine over
+    the span [theta - h, theta + h] lies between its end values, or reaches +-1 inside) and
+    evaluates the whole-floe sums in closed form: with mu the mean of w_j and
+    d_j = w_j - mu, ``sum w^2 = n mu^2 + sum d^2``, ``sum w^3 = n mu^3 + 3 mu sum d^2 +
+    sum d^3`` (no cancellation). The floes where w may change sign are then completed by
+    :func:`prefix_sums` (or the cell loop :func:`cell_sums` on foreign tables).
     """
     n = ck.shape[0]
     if sc.shape[0] < N_SC or sc.shape[1] < n + LANES or idx.shape[0] < n:
-        raise ValueError("drag_pass: scratch too small (sc needs N_SC rows and N_f + LANES"
+        raise ValueError("drag_pass: scratch too small (sc needs N_SC rows and R N_f + LANES"
                          " columns: new_scratch)")
-    if everyone:
-        for i in range(n):
-            sc[SC_C, i] = ck[i] * cwt + sk[i] * swt
-            sc[SC_S, i] = sk[i] * cwt - ck[i] * swt
-            idx[i] = i
-        cell_sums(sc, idx, n, a, P.u_amp, vs, cxi, sxi, accumulate)
-        return n
     nn = mom[M_N]
     cb = mom[M_CB]
     sbb = mom[M_SB]
@@ -401,9 +604,14 @@ def drag_pass(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc, idx, ev
             d3 = (X * X * X * tccc - 3.0 * X * X * Y * tccs
                   + 3.0 * X * Y * Y * tcss - Y * Y * Y * tsss)
             sc[SC_S3, i] = sig * (nn * mu * mu * mu + 3.0 * mu * d2 + d3)
+        sc[SC_SIG, i] = sig
         sc[SC_FLAG, i] = 0.0 if w1 * w2 > 0.0 else 1.0
-    m = general_floes(sc[SC_FLAG, :n], idx, mom[M_FAST] < 0.5)
-    cell_sums(sc, idx, m, a, ua, vs, cxi, sxi, accumulate)
+    if mom[M_FAST] > 0.5:
+        m = general_floes(sc[SC_FLAG, :n], idx, False)
+        prefix_sums(sc, idx, m, a, ua, vs, mom, accumulate)
+    else:
+        m = general_floes(sc[SC_FLAG, :n], idx, True)
+        cell_sums(sc, idx, m, a, ua, vs, cxi, sxi, accumulate)
     return m
 
 
@@ -412,189 +620,144 @@ def floe_drag(A, c, s, v, accumulate, P, cxi, sxi):
     """(s2, s3): drag sums of one floe, by quadrature or exactly; s3 = 0 unless
     ``accumulate`` (the |u_rel|^3 sum is only needed in averaging windows)."""
     if P.drag == DRAG_EXACT:
-        if accumulate:
-            return drag_sums_exact(A, c, s, v, P.geom)
-        return drag_force_exact(A, c, s, v, P.geom), 0.0
-    if accumulate:
-        return drag_sums(A, c, s, v, cxi, sxi)
-    return drag_force_sum(A, c, s, v, cxi, sxi), 0.0
-
-
-@njit(**JITN)
-def wave_drag_update(i, x, a, s, s2, s3, P, F, accumulate, stats):
-    """F_i = (1 + C_m) F_w,i + F_d,i from sin(theta_i) = ``s`` and the drag sums; stats."""
-    Fw = P.c_wave * a[i] * s
-    Fd = P.c_drag * s2
-    F[i] = P.one_cm * Fw + Fd
-    if accumulate:
-        stats[ST_S3, i] += s3
-        stats[ST_X, i] += x[i]
-        stats[ST_FW, i] += abs(Fw)
-        stats[ST_FD, i] += abs(Fd)
-
-
-@njit(**JITN)
-def eval_forces(x, vs, a, x0, ck, sk, cwt, swt, P, cxi, sxi, F, in_contact, accumulate,
-                stats, mom, sc, idx, two_pass):
-    """Total force of eq. 8 scaled to the left-hand side, (1 + C_m) F_w + F_d + F_c + F_s,
-    on every floe at positions ``x`` and velocities ``vs``.
-
-    The phase theta_i = k x_i - omega t enters through ck, sk = cos, sin(k x_i) and
-    cwt, swt = cos, sin(omega t): cos theta = ck cwt + sk swt, sin theta = sk cwt - ck swt.
-    Fills ``F`` [N]; when ``accumulate``, adds this step to ``stats`` and counts contact
-    onsets against ``in_contact`` (always updated).
-
-    Drag by :func:`drag_pass` / :func:`~floewave._exact.drag_pass_exact` (``mom``, scratch
-    ``sc`` of N_SC rows, ``idx``); ``two_pass``: closed forms where they apply, else the
-    general evaluation of every floe. Returns the number of floes that needed the general
-    evaluation (-1 without ``two_pass``).
-    """
-    n = x.shape[0]
-    m = -1
-    # wave (Froude-Krylov) + ice-water drag: the drag sums of all floes first, then one
-    # loop over the floes
-    if P.drag == DRAG_EXACT:
-        if two_pass:
-            m = drag_pass_exact(ck, sk, cwt, swt, a, P.u_amp, vs, P.geom, accumulate, sc,
-                                idx)
-        else:
-            for i in range(n):
-                c = ck[i] * cwt + sk[i] * swt
-                s = sk[i] * cwt - ck[i] * swt
-                sc[SC_S, i] = s
-                if accumulate:
-                    s2, s3 = drag_sums_exact(a[i] * P.u_amp, c, s, vs[i], P.geom)
-                    sc[SC_S3, i] = s3
-                else:
-                    s2 = drag_force_exact(a[i] * P.u_amp, c, s, vs[i], P.geom)
-                sc[SC_S2, i] = s2
+        s2, s3 = drag_sums_exact(A, c, s, v, P.geom)
     else:
-        m = drag_pass(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc, idx,
-                      not two_pass)
-        if not two_pass:
-            m = -1
-    for i in range(n):
-        wave_drag_update(i, x, a, sc[SC_S, i], sc[SC_S2, i], sc[SC_S3, i], P, F,
-                         accumulate, stats)
-    # contacts between neighbours i, i+1
-    Fc_prev = 0.0   # force of pair (i-1, i) pushing floe i towards +x
-    for i in range(n - 1):
-        gap = x[i + 1] - x[i] - P.L_x
-        Fc = 0.0
-        if gap < 0.0:
-            Fc = contact_force(-gap, vs[i + 1] - vs[i], P)
-            F[i] -= Fc
-            F[i + 1] += Fc
-        if accumulate:
-            stats[ST_GAP, i] += gap
-            stats[ST_FC, i] += abs(Fc_prev - Fc)
-            if gap < 0.0:
-                stats[ST_CONTACT, i] += 1.0
-                if in_contact[i] == 0:
-                    stats[ST_COLL, i] += 1.0
-        in_contact[i] = 1 if gap < 0.0 else 0
-        Fc_prev = Fc
-    if accumulate:
-        stats[ST_FC, n - 1] += abs(Fc_prev)
-    # edge springs (boom and beach) on the first and last floe
-    F[0] -= P.k_s * (x[0] - x0[0])
-    F[n - 1] -= P.k_s * (x[n - 1] - x0[n - 1])
-    return m
+        s2, s3 = drag_sums(A, c, s, v, cxi, sxi)
+    return s2, (s3 if accumulate else 0.0)
 
 
-@njit(**JIT)
-def initial_acceleration(x, u, a, x0, istep, P, cxi, sxi, acc, in_contact):
-    """acc = F / ((1 + C_m) m) at step ``istep`` with velocities ``u`` (fills ``acc``)."""
-    F = np.empty_like(x)
-    dummy = np.zeros((N_STATS, x.shape[0]))
-    wt = 2.0 * math.pi / P.n_t * (istep % P.n_t)
-    ck = np.cos(P.k * x)
-    sk = np.sin(P.k * x)
-    eval_forces(x, u, a, x0, ck, sk, math.cos(wt), math.sin(wt), P, cxi, sxi, F, in_contact,
-                False, dummy, np.zeros(N_MOM), np.zeros((N_SC, x.shape[0] + LANES)),
-                np.zeros(x.shape[0], np.int64), False)
-    for i in range(x.shape[0]):
-        acc[i] = F[i] * P.inv_mass
+@functools.lru_cache(maxsize=None)
+def make_advance(opts: KernelOptions):
+    """The time loop for ``opts``, compiled once per process (cached on disk by numba).
 
+    ``advance(x, u, acc, a, x0, in_contact, istep, nsteps, nf, P, cxi, sxi, mom, stats,
+    work, idx, init) -> istep`` advances the R = x.size / nf chains ``nsteps``
+    steps in place (flattened (R, N_f) arrays: positions [m], velocities [m s^-1],
+    accelerations [m s^-2] at step ``istep``; ``a`` the amplitudes [m], ``x0`` the initial
+    positions on whose floes 0 and N_f - 1 the edge springs act, ``in_contact`` int8, 1 if
+    pair (j, j+1) was in contact at the last evaluation). ``init``: first evaluate the
+    forces at the current state with v* = u and set ``acc`` from them (a new amplitude
+    profile); only in a loop built without ``accumulate``. ``stats`` (N_STATS, R N_f) gets
+    every step when built with ``accumulate``. ``work`` (:func:`new_work`), ``idx``
+    (int64, R N_f) are scratch; ``cxi, sxi`` the cell tables, ``mom`` their
+    moments.
 
-@njit(**JIT)
-def advance(x, u, acc, a, x0, in_contact, istep, nsteps, accumulate, P, cxi, sxi, stats,
-            work, mom, idx):
-    """Advance the floe chain ``nsteps`` time steps in place; return the new step index.
-
-    Parameters
-    ----------
-    x, u, acc : (N_f,) positions [m], velocities [m s^-1], accelerations [m s^-2] at step
-        ``istep`` (updated in place).
-    a : (N_f,) wave amplitude attached to each floe [m].
-    x0 : (N_f,) initial positions (edge springs act on floes 0 and N_f - 1) [m].
-    in_contact : (N_f,) int8, 1 if pair (i, i+1) was in contact at the last step.
-    istep : int, index of the current step (t = istep dt; the phase is taken modulo n_t).
-    accumulate : bool, add this window to ``stats`` (rows ST_*).
-    cxi, sxi : (n_x,) cos(k xi_j), sin(k xi_j) at the cell midpoints xi_j relative to the
-        floe centre.
-    work : (N_WORK, N_f + LANES) scratch (:func:`new_work`): half-step velocity, v*,
-        force, cos(k x), sin(k x), and rows 5... for the drag (``sc`` of
-        :func:`drag_pass`, N_SC rows).
-    mom : :func:`drag_tables` of ``cxi, sxi``; idx : (N_f,) int64 scratch.
-
-    cos, sin(k x_i) are computed once per call and then rotated by k dx_i each step
+    cos, sin(k x_j) are computed once per call and then rotated by k dx_j each step
     (Taylor series of the rotation to O((k dx)^4), k dx ~ 1e-5: exact to rounding).
-
-    The drag is evaluated in two passes (:func:`drag_pass`, :func:`~floewave._exact.
-    drag_pass_exact`: closed forms for the floes where they apply, vectorised over floes,
-    the general evaluation only for the others) unless a step finds more than 3/4 of the
-    floes needing the general one (long floes: one-sign floes are rare there); then the
-    plain per-floe loop is used for TWO_PASS_RETRY steps before the next two-pass trial.
-    Same results to rounding either way.
     """
-    n = x.shape[0]
-    if work.shape[0] < N_WORK or work.shape[1] < n + LANES or idx.shape[0] < n:
-        raise ValueError("advance: scratch too small (work needs N_WORK rows and N_f + LANES"
-                         " columns: new_work)")
-    dt = P.dt
-    uh = work[0, :n]
-    vs = work[1, :n]
-    F = work[2, :n]
-    ck = work[3, :n]
-    sk = work[4, :n]
-    sc = work[5:]
-    for i in range(n):
-        ck[i] = math.cos(P.k * x[i])
-        sk[i] = math.sin(P.k * x[i])
-    two_pi_nt = 2.0 * math.pi / P.n_t
-    # drag in two passes (closed form where it applies, the general evaluation for the
-    # rest) unless most floes need the general one (long floes): then the plain per-floe
-    # loop, and a new two-pass trial every TWO_PASS_RETRY steps
-    wait = 0
-    for _ in range(nsteps):
-        istep += 1
-        for i in range(n):
-            uh[i] = u[i] + 0.5 * dt * acc[i]
-            if P.integrator == INTEG_PREDICTOR:
-                vs[i] = u[i] + dt * acc[i]
+    contact, damping, clip, integrator, drag, accumulate = opts
+    contact = int(contact)
+    damping = int(damping)
+    clip = int(clip)
+    integrator = int(integrator)
+    drag = int(drag)
+    accumulate = bool(accumulate)
+
+    @njit(**JIT)
+    def advance(x, u, acc, a, x0, in_contact, istep, nsteps, nf, P, cxi, sxi, mom, stats,
+                work, idx, init):
+        nt = x.shape[0]
+        if (work.shape[0] < N_WORK or work.shape[1] < nt + LANES or idx.shape[0] < nt
+                or nf < 2 or nt % nf != 0):
+            raise ValueError("advance: scratch too small (work needs N_WORK rows and"
+                             " R N_f + LANES columns: new_work) or R N_f not a multiple"
+                             " of N_f >= 2")
+        if init and accumulate:
+            raise ValueError("advance: init only in a loop that does not accumulate")
+        R = nt // nf
+        dt = P.dt
+        uh = work[W_UH, :nt]
+        vs = work[W_VS, :nt]
+        F = work[W_F, :nt]
+        ck = work[W_CK, :nt]
+        sk = work[W_SK, :nt]
+        Fc = work[W_FC, :nt]
+        sc = work[W_SC:]
+        for j in range(nt):
+            ck[j] = math.cos(P.k * x[j])
+            sk[j] = math.sin(P.k * x[j])
+        two_pi_nt = 2.0 * math.pi / P.n_t
+        step = -1 if init else 0
+        while step < nsteps:
+            if step >= 0:
+                istep += 1
+                for j in range(nt):
+                    uh[j] = u[j] + 0.5 * dt * acc[j]
+                    if integrator == INTEG_PREDICTOR:
+                        vs[j] = u[j] + dt * acc[j]
+                    else:
+                        vs[j] = uh[j]
+                    dxj = dt * uh[j]
+                    x[j] += dxj
+                    e = P.k * dxj
+                    e2 = e * e
+                    ce = 1.0 - 0.5 * e2 + e2 * e2 * (1.0 / 24.0)
+                    se = e * (1.0 - e2 * (1.0 / 6.0))
+                    c_new = ck[j] * ce - sk[j] * se
+                    sk[j] = sk[j] * ce + ck[j] * se
+                    ck[j] = c_new
             else:
-                vs[i] = uh[i]
-            dxi = dt * uh[i]
-            x[i] += dxi
-            e = P.k * dxi
-            e2 = e * e
-            ce = 1.0 - 0.5 * e2 + e2 * e2 * (1.0 / 24.0)
-            se = e * (1.0 - e2 * (1.0 / 6.0))
-            c_new = ck[i] * ce - sk[i] * se
-            sk[i] = sk[i] * ce + ck[i] * se
-            ck[i] = c_new
-        wt = two_pi_nt * (istep % P.n_t)
-        m = eval_forces(x, vs, a, x0, ck, sk, math.cos(wt), math.sin(wt), P, cxi, sxi, F,
-                        in_contact, accumulate, stats, mom, sc, idx, wait == 0)
-        if m < 0:
-            wait -= 1
-        elif 4 * m > 3 * n:
-            wait = TWO_PASS_RETRY
-        for i in range(n):
-            acc[i] = F[i] * P.inv_mass
-            u[i] = uh[i] + 0.5 * dt * acc[i]
-    return istep
+                for j in range(nt):
+                    vs[j] = u[j]
+            wt = two_pi_nt * (istep % P.n_t)
+            cwt = math.cos(wt)
+            swt = math.sin(wt)
+            # --- forces of eq. 8, scaled to the left-hand side: (1 + C_m) F_w + F_d + F_c
+            # + F_s. Wave (Froude-Krylov) and ice-water drag: the drag sums of all floes
+            # first, then one loop over the floes
+            if drag == DRAG_EXACT:
+                drag_pass_exact(ck, sk, cwt, swt, a, P.u_amp, vs, P.geom, accumulate, sc,
+                                idx)
+            else:
+                drag_pass(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc, idx)
+            for j in range(nt):
+                Fw = P.c_wave * a[j] * sc[SC_S, j]
+                Fd = P.c_drag * sc[SC_S2, j]
+                F[j] = P.one_cm * Fw + Fd
+                if accumulate:
+                    stats[ST_S3, j] += sc[SC_S3, j]
+                    stats[ST_X, j] += x[j]
+                    stats[ST_FW, j] += abs(Fw)
+                    stats[ST_FD, j] += abs(Fd)
+            # contacts between neighbours j, j+1 of each replica
+            for r in range(R):
+                o = r * nf
+                for j in range(o, o + nf - 1):
+                    gap = x[j + 1] - x[j] - P.L_x
+                    touch = gap < 0.0
+                    f = 0.0
+                    if touch:       # (most pairs are apart: the law only where they touch)
+                        f = contact_law(-gap, vs[j + 1] - vs[j], P, contact, damping, clip)
+                    Fc[j] = f
+                    if accumulate:
+                        stats[ST_GAP, j] += gap
+                        if touch:
+                            stats[ST_CONTACT, j] += 1.0
+                            if in_contact[j] == 0:
+                                stats[ST_COLL, j] += 1.0
+                    in_contact[j] = 1 if touch else 0
+                Fc[o + nf - 1] = 0.0
+                F[o] -= Fc[o]
+                if accumulate:
+                    stats[ST_FC, o] += abs(Fc[o])
+                for j in range(o + 1, o + nf):
+                    F[j] = (F[j] + Fc[j - 1]) - Fc[j]
+                    if accumulate:
+                        stats[ST_FC, j] += abs(Fc[j - 1] - Fc[j])
+                # edge springs (boom and beach) on the first and last floe
+                F[o] -= P.k_s * (x[o] - x0[o])
+                F[o + nf - 1] -= P.k_s * (x[o + nf - 1] - x0[o + nf - 1])
+            if step >= 0:
+                for j in range(nt):
+                    acc[j] = F[j] * P.inv_mass
+                    u[j] = uh[j] + 0.5 * dt * acc[j]
+            else:
+                for j in range(nt):
+                    acc[j] = F[j] * P.inv_mass
+            step += 1
+        return istep
+
+    return advance
 
 
 @njit(**JIT)
@@ -607,7 +770,6 @@ def confined_window(x0, a, nsteps, P, cxi, sxi, stats):
     two_pi_nt = 2.0 * math.pi / P.n_t
     ck = np.cos(P.k * x0)
     sk = np.sin(P.k * x0)
-    F = np.empty(n)
     for istep in range(nsteps):
         wt = two_pi_nt * (istep % P.n_t)
         cwt = math.cos(wt)
@@ -616,17 +778,23 @@ def confined_window(x0, a, nsteps, P, cxi, sxi, stats):
             c = ck[i] * cwt + sk[i] * swt
             s = sk[i] * cwt - ck[i] * swt
             s2, s3 = floe_drag(a[i] * P.u_amp, c, s, 0.0, True, P, cxi, sxi)
-            wave_drag_update(i, x0, a, s, s2, s3, P, F, True, stats)
+            Fw = P.c_wave * a[i] * s
+            Fd = P.c_drag * s2
+            stats[ST_S3, i] += s3
+            stats[ST_X, i] += x0[i]
+            stats[ST_FW, i] += abs(Fw)
+            stats[ST_FD, i] += abs(Fd)
 
 
 def new_scratch(n: int) -> np.ndarray:
     """Drag scratch ``sc`` of :func:`drag_pass` / :func:`~floewave._exact.drag_pass_exact`
-    for ``n`` floes: (N_SC, n + LANES)."""
+    for ``n`` floes (all replicas): (N_SC, n + LANES)."""
     return np.zeros((N_SC, n + LANES))
 
 
 def new_work(n: int) -> np.ndarray:
-    """Scratch ``work`` of :func:`advance` for ``n`` floes: (N_WORK, n + LANES)."""
+    """Scratch ``work`` of the time loop for ``n`` floes (all replicas):
+    (N_WORK, n + LANES)."""
     return np.zeros((N_WORK, n + LANES))
 
 

@@ -20,7 +20,13 @@ __all__ = ["FloeChain", "NumericalError", "march_amplitude", "dissipation", "res
 
 
 class FloeChain:
-    """State of the 1-D floe chain (MODEL.md §1) and the compiled time loop around it."""
+    """State of the 1-D floe chain (MODEL.md §1), or of R chains in lockstep (an ensemble:
+    one row of ``x0`` per replica), and the compiled time loop around it.
+
+    The R chains share every coefficient and differ only in state; one call of the kernel
+    advances them all (:func:`floewave._kernels.make_advance`), replica by replica the same
+    numbers whatever R is.
+    """
 
     def __init__(self, cfg: ModelConfig, k: float, x0: np.ndarray | None = None):
         self.cfg = cfg
@@ -31,28 +37,42 @@ class FloeChain:
         self.sxi = np.sin(k * xi)
         n = cfg.n_floes
         # x_1 = L_x / 2, x_{i+1} = x_i + L_x + d_f: the ice edge is x = 0 (uniform
-        # placement; an ensemble passes each replica's own arrangement)
+        # placement; an ensemble passes each replica's own arrangement as a row)
         if x0 is None:
             x0 = cfg.L_x / 2.0 + np.arange(n) * (cfg.L_x + cfg.d_f)
         self.x0 = np.ascontiguousarray(x0, dtype=float)
-        self.work = K.new_work(n)
+        if self.x0.ndim not in (1, 2) or self.x0.shape[-1] < 2:
+            raise ValueError(f"x0 must be (N_f,) or (R, N_f) with N_f >= 2, not"
+                             f" {self.x0.shape}")
+        self.n = self.x0.shape[-1]
+        self.replicas = self.x0.size // self.n
+        self.work = K.new_work(self.x0.size)
         self.mom = K.drag_tables(self.cxi, self.sxi, self.P)
-        self.idx = np.zeros(n, np.int64)
+        self.idx = np.zeros(self.x0.size, np.int64)
+        self._spin = K.make_advance(K.kernel_options(self.P, False))
+        self._average = K.make_advance(K.kernel_options(self.P, True))
         self.reset()
 
     def reset(self) -> None:
         """Back to the initial state: floes at rest at x0, t = 0."""
-        n = self.x0.shape[0]
         self.x = self.x0.copy()
-        self.u = np.zeros(n)
-        self.acc = np.zeros(n)
-        self.in_contact = np.zeros(n, dtype=np.int8)
+        self.u = np.zeros_like(self.x0)
+        self.acc = np.zeros_like(self.x0)
+        self.in_contact = np.zeros(self.x0.shape, dtype=np.int8)
         self.istep = 0
         self._acc_ready = False
         self._acc_a = np.zeros(0)
 
+    def _loop(self, fn, a, nsteps, stats, init) -> None:
+        self.istep = fn(self.x.ravel(), self.u.ravel(), self.acc.ravel(), a.ravel(),
+                        self.x0.ravel(), self.in_contact.ravel(), self.istep, nsteps, self.n,
+                        self.P, self.cxi, self.sxi, self.mom, stats, self.work,
+                        self.idx, init)
+
     def run(self, a: np.ndarray, nsteps: int, stats: np.ndarray | None = None) -> None:
-        """Advance ``nsteps`` steps with amplitudes ``a``; accumulate into ``stats`` if given.
+        """Advance ``nsteps`` steps with amplitudes ``a`` (shape of ``x0``, or one profile
+        for every replica); accumulate into ``stats`` if given ((N_STATS, N_f) for one
+        chain, (N_STATS, R, N_f) or (N_STATS, R N_f) for R).
 
         The first half-kick uses the acceleration of the current state *with these
         amplitudes*: it is recomputed whenever ``a`` differs from the amplitudes it was
@@ -60,26 +80,29 @@ class FloeChain:
         amplitudes (issue *trust*: that carried the old wave force into one step per
         iteration).
         """
+        a = np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=float), self.x0.shape))
         if not self._acc_ready or not np.array_equal(a, self._acc_a):
-            K.initial_acceleration(self.x, self.u, a, self.x0, self.istep, self.P, self.cxi,
-                                   self.sxi, self.acc, self.in_contact)
-            self._acc_a = np.array(a, dtype=float)
+            self._loop(self._spin, a, 0, np.zeros((K.N_STATS, 0)), True)
+            self._acc_a = a.copy()
             self._acc_ready = True
-        acc_on = stats is not None
         if stats is None:
-            stats = np.zeros((K.N_STATS, 0))
-        self.istep = K.advance(self.x, self.u, self.acc, a, self.x0, self.in_contact,
-                               self.istep, nsteps, acc_on, self.P, self.cxi, self.sxi, stats,
-                               self.work, self.mom, self.idx)
+            self._loop(self._spin, a, nsteps, np.zeros((K.N_STATS, 0)), False)
+        else:
+            flat = stats.reshape(K.N_STATS, self.x0.size)
+            if not np.shares_memory(flat, stats):
+                raise ValueError("stats must be a contiguous (N_STATS, ...) array")
+            self._loop(self._average, a, nsteps, flat, False)
 
     def check(self) -> None:
         """Raise :class:`NumericalError` on a non-finite state or floes out of order."""
         if not (np.all(np.isfinite(self.x)) and np.all(np.isfinite(self.u))):
             raise NumericalError(f"DEM diverged: non-finite state at step {self.istep}")
-        if self.x.shape[0] > 1 and np.any(np.diff(self.x) <= 0.0):
-            i = int(np.argmin(np.diff(self.x)))
+        d = np.diff(self.x, axis=-1).reshape(self.replicas, -1)
+        if np.any(d <= 0.0):
+            r, i = np.unravel_index(int(np.argmin(d)), d.shape)
+            where = f" (replica {r})" if self.replicas > 1 else ""
             raise NumericalError(f"floes {i + 1} and {i + 2} passed through each other at"
-                                 f" step {self.istep}")
+                                 f" step {self.istep}{where}")
 
 
 class Window:
@@ -199,7 +222,8 @@ def run_point(cfg: ModelConfig,
     k, c_g = solve_dispersion(cfg)
     alpha_c = alpha_confined(cfg)
     R = cfg.n_chains
-    chains = [FloeChain(cfg, k, x0) for x0 in initial_positions(cfg)]
+    x0s = np.array(initial_positions(cfg))
+    chain = FloeChain(cfg, k, x0s)         # the R replicas in one kernel
     n = cfg.n_floes
     n_t = cfg.n_t
     a = np.full((R, n), cfg.a0)          # per replica (rows equal under coupling "mean")
@@ -213,20 +237,19 @@ def run_point(cfg: ModelConfig,
     a_new = a
     a_prev = a
     for it in range(1, cfg.max_iterations + 1):
-        windows = []
-        for r, chain in enumerate(chains):
-            stats = K.new_stats(n)
-            if cfg.confined:
-                K.confined_window(chain.x0, a[r], cfg.nT * n_t, chain.P, chain.cxi,
-                                  chain.sxi, stats)
-            else:
-                if not cfg.warm_start:
-                    chain.reset()
-                n0 = cfg.n0 if (it == 1 or not cfg.warm_start) else cfg.n0_warm
-                chain.run(a[r], n0 * n_t)
-                chain.run(a[r], cfg.nT * n_t, stats)
-                chain.check()
-            windows.append(Window(cfg, stats, cfg.nT * n_t, chain.x0))
+        stats = np.zeros((K.N_STATS, R, n))
+        if cfg.confined:
+            for r in range(R):
+                K.confined_window(x0s[r], a[r], cfg.nT * n_t, chain.P, chain.cxi,
+                                  chain.sxi, stats[:, r, :])
+        else:
+            if not cfg.warm_start:
+                chain.reset()
+            n0 = cfg.n0 if (it == 1 or not cfg.warm_start) else cfg.n0_warm
+            chain.run(a, n0 * n_t)
+            chain.run(a, cfg.nT * n_t, stats)
+            chain.check()
+        windows = [Window(cfg, stats[:, r, :], cfg.nT * n_t, x0s[r]) for r in range(R)]
         S = np.array([dissipation(cfg, w.s3_mean) for w in windows])
         if cfg.coupling == "mean":
             a_new = np.broadcast_to(march_amplitude(cfg, S.mean(axis=0), c_g, k), (R, n))
