@@ -83,8 +83,8 @@ SC_S2 = 2        # drag sum of |u_rel| u_rel
 SC_S3 = 3        # drag sum of |u_rel|^3 (accumulating steps only)
 SC_FLAG = 4      # 1: the floe needs the general evaluation
 SC_SIG = 5       # sign the closed form gave the floe's whole-floe sums
-SC_GATHER = 6    # rows 6-16: the general floes gathered by cell_sums / prefix_sums
-N_GATHER = 11
+SC_GATHER = 6    # rows 6-18: the general floes gathered by cell_sums / prefix_sums
+N_GATHER = 13
 N_SC = SC_GATHER + N_GATHER
 W_UH = 0         # rows of advance's scratch ``work``: half-step velocity,
 W_VS = 1         # velocity v* of the forces,
@@ -227,9 +227,10 @@ M_T1 = 21        # 1 / (2 sin(m delta / 2)), m = 1, 2, 3 (geometric sums of cos(
 M_T2 = 22
 M_T3 = 23
 N_MOM = 24
-# the geometric sums are evaluated with Taylor series of sin, cos of m d, |d| <= delta / 2:
-# the closed forms of drag_pass need delta up to this (k dx; 0.035 in the paper's grid)
-KDX_MAX = 0.2
+# the geometric sums are evaluated with Taylor series of sin, cos of d, |d| <= delta / 2
+# (:func:`_sin_cos_small`): the prefix sums of drag_pass need delta = k dx up to this (at
+# most 0.035 in the paper's grid); finer tables are summed cell by cell
+KDX_MAX = 0.05
 
 _TWO_PI = 2.0 * math.pi
 
@@ -368,12 +369,13 @@ def _angle(x, y):
 
 @njit(**JITN)
 def _sin_cos_small(x):
-    """(sin x, cos x) for |x| <= 0.3 by Taylor series (error < 1e-17)."""
+    """(sin x, cos x) for |x| <= KDX_MAX / 2 = 0.025 by Taylor series to x^7, x^8 (error
+    < 1e-20)."""
     x2 = x * x
     sx = x * (1.0 - x2 * (1.0 / 6.0) * (1.0 - x2 * (1.0 / 20.0) * (
-        1.0 - x2 * (1.0 / 42.0) * (1.0 - x2 * (1.0 / 72.0) * (1.0 - x2 * (1.0 / 110.0))))))
+        1.0 - x2 * (1.0 / 42.0))))
     cx = 1.0 - x2 * 0.5 * (1.0 - x2 * (1.0 / 12.0) * (1.0 - x2 * (1.0 / 30.0) * (
-        1.0 - x2 * (1.0 / 56.0) * (1.0 - x2 * (1.0 / 90.0) * (1.0 - x2 * (1.0 / 132.0))))))
+        1.0 - x2 * (1.0 / 56.0))))
     return sx, cx
 
 
@@ -428,6 +430,8 @@ def prefix_sums(sc, idx, m, a, ua, vs, mom, accumulate):
     gl = sc[SC_GATHER + 8]     # sign after the last root
     gpp = sc[SC_GATHER + 9]    # p = cos alpha = v / |A|, q = sin alpha
     gqq = sc[SC_GATHER + 10]
+    gc2 = sc[SC_GATHER + 11]   # cos 2 alpha = p^2 - q^2, and cos 3 alpha
+    gc3 = sc[SC_GATHER + 12]
     mp = ((m + LANES - 1) // LANES) * LANES
     for t in range(m):
         i = idx[t]
@@ -451,31 +455,44 @@ def prefix_sums(sc, idx, m, a, ua, vs, mom, accumulate):
         q = math.sqrt((1.0 - p) * (1.0 + p))
         gpp[t] = p
         gqq[t] = q
+        gc2[t] = (p - q) * (p + q)
+        gc3[t] = p * (4.0 * p * p - 3.0)
         bp = _angle(p * c + q * s, q * c - p * s)          # alpha - theta
         bm = _angle(p * c - q * s, -q * c - p * s)         # -alpha - theta
         rp = bp + _TWO_PI * math.ceil((-h - bp) * (1.0 / _TWO_PI))
         rm = bm + _TWO_PI * math.ceil((-h - bm) * (1.0 / _TWO_PI))
         none = q == 0.0 or A == 0.0     # tangent (|v| = |A|) or w constant: no sign change
-        gp[t] = 1e300 if none else rp
-        gm[t] = 1e300 if none else rm
-    for t in range(mp):
-        rp = gp[t]
-        rm = gm[t]
+        if none:
+            rp = 1e300
+            rm = 1e300
+        gp[t] = rp
+        gm[t] = rm
         # roots on the floe (the same expression decides below which roots count) and the
         # sign after the last one; none: the sign of w's mean
         n_p = math.floor((h - rp) * (1.0 / _TWO_PI)) + 1.0 if rp <= h else 0.0
         n_m = math.floor((h - rm) * (1.0 / _TWO_PI)) + 1.0 if rm <= h else 0.0
         lp = rp + _TWO_PI * (n_p - 1.0) if n_p > 0.0 else -1e300
         lm = rm + _TWO_PI * (n_m - 1.0) if n_m > 0.0 else -1e300
-        mu = gA[t] * (gc[t] * cb - gs[t] * sbb) - gv[t]
+        v = gv[t]
+        mu = A * (c * cb - s * sbb) - v
         last = 1.0 if mu > 0.0 else -1.0
         if lp > lm:
             last = -1.0
         elif lm > lp:
             last = 1.0
         gl[t] = last
-        g2[t] = 0.0
-        g3[t] = 0.0
+        # the prefix sums' terms of the floe's start edge e_0 = theta - k L_x / 2, once
+        # per root of weight +-2: net weight 2 (n_p - n_m)
+        wnet = 2.0 * (n_p - n_m)
+        se = s * che - c * she
+        ce = c * che + s * she
+        S1 = se * t1
+        S2 = 2.0 * se * ce * t2
+        g2[t] = -wnet * (0.5 * A * A * S2 - 2.0 * A * v * S1)
+        if accumulate:
+            S3 = se * (3.0 - 4.0 * se * se) * t3
+            g3[t] = -wnet * (0.25 * A * A * A * (3.0 * S1 + S3) - 1.5 * A * A * v * S2
+                             + 3.0 * A * v * v * S1)
     for fam in range(2):
         rows = gp if fam == 0 else gm
         w = 2.0 if fam == 0 else -2.0
@@ -494,41 +511,21 @@ def prefix_sums(sc, idx, m, a, ua, vs, mom, accumulate):
                 A = gA[t]
                 v = gv[t]
                 p = gpp[t]
-                q = ssign * gqq[t]
+                q = ssign * gqq[t]            # sin psi at the root, and its multiples
                 s1, c1 = _sin_cos_small(d)
                 s2d = 2.0 * s1 * c1
                 c2d = (c1 - s1) * (c1 + s1)
-                s3d = s1 * (3.0 - 4.0 * s1 * s1)
-                c3d = c1 * (4.0 * c1 * c1 - 3.0)
                 S1 = (q * c1 + p * s1) * t1
-                S2 = (2.0 * p * q * c2d + (p - q) * (p + q) * s2d) * t2
+                S2 = (2.0 * p * q * c2d + gc2[t] * s2d) * t2
                 F = (0.5 * A * A + v * v) * b + 0.5 * A * A * S2 - 2.0 * A * v * S1
                 g2[t] += w * F if on else 0.0
                 if accumulate:
-                    S3 = (q * (3.0 - 4.0 * q * q) * c3d + p * (4.0 * p * p - 3.0) * s3d) * t3
+                    s3d = s1 * (3.0 - 4.0 * s1 * s1)
+                    c3d = c1 * (4.0 * c1 * c1 - 3.0)
+                    S3 = (q * (3.0 - 4.0 * q * q) * c3d + gc3[t] * s3d) * t3
                     G = (0.25 * A * A * A * (3.0 * S1 + S3) - 1.5 * A * A * v * (b + S2)
                          + 3.0 * A * v * v * S1 - v * v * v * b)
                     g3[t] += w * G if on else 0.0
-    for t in range(mp):
-        # the floe's start edge e_0 = theta - k L_x / 2, weighted by the net root weight
-        rp = gp[t]
-        rm = gm[t]
-        n_p = math.floor((h - rp) * (1.0 / _TWO_PI)) + 1.0 if rp <= h else 0.0
-        n_m = math.floor((h - rm) * (1.0 / _TWO_PI)) + 1.0 if rm <= h else 0.0
-        wnet = 2.0 * (n_p - n_m)
-        A = gA[t]
-        v = gv[t]
-        c = gc[t]
-        s = gs[t]
-        se = s * che - c * she
-        ce = c * che + s * she
-        S1 = se * t1
-        S2 = 2.0 * se * ce * t2
-        g2[t] -= wnet * (0.5 * A * A * S2 - 2.0 * A * v * S1)
-        if accumulate:
-            S3 = se * (3.0 - 4.0 * se * se) * t3
-            g3[t] -= wnet * (0.25 * A * A * A * (3.0 * S1 + S3) - 1.5 * A * A * v * S2
-                             + 3.0 * A * v * v * S1)
     for t in range(m):
         i = idx[t]
         sig = sc[SC_SIG, i]

@@ -12,9 +12,12 @@ from sweep.identity import canonical_json, point_hash, short_hash
 # Pinned: these change only if the hash definition, ModelConfig's fields/defaults or
 # MODEL_VERSION change -- which must be a deliberate, documented event. Model version 3
 # (issue *trust*): kernels without fast-math (new bits), the acceleration recomputed when
-# the amplitudes change, the robust compact-zone rule and its six new fields.
+# the amplitudes change, the robust compact-zone rule and its six new fields. Model
+# version 4 (issue *ensemble*): replicas. Model version 5 (issue *SIMD*): the quadrature
+# drag of floes with a root by closed-form prefix sums (equal to the cell loop to rounding:
+# other trajectories).
 KNOWN = {
-    "default": "21ddf33e575937da38f2173166cbc88bcdfb06d38c73422368543f091b0533c7",
+    "default": "c141c29d3390f708b99fe486982a69f07bd62f93c8ca91863659bf943daf0d30",
 }
 
 
@@ -24,7 +27,7 @@ UPDATE = ("ModelConfig's fields or defaults, or MODEL_VERSION, changed: every po
 
 
 def test_known_hash_of_default_config():
-    assert floewave.MODEL_VERSION == "4"
+    assert floewave.MODEL_VERSION == "5"
     assert point_hash(ModelConfig()) == KNOWN["default"], UPDATE
 
 
@@ -50,8 +53,8 @@ def test_known_hashes(changes, expected):
 
 
 PINNED = {
-    "KNOWN_1": "60441604450664872a79357bd3a3438401d3350f3ba2fb1d95eab2abb07d7989",
-    "KNOWN_2": "3676ddebe1b086d28ad18b8ab6d46584efed2791af06f8c2826f9e31fbd730f2",
+    "KNOWN_1": "eaf49b05cfcff6382e8946f42fbcc61c82784085751f545a7472cd73baf72d5b",
+    "KNOWN_2": "edfeb2561f3230ec04daaeb4b56c4a711504e8ff19f6a014e88e652c4a004aee",
 }
 
 
