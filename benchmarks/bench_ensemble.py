@@ -1,0 +1,160 @@
+"""Ensemble kernel speed against the single-chain kernel of model version 4, same run.
+
+    python benchmarks/bench_ensemble.py [--replicas 1 4 8 16] [--seconds 0.4] [--repeat 3]
+                                        [--compile] [--markdown]
+
+For 84, 28 and 14 floes (L_x = 0.5, 1.5, 3.0 m at T = 1.2 s, the paper's lab setup) and both
+drag modes it times, after compilation and a spin-up of two periods (contacts active):
+
+- ``v4``: the single-chain kernel of model version 4 (``benchmarks/baseline/kernel_v4.py``,
+  a frozen copy of floewave/_kernels.py at commit 218421e: one chain per call, drag of the
+  floes with a root by the cell loop);
+- ``R = ...``: today's kernel advancing R replicas in one call (floewave/_kernels.py).
+
+The unit is floe-steps per second per core, and for an ensemble *replica*-floe-steps (R N_f
+per step). Spin-up steps and averaging steps (which add the window statistics) are timed
+separately: best of ``--repeat`` windows of about ``--seconds`` each, in CPU time of this
+thread (a core-second; the wall clock on a shared machine also counts other processes).
+``--compile`` also times, in fresh processes, the first point a worker runs with an empty
+numba cache (compilation) and with a filled one (loading).
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+from baseline import kernel_v4 as K4  # noqa: E402
+
+from floewave import ModelConfig, solve_dispersion  # noqa: E402
+from floewave import _kernels as K  # noqa: E402
+from floewave.ensemble import initial_positions  # noqa: E402
+from floewave.model import FloeChain  # noqa: E402
+
+
+def _best(fn, steps0: int, seconds: float, repeat: int) -> tuple[float, int]:
+    """(best seconds per step, steps per window): windows sized to ~``seconds``."""
+    t = time.thread_time()
+    fn(steps0)
+    per = max(time.thread_time() - t, 1e-9) / steps0
+    steps = max(int(seconds / per), 10)
+    best = np.inf
+    for _ in range(repeat):
+        t = time.thread_time()
+        fn(steps)
+        best = min(best, (time.thread_time() - t) / steps)
+    return best, steps
+
+
+def bench_v4(cfg: ModelConfig, seconds: float, repeat: int) -> tuple[float, float]:
+    """Floe-steps/s (spin-up, averaging) of the model-version-4 single-chain kernel."""
+    k, _ = solve_dispersion(cfg)
+    ch = FloeChain(cfg, k)
+    P = K4.KernelParams(*ch.P)
+    n = cfg.n_floes
+    x, u, acc = ch.x0.copy(), np.zeros(n), np.zeros(n)
+    ic = np.zeros(n, np.int8)
+    work, idx = K4.new_work(n), np.zeros(n, np.int64)
+    mom = K4.drag_tables(ch.cxi, ch.sxi, P)
+    a = np.full(n, cfg.a0)
+    st = np.zeros((K4.N_STATS, n))
+    state = {"istep": 0}
+    K4.initial_acceleration(x, u, a, ch.x0, 0, P, ch.cxi, ch.sxi, acc, ic)
+
+    def run(steps, accumulate):
+        state["istep"] = K4.advance(x, u, acc, a, ch.x0, ic, state["istep"], steps,
+                                    accumulate, P, ch.cxi, ch.sxi, st, work, mom, idx)
+
+    run(2 * cfg.n_t, False)
+    spin, _ = _best(lambda s: run(s, False), 200, seconds, repeat)
+    avg, _ = _best(lambda s: run(s, True), 200, seconds, repeat)
+    return n / spin, n / avg
+
+
+def bench_ensemble(cfg: ModelConfig, R: int, seconds: float,
+                   repeat: int) -> tuple[float, float]:
+    """Replica-floe-steps/s (spin-up, averaging) of today's kernel with R replicas."""
+    k, _ = solve_dispersion(cfg)
+    x0 = np.array(initial_positions(cfg.replace(replicas=max(R, 2))))[:R]
+    ch = FloeChain(cfg, k, x0)
+    a = np.full(x0.shape, cfg.a0)
+    st = np.zeros((K.N_STATS,) + x0.shape)
+    ch.run(a, 2 * cfg.n_t)
+    spin, _ = _best(lambda s: ch.run(a, s), 100, seconds, repeat)
+    avg, _ = _best(lambda s: ch.run(a, s, st), 100, seconds, repeat)
+    return x0.size / spin, x0.size / avg
+
+
+_FIRST_POINT = """
+import time
+t = time.perf_counter()
+from floewave import ModelConfig, run_point
+run_point(ModelConfig(L_x=1.5, T=1.2, max_iterations=1, n0=1, nT=1, replicas=2,
+                      drag_integration={mode!r}))
+print(time.perf_counter() - t)
+"""
+
+
+def first_point_seconds(mode: str, cache: str) -> float:
+    """Wall seconds of a fresh process's import + first (tiny) point with NUMBA_CACHE_DIR
+    ``cache``."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+    out = subprocess.run([sys.executable, "-c", _FIRST_POINT.format(mode=mode)], env=env,
+                         check=True, capture_output=True, text=True).stdout
+    return float(out.split()[-1])
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--replicas", type=int, nargs="+", default=[1, 4, 8, 16])
+    p.add_argument("--seconds", type=float, default=0.4)
+    p.add_argument("--repeat", type=int, default=3)
+    p.add_argument("--compile", action="store_true")
+    p.add_argument("--markdown", action="store_true", help="print a Markdown table")
+    args = p.parse_args()
+    Rs = args.replicas
+    cols = ["v4"] + [f"R={R}" for R in Rs]
+    if args.markdown:
+        print("| drag | N_f | step | " + " | ".join(cols) + f" | R={Rs[-1]} / v4 |")
+        print("|---|---|---|" + "---|" * (len(cols) + 1))
+    else:
+        print(f"{'drag':<11}{'N_f':>4} {'step':<6}" + "".join(f"{c:>9}" for c in cols)
+              + f"{'best/v4':>9}   [M (replica-)floe-steps/s, one core]")
+    for mode in ("quadrature", "exact"):
+        for L_x in (0.5, 1.5, 3.0):
+            cfg = ModelConfig(L_x=L_x, T=1.2, drag_integration=mode)
+            base = bench_v4(cfg, args.seconds, args.repeat)
+            ens = [bench_ensemble(cfg, R, args.seconds, args.repeat) for R in Rs]
+            for j, step in enumerate(("spin", "avg")):
+                vals = [base[j]] + [e[j] for e in ens]
+                ratio = max(e[j] for e in ens) / base[j]
+                if args.markdown:
+                    print(f"| {mode} | {cfg.n_floes} | {step} | "
+                          + " | ".join(f"{v / 1e6:.1f}" for v in vals)
+                          + f" | {ens[-1][j] / base[j]:.2f} |")
+                else:
+                    print(f"{mode:<11}{cfg.n_floes:>4} {step:<6}"
+                          + "".join(f"{v / 1e6:>9.1f}" for v in vals)
+                          + f"{ratio:>9.2f}", flush=True)
+    if args.compile:
+        for mode in ("quadrature", "exact"):
+            with tempfile.TemporaryDirectory() as cache:
+                cold = first_point_seconds(mode, cache)
+                warm = first_point_seconds(mode, cache)
+            print(f"first point of a worker ({mode}): {cold:.1f} s with an empty numba"
+                  f" cache (compiles), {warm:.1f} s with a filled one (loads)")
+
+
+if __name__ == "__main__":
+    main()
