@@ -24,8 +24,8 @@ generated code:
 Without the value-changing fast-math flags every copy of a function computes the IEEE result
 of its source, so it does not matter which copy runs. What fast-math bought (vectorised cell
 sums, a reduction that needs re-association) is won back explicitly: the cell sums are
-vectorised *across floes* (``floewave._kernels.cell_sums``), each floe's sum kept in the
-source's order.
+vectorised *across floes and replicas* instead, and the sums of floes with a root on them
+are closed forms (``floewave._kernels.prefix_sums``) rather than re-associated loops.
 """
 from __future__ import annotations
 

@@ -52,7 +52,7 @@ def forces(x: np.ndarray, v: np.ndarray, a: np.ndarray, x0: np.ndarray, wt: floa
 
 
 def advance(x, u, acc, a, x0, istep, nsteps, P, cxi, sxi):
-    """Numpy twin of :func:`floewave._kernels.advance` (no statistics); returns istep."""
+    """Numpy twin of the time loop :func:`floewave._kernels.make_advance` builds (no statistics); returns istep."""
     dt = P.dt
     for _ in range(nsteps):
         istep += 1

@@ -3,8 +3,8 @@
 The kernels used to be compiled with fast-math, and a process that compiled them ran other
 machine code than a process that loaded them from the on-disk cache (see
 :mod:`floewave._jit`): the Fig. 2 ``ml`` eps 0.6 point gave W_c 18.42 m cold and 15.92 m
-warm. Here short DEM points (every kernel path: two-pass and plain quadrature drag, exact
-drag, the amplitude iteration; ensembles of 2 replicas, random and uniform placement, mean
+warm. Here short DEM points (every kernel path: closed-form and prefix-sum quadrature drag
+with one and two roots per floe, exact drag, the amplitude iteration; ensembles of 2 replicas, random and uniform placement, mean
 and independent coupling) run in fresh interpreters:
 
 - A: an empty cache directory, the quadrature point first, then the exact-drag point;
@@ -31,16 +31,17 @@ SCRIPT = textwrap.dedent("""
     from floewave import ModelConfig, run_point
 
     POINTS = {
-        # 84 floes of 0.5 m: closed-form and cell-loop floes in the two-pass drag
+        # 84 floes of 0.5 m: closed-form and prefix-sum floes (one root of each family)
         "quadrature": dict(L_x=0.5, T=1.2, a0=0.015, eps=0.6, d_f=0.005, dispersion="ml"),
-        # 28 floes of 1.5 m: the plain (every floe by the cell loop) drag path
+        # 28 floes of 1.5 m: nearly every floe by the prefix sums
         "long": dict(L_x=1.5, T=1.2, a0=0.02, eps=0.8, d_f=0.005, dispersion="ep"),
         "exact": dict(L_x=0.5, T=1.2, a0=0.015, eps=0.6, d_f=0.005, dispersion="ml",
                       drag_integration="exact"),
-        # 1.5 m floes, exact drag: the per-floe exact loop (most floes need roots)
+        # 1.5 m floes, exact drag: most floes need the root-finding evaluation
         "exact-long": dict(L_x=1.5, T=1.2, a0=0.02, eps=0.8, d_f=0.005, dispersion="ep",
                            drag_integration="exact", integrator="half_step"),
         # an ensemble of independently iterated replicas from the paper's arrangement
+        # (3 m floes: two roots of a family on a floe)
         "independent": dict(L_x=3.0, T=1.2, a0=0.02, eps=0.6, d_f=0.005, dispersion="ml",
                             coupling="independent", placement="uniform"),
     }

@@ -244,3 +244,19 @@ def test_confined_runs_one_chain_whatever_R():
     r = run_point(cfg)
     assert r.replicas == 1
     assert r.floe_steps == cfg.replace(replicas=1).floe_steps_of(r.iterations)
+
+
+def test_independent_replica_r_gives_the_same_numbers_whatever_R():
+    """With coupling "independent" each replica iterates its own a(x) from its own
+    arrangement (seeded without R) in the one ensemble kernel: the first two replicas of an
+    ensemble of 3 are bit for bit those of an ensemble of 2 (same iteration count here:
+    max_iterations reached before any noise floor). Under coupling "mean" a replica's
+    amplitudes are the replica mean, which depends on R by design."""
+    base = dict(L_x=1.5, T=1.2, a0=0.02, d_f=0.01, coupling="independent", n0=2, nT=1,
+                max_iterations=3, noise_window=10, delta=1e-12)
+    two = run_point(ModelConfig(replicas=2, **base))
+    three = run_point(ModelConfig(replicas=3, **base))
+    assert two.iterations == three.iterations == 3
+    for name in ("S_sd_replicas", "x_mean_replicas", "gap_mean_replicas"):
+        assert np.array_equal(getattr(two, name), getattr(three, name)[:2], equal_nan=True), name
+    assert not np.array_equal(three.S_sd_replicas[0], three.S_sd_replicas[1])
