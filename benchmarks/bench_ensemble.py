@@ -15,13 +15,15 @@ The unit is floe-steps per second per core, and for an ensemble *replica*-floe-s
 per step). Spin-up steps and averaging steps (which add the window statistics) are timed
 separately: best of ``--repeat`` windows of about ``--seconds`` each, in CPU time of this
 thread (a core-second; the wall clock on a shared machine also counts other processes).
-``--compile`` also times, in fresh processes, the first point a worker runs with an empty
-numba cache (compilation) and with a filled one (loading).
+``--compile`` also times (CPU seconds), in fresh processes, the import and first point a
+worker runs with an empty numba cache (compilation) and with a filled one (loading);
+``--compile-base DIR`` the same for another checkout (e.g. model version 4).
 """
 from __future__ import annotations
 
 import argparse
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -97,22 +99,23 @@ def bench_ensemble(cfg: ModelConfig, R: int, seconds: float,
 
 
 _FIRST_POINT = """
-import time
-t = time.perf_counter()
 from floewave import ModelConfig, run_point
 run_point(ModelConfig(L_x=1.5, T=1.2, max_iterations=1, n0=1, nT=1, replicas=2,
                       drag_integration={mode!r}))
-print(time.perf_counter() - t)
 """
 
 
-def first_point_seconds(mode: str, cache: str) -> float:
-    """Wall seconds of a fresh process's import + first (tiny) point with NUMBA_CACHE_DIR
-    ``cache``."""
+def first_point_seconds(mode: str, cache: str, pythonpath: str | None = None) -> float:
+    """CPU seconds of a fresh process importing floewave and running a first (tiny) point
+    with NUMBA_CACHE_DIR ``cache`` (``pythonpath``: another floewave checkout)."""
     env = dict(os.environ, NUMBA_CACHE_DIR=cache)
-    out = subprocess.run([sys.executable, "-c", _FIRST_POINT.format(mode=mode)], env=env,
-                         check=True, capture_output=True, text=True).stdout
-    return float(out.split()[-1])
+    if pythonpath:
+        env["PYTHONPATH"] = pythonpath
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    subprocess.run([sys.executable, "-c", _FIRST_POINT.format(mode=mode)], env=env, cwd=cache,
+                   check=True, capture_output=True, text=True)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
 def main() -> None:
@@ -121,6 +124,9 @@ def main() -> None:
     p.add_argument("--seconds", type=float, default=0.4)
     p.add_argument("--repeat", type=int, default=3)
     p.add_argument("--compile", action="store_true")
+    p.add_argument("--compile-base", metavar="DIR", default=None,
+                   help="with --compile: also time the first point of the floewave checkout"
+                        " in DIR (e.g. a worktree of 218421e, model version 4)")
     p.add_argument("--markdown", action="store_true", help="print a Markdown table")
     args = p.parse_args()
     Rs = args.replicas
@@ -149,11 +155,15 @@ def main() -> None:
                           + f"{ratio:>9.2f}", flush=True)
     if args.compile:
         for mode in ("quadrature", "exact"):
-            with tempfile.TemporaryDirectory() as cache:
-                cold = first_point_seconds(mode, cache)
-                warm = first_point_seconds(mode, cache)
-            print(f"first point of a worker ({mode}): {cold:.1f} s with an empty numba"
-                  f" cache (compiles), {warm:.1f} s with a filled one (loads)")
+            for label, path in (("this checkout", None), (args.compile_base, args.compile_base)):
+                if label is None:
+                    continue
+                with tempfile.TemporaryDirectory() as cache:
+                    cold = first_point_seconds(mode, cache, path)
+                    warm = first_point_seconds(mode, cache, path)
+                print(f"first point of a worker, {label} ({mode}): {cold:.1f} CPU s with an"
+                      f" empty numba cache (compiles), {warm:.1f} CPU s with a filled one"
+                      f" (loads)", flush=True)
 
 
 if __name__ == "__main__":
