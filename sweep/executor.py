@@ -26,7 +26,6 @@ from __future__ import annotations
 import collections
 import contextlib
 import importlib
-import json
 import math
 import os
 import signal
@@ -44,11 +43,11 @@ from floewave import ModelConfig
 
 from .config import Campaign, Point
 from .errors import ConfigError, Interrupted, LaunchError, SweepError, WorkerError
-from .identity import canonical_json
 from .progress import Progress, log_line
 from .provenance import environment, host
-from .schema import PROFILE_VARS, REPLICA_VARS, column
-from .store import Store, Unstorable, _jsonable, utc_now
+from .record import Record, known_outcome, plain, provenance_json
+from .schema import PROFILE_VARS, REPLICA_VARS
+from .store import Store, utc_now
 from .warmup import warm_up, warm_up_configs
 
 __all__ = ["run_campaign", "compute_point", "worker_loop", "Master", "InProcessTransport",
@@ -185,7 +184,7 @@ def compute_point(task: dict[str, Any], fn: Callable[[ModelConfig], Any],
         out["profiles"] = profiles
         out["residual_history"] = np.asarray(data.get("residual_history", []),
                                              dtype=np.float64)
-        out["scalars"] = {k: _jsonable(v) for k, v in data.items()
+        out["scalars"] = {k: plain(v) for k, v in data.items()
                           if k not in profiles and k != "residual_history"
                           and np.ndim(v) == 0}
         status = str(data.get("status", ""))
@@ -513,52 +512,20 @@ class Master:
         return max(1, min(_MAX_DEPTH, 1 + int(ratio)))
 
     def record(self, point: Point, out: dict[str, Any],
-               config: dict[str, Any] | None = None) -> dict[str, Any]:
-        """Turn a worker's outcome into a store record (adds swept values, config)."""
-        row: dict[str, Any] = {name: getattr(point.config, name)
-                               for name in floewave.SWEPT_FIELDS}
-        scalars = out.get("scalars", {})
-        unusable = []
-        for name, value in scalars.items():
-            if name in ("status", "wall_time"):
-                continue
-            try:
-                kind = column(name).kind
-            except KeyError:
-                continue
-            try:
-                if kind == "str":
-                    row[name] = str(value)
-                elif kind == "int":
-                    row[name] = (int(value) if value is not None and math.isfinite(value)
-                                 else -1)
-                else:
-                    row[name] = float(value) if value is not None else math.nan
-            except (TypeError, ValueError, OverflowError):
-                unusable.append(f"{name} = {str(value)[:40]!r}")
-        try:
-            row["model_wall_time"] = float(scalars.get("wall_time", math.nan))
-        except (TypeError, ValueError):
-            unusable.append(f"wall_time = {str(scalars.get('wall_time'))[:40]!r}")
-        if unusable:  # the schema cannot hold the result: a failed point, with the reason
-            out = dict(out, status="failed", profiles={}, residual_history=np.zeros(0),
-                       message="the result does not fit the schema: " + ", ".join(unusable))
-            row = {name: getattr(point.config, name) for name in floewave.SWEPT_FIELDS}
-        row.update(hash=point.hash, status=out["status"], message=out["message"],
-                   host=out["host"], rank=int(out["rank"]), pid=int(out["pid"]),
-                   start_time=out["start_time"], end_time=out["end_time"],
-                   wall_time=float(out["wall_time"]), config_json=canonical_json(
-                       point.config.to_dict() if config is None else config))
-        key = (int(out["rank"]), str(scalars.get("kernel_mode", "")))
+               config: dict[str, Any] | None = None) -> Record:
+        """The :class:`sweep.record.Record` of a worker's outcome (or of
+        :func:`sweep.record.known_outcome`) for ``point``."""
+        return Record.from_outcome(point, out, config, self._provenance_of)
+
+    def _provenance_of(self, rank: int, kernel_mode: str) -> str:
+        """The ``provenance`` column of a point computed by ``rank`` in ``kernel_mode``
+        (the same for all its points: built once)."""
+        key = (rank, kernel_mode)
         prov = self._provenance.get(key)
-        if prov is None:  # the same for every point of a rank and kernel mode
-            env = dict(self.transport.worker_env.get(key[0], {}))
-            env.update(self.git)
-            env["kernel_mode"] = key[1]
-            prov = self._provenance[key] = json.dumps(env, sort_keys=True)
-        row["provenance"] = prov
-        return {"row": row, "profiles": out.get("profiles", {}),
-                "residual_history": out.get("residual_history", np.zeros(0))}
+        if prov is None:
+            prov = self._provenance[key] = provenance_json(
+                self.transport.worker_env.get(rank, {}), self.git, kernel_mode)
+        return prov
 
     def run(self, todo: list[Point], progress: Progress, signals: _StopSignals,
             summary: RunSummary) -> None:
@@ -666,14 +633,9 @@ class Master:
                 raise WorkerError(f"worker rank {worker} returned point"
                                   f" {str(payload.get('hash'))[:12]}, expected"
                                   f" {point.hash[:12]} (protocol error)")
-            try:
-                self.store.add(self.record(point, payload, config))
-            except Unstorable as exc:  # the record cannot be stored: a failed point
-                payload = dict(payload, status="failed", scalars={}, profiles={},
-                               residual_history=np.zeros(0),
-                               message=f"the result cannot be stored: {exc}")
-                self.store.add(self.record(point, payload, config))
-            statuses.append(payload["status"])
+            rec = self.record(point, payload, config)
+            self.store.add(rec)
+            statuses.append(rec.status)
             wall += float(payload.get("wall_time", 0.0))
         self.store.commit()  # now they are stored: count them
         for status in statuses:
@@ -861,11 +823,7 @@ def _run_points(campaign: Campaign, store: Store, master: Master, signals: _Stop
             elif store.handouts(p.hash):
                 master.suspects.add(p.hash)
         for p, status, message in known:
-            now = utc_now()
-            out = {"hash": p.hash, "status": status, "message": message, "host": host(),
-                   "rank": 0, "pid": os.getpid(), "start_time": now, "end_time": now,
-                   "wall_time": 0.0}
-            store.add(master.record(p, out))
+            store.add(master.record(p, known_outcome(p.hash, status, message)))
         store.commit()  # one group commit for all of them
         for _, status, _ in known:
             summary.computed += 1

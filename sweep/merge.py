@@ -13,6 +13,7 @@ import h5py
 from .config import parse_campaign
 from .errors import CampaignMismatchError, Interrupted, StoreError
 from .provenance import environment
+from .record import Record
 from .schema import (
     COLUMNS,
     HISTORY_VAR,
@@ -35,8 +36,8 @@ def _text(v: Any) -> Any:
     return v.decode() if isinstance(v, bytes) else v
 
 
-def iter_records(path: str | Path) -> Iterator[dict[str, Any]]:
-    """Every committed point of a store as a record for :meth:`Store.put`."""
+def iter_records(path: str | Path) -> Iterator[Record]:
+    """Every committed point of a store as a :class:`sweep.record.Record`."""
     with h5py.File(path, "r", locking=False) as f:
         table = f["table"]
         n = int(table.attrs["n_rows"])
@@ -53,7 +54,8 @@ def iter_records(path: str | Path) -> Iterator[dict[str, Any]]:
                 profiles = {k: f[name][k][()] for k in (*PROFILE_VARS, *REPLICA_VARS)
                             if k in f[name] or k in PROFILE_VARS}
                 history = f[name][HISTORY_VAR[0]][()]
-            yield {"row": row, "profiles": profiles, "residual_history": history}
+            yield Record.coerce({"row": row, "profiles": profiles,
+                                 "residual_history": history})
 
 
 class _Stop:

@@ -46,6 +46,7 @@ import numpy as np
 from .errors import CampaignMismatchError, SchemaVersionError, StoreError
 from .journal import BadLine, Journal, JournalScan, decode, encode, journal_path, rejected_path
 from .lock import Lock, lock_path
+from .record import Record
 from .schema import FORMAT, MIGRATIONS, SCHEMA_VERSION, STATUSES
 from .writer import (
     HDF5_SIGNATURE,
@@ -53,16 +54,11 @@ from .writer import (
     Unstorable,
     fsync_dir,
     fsync_path,
-    normalise_record,
     set_campaign,
 )
 
 __all__ = ["Store", "Record", "journal_path", "lock_path", "rejected_path", "utc_now",
            "read_journal", "Unstorable"]
-
-Record = dict[str, Any]
-"""A point record: ``{"row": {column: value}, "profiles": {name: array},
-"residual_history": array}``."""
 
 #: Signals whose Python handlers must not run in the middle of a commit, an open or a
 #: rebuild (the in-process grace timer raises from its handler; a default action would
@@ -98,31 +94,19 @@ def utc_now() -> str:
     return _dt.datetime.now(_dt.UTC).isoformat(timespec="microseconds")
 
 
-def _jsonable(value: Any) -> Any:
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
-
-
 def _text(value: Any) -> str:
     return value.decode() if isinstance(value, bytes) else str(value)
 
 
-def _with_arrays(rec: dict[str, Any]) -> Record:
-    rec["profiles"] = {k: np.asarray(v, dtype=np.float64)
-                       for k, v in rec.get("profiles", {}).items()}
-    rec["residual_history"] = np.asarray(rec.get("residual_history", []), dtype=np.float64)
-    return rec
-
-
 def read_journal(path: str | Path) -> Iterator[Record]:
-    """Yield the point records of a journal (torn or unreadable lines skipped)."""
+    """Yield the point records of a journal as written (torn or unreadable lines
+    skipped; values as the journal holds them, profiles and history as arrays)."""
     for rec in Journal(path).read():
         try:
-            yield _with_arrays(rec)
-        except (TypeError, ValueError):
+            yield Record(rec["row"], {k: np.asarray(v, dtype=np.float64)
+                                      for k, v in rec.get("profiles", {}).items()},
+                         np.asarray(rec.get("residual_history", []), dtype=np.float64))
+        except (TypeError, ValueError, AttributeError):
             continue
 
 
@@ -503,7 +487,7 @@ class Store:
                 continue
             try:
                 obj, _ = decode(line, require_checksum=False)
-                batch.append(normalise_record(obj))
+                batch.append(Record.coerce(obj))
             except (BadLine, Unstorable) as exc:
                 bad.append((offset, len(line), f"cannot be written to HDF5: {exc}"))
                 continue
@@ -643,22 +627,16 @@ class Store:
         self.add(record)
         self.commit()
 
-    def add(self, record: Record) -> None:
+    def add(self, record: Record | dict[str, Any]) -> None:
         """Stage one point for the next :meth:`commit` (nothing is written yet).
 
-        The record is converted to the schema's kinds first (:class:`Unstorable` if a
-        value cannot be; nothing is staged then). A staged point is not stored: a crash
-        or :meth:`close` before :meth:`commit` loses it (it was never acknowledged).
+        ``record`` is a :class:`sweep.record.Record` (or a dict of its members, converted
+        to the schema's kinds first: :class:`Unstorable` if a value cannot be; nothing
+        is staged then). A staged point is not stored: a crash or :meth:`close` before
+        :meth:`commit` loses it (it was never acknowledged).
         """
-        rec = normalise_record(record)
-        row = rec["row"]
-        if "hash" not in row:
-            raise Unstorable("no 'hash'")
-        row["seq"] = self.next_seq
-        row["run"] = self.run_index
-        line = encode({"row": row,
-                       "profiles": {k: v.tolist() for k, v in rec["profiles"].items()},
-                       "residual_history": rec["residual_history"].tolist()})
+        rec = Record.coerce(record).stamped(self.next_seq, self.run_index)
+        line = rec.journal_line()
         self.next_seq += 1
         self._lines.append(line)
         self._staged.append(rec)
