@@ -24,9 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from .writer import Unstorable, normalise_record
-
-__all__ = ["Record", "plain", "known_outcome", "Unstorable"]
+__all__ = ["Record", "plain", "known_outcome", "provenance_json"]
 
 
 def plain(value: Any) -> Any:
@@ -85,6 +83,8 @@ class Record:
         """A Record as stored: ``record`` (a Record or a dict of the same members)
         converted to the schema's kinds (:class:`sweep.writer.Unstorable` names a value
         that cannot be; a row without ``hash`` is unstorable)."""
+        from .writer import Unstorable, normalise_record
+
         if isinstance(record, Record) and record.normal:
             return record
         rec = normalise_record(record if isinstance(record, Mapping)
@@ -107,6 +107,8 @@ class Record:
         exception): a scalar of the wrong kind ("does not fit the schema"), or a value
         or profile :func:`sweep.writer.normalise_record` refuses ("cannot be stored").
         """
+        from .writer import Unstorable
+
         try:
             return cls.coerce(_row_of(point, out, config, provenance))
         except Unstorable as exc:  # the record cannot be stored: a failed point

@@ -46,6 +46,7 @@ import numpy as np
 from .errors import CampaignMismatchError, SchemaVersionError, StoreError
 from .journal import BadLine, Journal, JournalScan, decode, encode, journal_path, rejected_path
 from .lock import Lock, lock_path
+from .reader import text
 from .record import Record
 from .schema import FORMAT, MIGRATIONS, SCHEMA_VERSION, STATUSES
 from .writer import (
@@ -93,9 +94,6 @@ def utc_now() -> str:
     """The current time, ISO 8601 UTC with microseconds."""
     return _dt.datetime.now(_dt.UTC).isoformat(timespec="microseconds")
 
-
-def _text(value: Any) -> str:
-    return value.decode() if isinstance(value, bytes) else str(value)
 
 
 def read_journal(path: str | Path) -> Iterator[Record]:
@@ -319,7 +317,7 @@ class Store:
         info: dict[str, Any] = {}
         try:
             with h5py.File(p, "r", locking=False) as f:
-                fmt = _text(f.attrs.get("format", ""))
+                fmt = text(f.attrs.get("format", ""))
                 if fmt != FORMAT:
                     if fmt or not ours:
                         raise StoreError(f"{p}: an HDF5 file but not a sweep store (format"
@@ -329,7 +327,7 @@ class Store:
                 try:
                     version = int(raw)
                 except (TypeError, ValueError):
-                    raise StoreError(f"{p}: schema_version {_text(raw)!r} is not a version"
+                    raise StoreError(f"{p}: schema_version {text(raw)!r} is not a version"
                                      " number; it was left untouched") from None
                 if version > SCHEMA_VERSION:
                     raise SchemaVersionError(
@@ -341,7 +339,7 @@ class Store:
                         raise SchemaVersionError(f"{p}: no migration from schema version"
                                                  f" {step} to {SCHEMA_VERSION}")
                     step = MIGRATIONS[step][0]
-                info["campaign_json"] = _text(f.attrs.get("campaign_json", ""))
+                info["campaign_json"] = text(f.attrs.get("campaign_json", ""))
                 self._file_schema = version
                 table = f["table"]
                 n = int(table.attrs["n_rows"])
@@ -512,12 +510,12 @@ class Store:
         f.attrs["writer_open"] = True  # before anything in the file changes
         w.durable()
         self._migrate(f)
-        if campaign is not None and _text(f.attrs.get("campaign_hash", "")) != \
+        if campaign is not None and text(f.attrs.get("campaign_hash", "")) != \
                 campaign.definition_hash():  # --extend (checked above)
             hist = f.require_group("campaign_history")
             import h5py
 
-            hist.create_dataset(str(len(hist)), data=_text(f.attrs["campaign_toml"]),
+            hist.create_dataset(str(len(hist)), data=text(f.attrs["campaign_toml"]),
                                 dtype=h5py.string_dtype("utf-8"))
             set_campaign(f, campaign)
         self.orphans_removed = w.prepare()
@@ -535,24 +533,10 @@ class Store:
         missing = [h for h in w.rows if h not in self.scan.latest]
         if not missing:
             return
-        from .schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, REPLICA_VARS, profile_path
+        from . import reader
 
-        table = w.file["table"]
-        n = int(table.attrs["n_rows"])
-        cols = {c.name: table[c.name][:n] for c in COLUMNS}
-        lines = []
-        for h in missing:
-            i = w.rows[h]
-            row = {name: (_text(v[i]) if isinstance(v[i], (bytes, str)) else v[i].item())
-                   for name, v in cols.items()}
-            name = profile_path(h)
-            profiles, history = {}, []
-            if name in w.file:
-                profiles = {k: w.file[name][k][()].tolist()
-                            for k in (*PROFILE_VARS, *REPLICA_VARS) if k in w.file[name]}
-                history = w.file[name][HISTORY_VAR[0]][()].tolist()
-            lines.append(encode({"row": row, "profiles": profiles,
-                                 "residual_history": history}))
+        lines = [rec.journal_line()
+                 for rec in reader.iter_records(w.file, set(missing), normalise=False)]
         self.journal.open_for_append()
         _check_space(self.journal.path, 2 * sum(map(len, lines)), "journaling stored points")
         try:
