@@ -44,7 +44,8 @@ _LAZY = {
 }
 _MODULES = {"analysis", "cli", "config", "errors", "executor", "figures", "identity",
             "journal", "lock", "merge", "papercheck", "plan", "progress", "provenance",
-            "reader", "record", "schema", "stats", "store", "testing", "writer"}
+            "reader", "record", "schema", "stats", "store", "testing", "writer",
+            "campaign_check", "master", "signals", "transport", "worker"}
 
 
 def __getattr__(name: str) -> Any:

@@ -1,7 +1,9 @@
 """The result store: one HDF5 file written only by the master, a journal and a lock.
 
 The parts: :mod:`sweep.lock` (who may write), :mod:`sweep.journal` (the durable truth,
-checksummed lines), :mod:`sweep.writer` (the HDF5 file). :class:`Store` is the policy
+checksummed lines), :mod:`sweep.writer` (the HDF5 file), :mod:`sweep.reader` (reading
+stored rows back), :mod:`sweep.campaign_check` (is this the store's campaign, or an
+``--extend`` of it), :mod:`sweep.record` (what a point is). :class:`Store` is the policy
 that ties them together.
 
 Writing points (group commit): :meth:`Store.add` stages a point (converted to the
@@ -43,7 +45,8 @@ from typing import Any
 
 import numpy as np
 
-from .errors import CampaignMismatchError, SchemaVersionError, StoreError
+from .campaign_check import check_campaign, check_legacy_journal
+from .errors import SchemaVersionError, StoreError
 from .journal import BadLine, Journal, JournalScan, decode, encode, journal_path, rejected_path
 from .lock import Lock, lock_path
 from .reader import text
@@ -226,12 +229,13 @@ class Store:
         # the campaign check, before anything is changed: the file and the journal
         if campaign is not None:
             if info.get("campaign_json"):
-                self._check_campaign(_json(info["campaign_json"]), campaign, extend, "store")
+                check_campaign(self.path, _json(info["campaign_json"]), campaign, extend,
+                               "store", getattr(self, "_file_schema", "?"))
             if scan.identity is not None:
-                self._check_campaign(_json(scan.identity["campaign_json"]), campaign, extend,
-                                     "journal")
+                check_campaign(self.path, _json(scan.identity["campaign_json"]), campaign,
+                               extend, "journal", getattr(self, "_file_schema", "?"))
             elif scan.records and state != "ok":
-                self._check_legacy_journal(scan, campaign)
+                check_legacy_journal(self.journal.path, scan.latest, campaign)
         self.scan = scan
         if scan.bad:
             self._set_aside(scan.bad)
@@ -359,58 +363,6 @@ class Store:
         if unclean and ours:
             return "unclean", info
         return "ok", info
-
-    def _check_campaign(self, old: dict[str, Any], campaign: Any, extend: bool,
-                        where: str) -> None:
-        """Refuse a campaign that is not the one of the store's file or journal."""
-        from .identity import canonical_json, sha256_hex
-
-        if sha256_hex(canonical_json(old)) == campaign.definition_hash():
-            return
-        new = campaign.definition()
-        if str(old.get("model_version")) != str(new.get("model_version")):
-            # another model version: none of its points is a point of this model
-            raise CampaignMismatchError(
-                f"{self.path}: the {where} holds points of model version"
-                f" {old.get('model_version')} (store schema"
-                f" {getattr(self, '_file_schema', '?')}); this"
-                f" sweep computes model version {new.get('model_version')} (schema"
-                f" {SCHEMA_VERSION}), whose points have other hashes. Use another --store;"
-                " the old one stays readable (sweep.load, sweep status, sweep export)")
-        if not extend:
-            diff = sorted(k for k in set(old["base"]) | set(new["base"])
-                          if old["base"].get(k) != new["base"].get(k))
-            sweep_diff = sorted(k for k in set(old["sweep"]) | set(new["sweep"])
-                                if old["sweep"].get(k) != new["sweep"].get(k))
-            what = ", ".join([f"[base] {k}" for k in diff] + [f"[sweep] {k}" for k in
-                                                              sweep_diff]) or "model_version"
-            raise CampaignMismatchError(
-                f"{self.path}: the {where} belongs to a different campaign (differs in"
-                f" {what}); use another --store, or --extend to add grid values to this one")
-        problems = []
-        if old["base"] != new["base"] or old["model_version"] != new["model_version"]:
-            problems.append("its [base] (or model version) differs")
-        if set(old["sweep"]) != set(new["sweep"]):
-            problems.append("its swept dimensions differ")
-        else:
-            for k, values in old["sweep"].items():
-                missing = [v for v in values if v not in new["sweep"][k]]
-                if missing:
-                    problems.append(f"[sweep] {k} drops {missing}")
-        if problems:
-            raise CampaignMismatchError(f"{self.path}: cannot --extend this {where}: "
-                                        + "; ".join(problems))
-
-    def _check_legacy_journal(self, scan: JournalScan, campaign: Any) -> None:
-        """A journal without a campaign line (written before version 2) is used to
-        rebuild only if every point it holds belongs to the campaign's grid."""
-        grid = {p.hash for p in campaign.points()}
-        foreign = [h for h in scan.latest if h not in grid]
-        if foreign:
-            raise CampaignMismatchError(
-                f"{self.journal.path}: holds {len(foreign)} point(s) that are not in this"
-                f" campaign's grid (e.g. {foreign[0][:12]}): it belongs to another campaign;"
-                " use another --store, or move the journal away")
 
     def _set_aside(self, bad: list[tuple[int, int, str]]) -> None:
         try:
