@@ -23,6 +23,7 @@ from .errors import (
                      LaunchError,
                      PointNotFoundError,
                      SchemaVersionError,
+                     StoreCorruptedError,
                      StoreError,
                      StoreLockedError,
                      SweepError,
@@ -42,8 +43,9 @@ _LAZY = {
     "alpha_omega": "stats", "collision_stats": "stats", "derived": "stats",
 }
 _MODULES = {"analysis", "cli", "config", "errors", "executor", "figures", "identity",
-            "journal", "lock", "merge", "papercheck", "progress", "provenance", "schema",
-            "stats", "store", "testing", "writer"}
+            "journal", "lock", "merge", "papercheck", "plan", "progress", "provenance",
+            "reader", "record", "schema", "stats", "store", "testing", "writer",
+            "campaign_check", "master", "signals", "transport", "worker"}
 
 
 def __getattr__(name: str) -> Any:
@@ -66,6 +68,6 @@ __all__ = ["load_campaign", "parse_campaign", "Campaign", "Point", "RunOptions",
            "load_xarray", "load_profile", "load_profiles", "validate", "collision_stats",
            "alpha_omega",
            "derived", "SCHEMA_VERSION", "SweepError",
-           "ConfigError", "StoreError", "StoreLockedError", "SchemaVersionError",
-           "CampaignMismatchError", "LaunchError", "WorkerError", "Interrupted",
-           "PointNotFoundError"]
+           "ConfigError", "StoreError", "StoreLockedError", "StoreCorruptedError",
+           "SchemaVersionError", "CampaignMismatchError", "LaunchError", "WorkerError",
+           "Interrupted", "PointNotFoundError"]

@@ -15,16 +15,9 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from . import reader
 from .errors import PointNotFoundError, StoreError
-from .schema import (
-    COLUMNS,
-    HISTORY_VAR,
-    MIGRATION_FILL,
-    PROFILE_VARS,
-    REPLICA_VARS,
-    column,
-    profile_path,
-)
+from .schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, REPLICA_VARS, column
 
 __all__ = ["load", "load_xarray", "load_profile", "load_profiles", "store_attrs", "store_runs",
            "resolve_hash", "journal_points", "STATUS_ORDER", "PROFILE_LEADING_DIMS"]
@@ -49,25 +42,17 @@ class _OpenError(StoreError):
 
 def _open(path: str | Path) -> h5py.File:
     try:
-        return h5py.File(path, "r", locking=False)
+        return reader.open_file(path)
     except (OSError, FileNotFoundError) as exc:
         cls = _OpenError if Path(path).is_file() else StoreError
         raise cls(f"{path}: cannot open store: {exc}") from None
-
-
-def _decode(values: np.ndarray) -> np.ndarray:
-    if values.dtype.kind == "O" or values.dtype.kind == "S":
-        return np.array([v.decode() if isinstance(v, bytes) else v for v in values],
-                        dtype=object)
-    return values
 
 
 def store_attrs(path: str | Path) -> dict[str, Any]:
     """The root attributes of a store (strings decoded)."""
     def read() -> dict[str, Any]:
         with _open(path) as f:
-            return {k: (v.decode() if isinstance(v, bytes) else v)
-                    for k, v in f.attrs.items()}
+            return reader.attrs_of(f)
 
     return _retried(read)
 
@@ -81,9 +66,7 @@ def store_runs(path: str | Path) -> list[dict[str, Any]]:
                 return []
             out = []
             for name in sorted(f["runs"], key=int):
-                attrs = {k: (v.decode() if isinstance(v, bytes) else v)
-                         for k, v in f["runs"][name].attrs.items()}
-                out.append({"index": int(name), **attrs})
+                out.append({"index": int(name), **reader.attrs_of(f["runs"][name])})
             return out
 
     return _retried(read)
@@ -158,18 +141,15 @@ def _load(path: str | Path) -> pd.DataFrame:
     with _open(path) as f:
         if "table" not in f:
             raise StoreError(f"{path}: not a sweep store (no /table)")
-        table = f["table"]
-        n = int(table.attrs["n_rows"])
-        # a column an older schema version lacks reads as its fill value
-        data = {c.name: (_decode(table[c.name][:n]) if c.name in table
-                         else np.full(n, MIGRATION_FILL.get(c.name, c.fill),
-                                      dtype=object if c.kind == "str" else None))
-                for c in COLUMNS}
-        campaign = f.attrs.get("campaign_json", "")
+        data = reader.table_columns(f)
+        campaign = reader.text(f.attrs.get("campaign_json", ""))
+        # every row's config_json still hashes to its hash (StoreCorruptedError if not)
+        reader.check_hashes(path, data["hash"], data["config_json"], reader.model_version(f),
+                            data["provenance"])
     df = _typed(pd.DataFrame(data))
     df.attrs["units"] = {c.name: c.units for c in COLUMNS}
     df.attrs["long_name"] = {c.name: c.long_name for c in COLUMNS}
-    df.attrs["campaign"] = campaign.decode() if isinstance(campaign, bytes) else campaign
+    df.attrs["campaign"] = campaign
     return df
 
 
@@ -251,14 +231,14 @@ def load_profile(path: str | Path, hash: str) -> xr.Dataset:
     """
     h = hash if len(hash) == 64 else resolve_hash(path, hash)
 
-    def read() -> tuple[dict[str, Any], Any] | None:
+    def read() -> tuple[dict[str, Any], Any, dict[str, Any]] | None:
         with _open(path) as f:
-            name = profile_path(h)
-            if name not in f:
+            got = reader.profile_group(f, h)
+            if got is None:
                 return None
-            g = f[name]
-            rep = {k: g[k][()] for k in REPLICA_VARS if k in g}
-            return {k: g[k][()] for k in PROFILE_VARS}, g[HISTORY_VAR[0]][()], rep
+            profiles, history = got
+            rep = {k: profiles[k] for k in REPLICA_VARS if k in profiles}
+            return {k: profiles[k] for k in PROFILE_VARS}, history, rep
 
     got = _retried(read)
     if got is None:
@@ -353,11 +333,9 @@ def load_profiles(path: str | Path, **selectors: Any) -> xr.Dataset:
         out: dict[str, dict[str, np.ndarray]] = {}
         with _open(path) as f:
             for h, ok in zip(hashes, good, strict=True):
-                name = profile_path(h)
-                if ok and name in f:
-                    g = f[name]
-                    out[h] = {k: np.asarray(g[k][()], dtype=float) for k in PROFILE_VARS
-                              if k in g}
+                got = reader.profile_group(f, h, PROFILE_VARS, history=False) if ok else None
+                if got is not None:
+                    out[h] = {k: np.asarray(v, dtype=float) for k, v in got[0].items()}
         return out
 
     data = _retried(read)

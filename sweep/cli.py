@@ -176,7 +176,7 @@ def _stop_during_start_up(signum: int, frame: Any) -> None:
                       " the same command again")
 
 
-#: Variables an MPI launcher sets (as :data:`sweep.executor._LAUNCHER_VARS`; kept here
+#: Variables an MPI launcher sets (used by :func:`sweep.executor.mpi_world`; kept here
 #: so that the check needs no heavy import).
 _LAUNCHER_VARS = ("PMI_RANK", "PMI_SIZE", "PMIX_RANK", "OMPI_COMM_WORLD_SIZE",
                   "MPI_LOCALNRANKS", "HYDRA_CONTROL_FD", "PMI_FD")

@@ -105,8 +105,14 @@ class Campaign:
 
     def shard(self, k: int, n: int) -> Campaign:
         """The same campaign restricted to shard ``k`` of ``n``: points whose hash,
-        as an integer, is ``k`` modulo ``n`` (stable under ``--extend``)."""
-        return dataclasses.replace(self, shard_of=(k, n))
+        as an integer, is ``k`` modulo ``n`` (stable under ``--extend``). The grid
+        already expanded (and checked) for this campaign is filtered, not expanded
+        again."""
+        sharded = dataclasses.replace(self, shard_of=(k, n))
+        full = self.__dict__.get("_grid") if self.shard_of is None else None
+        if full is not None:  # the cached_property's slot (a frozen dataclass allows it)
+            sharded.__dict__["_grid"] = tuple(p for p in full if int(p.hash, 16) % n == k)
+        return sharded
 
     @property
     def swept_fields(self) -> tuple[str, ...]:

@@ -70,6 +70,16 @@ class CampaignMismatchError(StoreError):
     """The store belongs to a different campaign (use ``--extend`` to add grid values)."""
 
 
+class StoreCorruptedError(StoreError):
+    """A stored row's ``config_json`` no longer hashes to its ``hash`` (the row was
+    altered after it was written); ``hashes`` names the rows (as signac's
+    ``JobsCorruptedError`` names its jobs)."""
+
+    def __init__(self, message: str, hashes: list[str] | None = None) -> None:
+        super().__init__(message)
+        self.hashes = list(hashes or [])
+
+
 class PointNotFoundError(SweepError, KeyError):
     """No stored point (or no profile) matches a hash or a parameter selection; a
     ``KeyError`` too, with a readable message (not the repr a plain ``KeyError`` shows)."""

@@ -25,7 +25,7 @@ import floewave
 from floewave import ModelConfig
 
 __all__ = ["canonical_json", "point_hash", "short_hash", "sha256_hex", "HASH_LENGTH",
-           "SHORT_LENGTH"]
+           "SHORT_LENGTH", "config_hashes_to"]
 
 HASH_LENGTH = 64
 SHORT_LENGTH = 12
@@ -81,3 +81,16 @@ def point_hash(config: ModelConfig | Mapping[str, Any],
 def short_hash(h: str) -> str:
     """The display prefix of a hash."""
     return h[:SHORT_LENGTH]
+
+
+def config_hashes_to(config_json: str, h: str, model_version: Any) -> bool:
+    """Whether a stored point's ``config_json`` still gives its hash ``h`` under
+    ``model_version`` (the text as stored, and failing that the config resolved fully:
+    text that is not canonical but means the same point)."""
+    text = '{"config":' + config_json + ',"model_version":' + json.dumps(model_version) + "}"
+    if sha256_hex(text) == h:
+        return True
+    try:
+        return point_hash(json.loads(config_json), model_version) == h
+    except Exception:  # noqa: BLE001 - any failure means it does not re-hash
+        return False

@@ -38,7 +38,7 @@ from pathlib import Path
 from typing import Any
 
 from .errors import StoreError, StoreLockedError
-from .identity import HASH_LENGTH, sha256_hex
+from .identity import HASH_LENGTH, config_hashes_to
 
 __all__ = ["Journal", "JournalScan", "BadLine", "journal_path", "rejected_path",
            "encode", "decode", "check_record", "HEADER_KIND", "JOURNAL_VERSION"]
@@ -137,17 +137,8 @@ def check_record(obj: dict[str, Any], model_version: str, statuses: tuple[str, .
     if config_json:
         if not isinstance(config_json, str):
             return "'config_json' is not a string"
-        expected = sha256_hex('{"config":' + config_json + ',"model_version":'
-                              + json.dumps(model_version) + "}")
-        if expected != h:
-            from .identity import point_hash  # not canonical text: resolve it fully
-
-            try:
-                full = point_hash(json.loads(config_json), model_version)
-            except Exception:  # noqa: BLE001 - any failure means it does not re-hash
-                full = ""
-            if full != h:
-                return f"its config does not hash to its hash {h[:12]}"
+        if not config_hashes_to(config_json, h, model_version):
+            return f"its config does not hash to its hash {h[:12]}"
     return ""
 
 

@@ -8,21 +8,12 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-import h5py
-
+from . import reader
 from .config import parse_campaign
 from .errors import CampaignMismatchError, Interrupted, StoreError
 from .provenance import environment
-from .schema import (
-    COLUMNS,
-    HISTORY_VAR,
-    MIGRATION_FILL,
-    MIGRATIONS,
-    PROFILE_VARS,
-    REPLICA_VARS,
-    SCHEMA_VERSION,
-    profile_path,
-)
+from .record import Record
+from .schema import MIGRATIONS, SCHEMA_VERSION
 from .store import Store
 
 __all__ = ["merge", "iter_records"]
@@ -31,29 +22,10 @@ __all__ = ["merge", "iter_records"]
 _BATCH = 256
 
 
-def _text(v: Any) -> Any:
-    return v.decode() if isinstance(v, bytes) else v
-
-
-def iter_records(path: str | Path) -> Iterator[dict[str, Any]]:
-    """Every committed point of a store as a record for :meth:`Store.put`."""
-    with h5py.File(path, "r", locking=False) as f:
-        table = f["table"]
-        n = int(table.attrs["n_rows"])
-        # a column an older (migratable) schema version lacks reads as its fill value
-        cols = {c.name: table[c.name][:n] if c.name in table
-                else [MIGRATION_FILL.get(c.name, c.fill)] * n for c in COLUMNS}
-        for i in range(n):
-            row = {name: _text(values[i]) for name, values in cols.items()}
-            row = {k: (v.item() if hasattr(v, "item") else v) for k, v in row.items()}
-            h = row["hash"]
-            name = profile_path(h)
-            profiles, history = {}, []
-            if name in f:
-                profiles = {k: f[name][k][()] for k in (*PROFILE_VARS, *REPLICA_VARS)
-                            if k in f[name] or k in PROFILE_VARS}
-                history = f[name][HISTORY_VAR[0]][()]
-            yield {"row": row, "profiles": profiles, "residual_history": history}
+def iter_records(path: str | Path) -> Iterator[Record]:
+    """Every committed point of a store as a :class:`sweep.record.Record`."""
+    with reader.open_file(path) as f:
+        yield from reader.iter_records(f)
 
 
 class _Stop:
@@ -104,7 +76,7 @@ def merge(output: str | Path, inputs: list[str | Path]) -> str:
             raise StoreError(f"{path}: is the output store itself; merge other stores"
                              " into it")
         try:
-            with h5py.File(path, "r", locking=False) as f:
+            with reader.open_file(path) as f:
                 version = f.attrs.get("schema_version")
                 try:
                     number = int(version)
@@ -114,8 +86,12 @@ def merge(output: str | Path, inputs: list[str | Path]) -> str:
                                                number not in MIGRATIONS):
                     raise StoreError(f"{path}: schema version {version!r}: this sweep"
                                      f" (schema version {SCHEMA_VERSION}) cannot merge it")
-                hashes.append(_text(f.attrs["campaign_hash"]))
-                texts.append(_text(f.attrs["campaign_toml"]))
+                hashes.append(reader.text(f.attrs["campaign_hash"]))
+                texts.append(reader.text(f.attrs["campaign_toml"]))
+                # every row still hashes to its hash: a merge never spreads a bad row
+                cols = reader.table_columns(f, ("hash", "config_json", "provenance"))
+                reader.check_hashes(path, cols["hash"], cols["config_json"],
+                                    reader.model_version(f), cols["provenance"])
         except StoreError:
             raise
         except (OSError, KeyError, ValueError, RuntimeError, TypeError) as exc:

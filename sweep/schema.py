@@ -332,13 +332,26 @@ def validate(path: str | Path) -> list[str]:
                 problems.append(f"/table/{col.name}: {ds.shape[0]} values < n_rows {n}")
         if problems:
             return problems
+        from . import reader
+
         table = f["table"]
-        hashes = [h.decode() if isinstance(h, bytes) else h for h in table["hash"][:n]]
-        status = [s.decode() if isinstance(s, bytes) else s for s in table["status"][:n]]
+        cols = reader.table_columns(f, ("hash", "status", "config_json", "provenance"), n)
+        hashes, status = list(cols["hash"]), list(cols["status"])
         n_floes = table["n_floes"][:n]
         replicas = table["replicas"][:n] if "replicas" in table else None
         if len(set(hashes)) != len(hashes):
             problems.append("/table/hash: duplicate hashes")
+        if "campaign_json" in f.attrs:
+            well_formed = [(i, h, cj, prov) for i, (h, cj, prov) in enumerate(zip(
+                hashes, cols["config_json"], cols["provenance"], strict=True))
+                if len(h) == HASH_LENGTH and set(h) <= set("0123456789abcdef")]
+            for k, h in reader.hash_mismatches([w[1] for w in well_formed],
+                                               [w[2] for w in well_formed],
+                                               reader.model_version(f),
+                                               [w[3] for w in well_formed]):
+                problems.append(f"/table/config_json[{well_formed[k][0]}]: does not hash"
+                                f" to its hash {h} (the row was altered after it was"
+                                " written)")
         for i, (h, s) in enumerate(zip(hashes, status, strict=False)):
             if len(h) != HASH_LENGTH or any(c not in "0123456789abcdef" for c in h):
                 problems.append(f"/table/hash[{i}]: {h!r} is not a {HASH_LENGTH}-character"

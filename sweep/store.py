@@ -1,7 +1,9 @@
 """The result store: one HDF5 file written only by the master, a journal and a lock.
 
 The parts: :mod:`sweep.lock` (who may write), :mod:`sweep.journal` (the durable truth,
-checksummed lines), :mod:`sweep.writer` (the HDF5 file). :class:`Store` is the policy
+checksummed lines), :mod:`sweep.writer` (the HDF5 file), :mod:`sweep.reader` (reading
+stored rows back), :mod:`sweep.campaign_check` (is this the store's campaign, or an
+``--extend`` of it), :mod:`sweep.record` (what a point is). :class:`Store` is the policy
 that ties them together.
 
 Writing points (group commit): :meth:`Store.add` stages a point (converted to the
@@ -43,9 +45,12 @@ from typing import Any
 
 import numpy as np
 
-from .errors import CampaignMismatchError, SchemaVersionError, StoreError
+from .campaign_check import check_campaign, check_legacy_journal
+from .errors import SchemaVersionError, StoreError
 from .journal import BadLine, Journal, JournalScan, decode, encode, journal_path, rejected_path
 from .lock import Lock, lock_path
+from .reader import text
+from .record import Record
 from .schema import FORMAT, MIGRATIONS, SCHEMA_VERSION, STATUSES
 from .writer import (
     HDF5_SIGNATURE,
@@ -53,16 +58,11 @@ from .writer import (
     Unstorable,
     fsync_dir,
     fsync_path,
-    normalise_record,
     set_campaign,
 )
 
 __all__ = ["Store", "Record", "journal_path", "lock_path", "rejected_path", "utc_now",
            "read_journal", "Unstorable"]
-
-Record = dict[str, Any]
-"""A point record: ``{"row": {column: value}, "profiles": {name: array},
-"residual_history": array}``."""
 
 #: Signals whose Python handlers must not run in the middle of a commit, an open or a
 #: rebuild (the in-process grace timer raises from its handler; a default action would
@@ -98,31 +98,16 @@ def utc_now() -> str:
     return _dt.datetime.now(_dt.UTC).isoformat(timespec="microseconds")
 
 
-def _jsonable(value: Any) -> Any:
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
-
-
-def _text(value: Any) -> str:
-    return value.decode() if isinstance(value, bytes) else str(value)
-
-
-def _with_arrays(rec: dict[str, Any]) -> Record:
-    rec["profiles"] = {k: np.asarray(v, dtype=np.float64)
-                       for k, v in rec.get("profiles", {}).items()}
-    rec["residual_history"] = np.asarray(rec.get("residual_history", []), dtype=np.float64)
-    return rec
-
 
 def read_journal(path: str | Path) -> Iterator[Record]:
-    """Yield the point records of a journal (torn or unreadable lines skipped)."""
+    """Yield the point records of a journal as written (torn or unreadable lines
+    skipped; values as the journal holds them, profiles and history as arrays)."""
     for rec in Journal(path).read():
         try:
-            yield _with_arrays(rec)
-        except (TypeError, ValueError):
+            yield Record(rec["row"], {k: np.asarray(v, dtype=np.float64)
+                                      for k, v in rec.get("profiles", {}).items()},
+                         np.asarray(rec.get("residual_history", []), dtype=np.float64))
+        except (TypeError, ValueError, AttributeError):
             continue
 
 
@@ -244,12 +229,13 @@ class Store:
         # the campaign check, before anything is changed: the file and the journal
         if campaign is not None:
             if info.get("campaign_json"):
-                self._check_campaign(_json(info["campaign_json"]), campaign, extend, "store")
+                check_campaign(self.path, _json(info["campaign_json"]), campaign, extend,
+                               "store", getattr(self, "_file_schema", "?"))
             if scan.identity is not None:
-                self._check_campaign(_json(scan.identity["campaign_json"]), campaign, extend,
-                                     "journal")
+                check_campaign(self.path, _json(scan.identity["campaign_json"]), campaign,
+                               extend, "journal", getattr(self, "_file_schema", "?"))
             elif scan.records and state != "ok":
-                self._check_legacy_journal(scan, campaign)
+                check_legacy_journal(self.journal.path, scan.latest, campaign)
         self.scan = scan
         if scan.bad:
             self._set_aside(scan.bad)
@@ -335,7 +321,7 @@ class Store:
         info: dict[str, Any] = {}
         try:
             with h5py.File(p, "r", locking=False) as f:
-                fmt = _text(f.attrs.get("format", ""))
+                fmt = text(f.attrs.get("format", ""))
                 if fmt != FORMAT:
                     if fmt or not ours:
                         raise StoreError(f"{p}: an HDF5 file but not a sweep store (format"
@@ -345,7 +331,7 @@ class Store:
                 try:
                     version = int(raw)
                 except (TypeError, ValueError):
-                    raise StoreError(f"{p}: schema_version {_text(raw)!r} is not a version"
+                    raise StoreError(f"{p}: schema_version {text(raw)!r} is not a version"
                                      " number; it was left untouched") from None
                 if version > SCHEMA_VERSION:
                     raise SchemaVersionError(
@@ -357,7 +343,7 @@ class Store:
                         raise SchemaVersionError(f"{p}: no migration from schema version"
                                                  f" {step} to {SCHEMA_VERSION}")
                     step = MIGRATIONS[step][0]
-                info["campaign_json"] = _text(f.attrs.get("campaign_json", ""))
+                info["campaign_json"] = text(f.attrs.get("campaign_json", ""))
                 self._file_schema = version
                 table = f["table"]
                 n = int(table.attrs["n_rows"])
@@ -377,58 +363,6 @@ class Store:
         if unclean and ours:
             return "unclean", info
         return "ok", info
-
-    def _check_campaign(self, old: dict[str, Any], campaign: Any, extend: bool,
-                        where: str) -> None:
-        """Refuse a campaign that is not the one of the store's file or journal."""
-        from .identity import canonical_json, sha256_hex
-
-        if sha256_hex(canonical_json(old)) == campaign.definition_hash():
-            return
-        new = campaign.definition()
-        if str(old.get("model_version")) != str(new.get("model_version")):
-            # another model version: none of its points is a point of this model
-            raise CampaignMismatchError(
-                f"{self.path}: the {where} holds points of model version"
-                f" {old.get('model_version')} (store schema"
-                f" {getattr(self, '_file_schema', '?')}); this"
-                f" sweep computes model version {new.get('model_version')} (schema"
-                f" {SCHEMA_VERSION}), whose points have other hashes. Use another --store;"
-                " the old one stays readable (sweep.load, sweep status, sweep export)")
-        if not extend:
-            diff = sorted(k for k in set(old["base"]) | set(new["base"])
-                          if old["base"].get(k) != new["base"].get(k))
-            sweep_diff = sorted(k for k in set(old["sweep"]) | set(new["sweep"])
-                                if old["sweep"].get(k) != new["sweep"].get(k))
-            what = ", ".join([f"[base] {k}" for k in diff] + [f"[sweep] {k}" for k in
-                                                              sweep_diff]) or "model_version"
-            raise CampaignMismatchError(
-                f"{self.path}: the {where} belongs to a different campaign (differs in"
-                f" {what}); use another --store, or --extend to add grid values to this one")
-        problems = []
-        if old["base"] != new["base"] or old["model_version"] != new["model_version"]:
-            problems.append("its [base] (or model version) differs")
-        if set(old["sweep"]) != set(new["sweep"]):
-            problems.append("its swept dimensions differ")
-        else:
-            for k, values in old["sweep"].items():
-                missing = [v for v in values if v not in new["sweep"][k]]
-                if missing:
-                    problems.append(f"[sweep] {k} drops {missing}")
-        if problems:
-            raise CampaignMismatchError(f"{self.path}: cannot --extend this {where}: "
-                                        + "; ".join(problems))
-
-    def _check_legacy_journal(self, scan: JournalScan, campaign: Any) -> None:
-        """A journal without a campaign line (written before version 2) is used to
-        rebuild only if every point it holds belongs to the campaign's grid."""
-        grid = {p.hash for p in campaign.points()}
-        foreign = [h for h in scan.latest if h not in grid]
-        if foreign:
-            raise CampaignMismatchError(
-                f"{self.journal.path}: holds {len(foreign)} point(s) that are not in this"
-                f" campaign's grid (e.g. {foreign[0][:12]}): it belongs to another campaign;"
-                " use another --store, or move the journal away")
 
     def _set_aside(self, bad: list[tuple[int, int, str]]) -> None:
         try:
@@ -503,7 +437,7 @@ class Store:
                 continue
             try:
                 obj, _ = decode(line, require_checksum=False)
-                batch.append(normalise_record(obj))
+                batch.append(Record.coerce(obj))
             except (BadLine, Unstorable) as exc:
                 bad.append((offset, len(line), f"cannot be written to HDF5: {exc}"))
                 continue
@@ -528,12 +462,12 @@ class Store:
         f.attrs["writer_open"] = True  # before anything in the file changes
         w.durable()
         self._migrate(f)
-        if campaign is not None and _text(f.attrs.get("campaign_hash", "")) != \
+        if campaign is not None and text(f.attrs.get("campaign_hash", "")) != \
                 campaign.definition_hash():  # --extend (checked above)
             hist = f.require_group("campaign_history")
             import h5py
 
-            hist.create_dataset(str(len(hist)), data=_text(f.attrs["campaign_toml"]),
+            hist.create_dataset(str(len(hist)), data=text(f.attrs["campaign_toml"]),
                                 dtype=h5py.string_dtype("utf-8"))
             set_campaign(f, campaign)
         self.orphans_removed = w.prepare()
@@ -551,24 +485,10 @@ class Store:
         missing = [h for h in w.rows if h not in self.scan.latest]
         if not missing:
             return
-        from .schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, REPLICA_VARS, profile_path
+        from . import reader
 
-        table = w.file["table"]
-        n = int(table.attrs["n_rows"])
-        cols = {c.name: table[c.name][:n] for c in COLUMNS}
-        lines = []
-        for h in missing:
-            i = w.rows[h]
-            row = {name: (_text(v[i]) if isinstance(v[i], (bytes, str)) else v[i].item())
-                   for name, v in cols.items()}
-            name = profile_path(h)
-            profiles, history = {}, []
-            if name in w.file:
-                profiles = {k: w.file[name][k][()].tolist()
-                            for k in (*PROFILE_VARS, *REPLICA_VARS) if k in w.file[name]}
-                history = w.file[name][HISTORY_VAR[0]][()].tolist()
-            lines.append(encode({"row": row, "profiles": profiles,
-                                 "residual_history": history}))
+        lines = [rec.journal_line()
+                 for rec in reader.iter_records(w.file, set(missing), normalise=False)]
         self.journal.open_for_append()
         _check_space(self.journal.path, 2 * sum(map(len, lines)), "journaling stored points")
         try:
@@ -643,22 +563,16 @@ class Store:
         self.add(record)
         self.commit()
 
-    def add(self, record: Record) -> None:
+    def add(self, record: Record | dict[str, Any]) -> None:
         """Stage one point for the next :meth:`commit` (nothing is written yet).
 
-        The record is converted to the schema's kinds first (:class:`Unstorable` if a
-        value cannot be; nothing is staged then). A staged point is not stored: a crash
-        or :meth:`close` before :meth:`commit` loses it (it was never acknowledged).
+        ``record`` is a :class:`sweep.record.Record` (or a dict of its members, converted
+        to the schema's kinds first: :class:`Unstorable` if a value cannot be; nothing
+        is staged then). A staged point is not stored: a crash or :meth:`close` before
+        :meth:`commit` loses it (it was never acknowledged).
         """
-        rec = normalise_record(record)
-        row = rec["row"]
-        if "hash" not in row:
-            raise Unstorable("no 'hash'")
-        row["seq"] = self.next_seq
-        row["run"] = self.run_index
-        line = encode({"row": row,
-                       "profiles": {k: v.tolist() for k, v in rec["profiles"].items()},
-                       "residual_history": rec["residual_history"].tolist()})
+        rec = Record.coerce(record).stamped(self.next_seq, self.run_index)
+        line = rec.journal_line()
         self.next_seq += 1
         self._lines.append(line)
         self._staged.append(rec)

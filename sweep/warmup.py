@@ -50,7 +50,7 @@ def warm_up(configs: list[dict[str, Any]], compute: str) -> tuple[float, str]:
     try:
         from floewave import ModelConfig
 
-        from .executor import resolve_compute
+        from .worker import resolve_compute
 
         fn = resolve_compute(compute)
         for c in configs:

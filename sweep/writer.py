@@ -21,6 +21,7 @@ import h5py
 import numpy as np
 from h5py import h5a, h5d, h5g, h5s, h5t
 
+from .reader import text
 from .schema import (
     COLUMNS,
     FORMAT,
@@ -47,9 +48,6 @@ _I64 = (-(2 ** 63), 2 ** 63 - 1)
 class Unstorable(ValueError):
     """A record holds a value the schema cannot store; the message says which."""
 
-
-def _text(value: Any) -> str:
-    return value.decode() if isinstance(value, bytes) else str(value)
 
 
 def _clean_str(value: Any) -> str:
@@ -229,7 +227,7 @@ class H5Writer:
                           h5t.py_create(np.dtype(_DTYPES[col.kind]) if col.kind != "str"
                                         else _STR))
                          for col in COLUMNS]
-        hashes = [_text(h) for h in table["hash"][:n]]
+        hashes = [text(h) for h in table["hash"][:n]]
         self.rows = {h: i for i, h in enumerate(hashes)}
         self.seq_of = {h: int(s) for h, s in zip(hashes, table["seq"][:n], strict=False)}
         removed = 0
@@ -241,7 +239,7 @@ class H5Writer:
         return removed
 
     def status_of(self, h: str) -> str:
-        return _text(self.file["table"]["status"][self.rows[h]])
+        return text(self.file["table"]["status"][self.rows[h]])
 
     def write_many(self, records: list[dict[str, Any]]) -> None:
         """Write normalised records (profiles, then rows, then ``n_rows``); no sync."""

@@ -86,6 +86,24 @@ def test_shard_partition():
     assert c.shard(0, 3).definition_hash() == c.definition_hash()
 
 
+def test_shard_filters_the_expanded_grid_instead_of_expanding_it_again():
+    import dataclasses
+
+    c = parse_campaign("[base]\nh_i = 0.1\n[sweep]\nT = [0.6, 1.2, 1.8]\n"
+                       "dispersion = ['ml', 'ep']\neps = [0.2, 0.4]\n")
+    for k in range(3):
+        shard = c.shard(k, 3)
+        assert "_grid" in shard.__dict__  # the parent's grid, filtered
+        fresh = dataclasses.replace(c, shard_of=(k, 3))  # expanded on its own
+        assert "_grid" not in fresh.__dict__
+
+        def key(points):
+            return [(p.index, p.hash, p.swept, p.cost, p.invalid) for p in points]
+
+        assert key(shard.points()) == key(fresh.points()) and shard.size == fresh.size
+    assert sum(c.shard(k, 3).size for k in range(3)) == c.size == 12
+
+
 BAD = [
     ("unknown_table", "[oops]\nx = 1\n" + MINIMAL, "oops"),
     ("unknown_base_key", "[base]\nL_xx = 1.0\n" + MINIMAL, "L_xx"),

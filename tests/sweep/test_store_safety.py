@@ -322,6 +322,8 @@ def test_compute_faults_are_failed_points(tmp_path):
         assert needle in df.loc[eps, "message"], (eps, df.loc[eps, "message"])
     assert df.loc[0.6, "status"] == "converged"
     assert sweep.validate(path) == []
+    # the run's counts are the stored statuses (one Record: W_c = 'wide' is failed)
+    assert s.counts == {"failed": 5, "converged": 1}
 
 
 def test_bad_compute_is_a_config_error_and_writes_nothing(tmp_path):

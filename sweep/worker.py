@@ -1,0 +1,215 @@
+"""The worker side of a campaign: compute one point, whatever happens, and the MPI
+worker loop.
+
+Points are computed by a pluggable function ``"module:function"`` (:func:`resolve_compute`)
+taking a :class:`floewave.ModelConfig` and returning a :class:`floewave.PointResult` (or a
+dict like its ``to_dict()``); the default is ``floewave:run_point``. :func:`compute_point`
+turns whatever happens into an outcome: ``invalid`` for
+:class:`floewave.InvalidPointError`, ``failed`` for any other exception or NaN results
+(the message carries rank, host and traceback), ``timeout`` past ``point_timeout``, the
+model's own status otherwise. The master makes it a :class:`sweep.record.Record`.
+"""
+from __future__ import annotations
+
+import contextlib
+import importlib
+import os
+import signal
+import time
+import traceback
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+import floewave
+from floewave import ModelConfig
+
+from .errors import ConfigError, SweepError
+from .provenance import environment, host
+from .record import plain
+from .schema import PROFILE_VARS, REPLICA_VARS
+from .signals import GraceExpired
+from .store import utc_now
+from .warmup import warm_up
+
+__all__ = ["DEFAULT_COMPUTE", "MODEL_STATUSES", "resolve_compute", "compute_point",
+           "worker_loop"]
+
+DEFAULT_COMPUTE = "floewave:run_point"
+MODEL_STATUSES = floewave.results.STATUSES
+#: Longest interval [s] given to ``faulthandler`` (larger values overflow it).
+_MAX_TIMER = 1e7
+
+
+class _PointTimeout(BaseException):
+    """Raised in the computing thread when a point runs past its ``point_timeout``."""
+
+
+#: The hard limit of a point stuck in native code: ``point_timeout`` plus this much
+#: (at least ``_HARD_MIN`` s) later the process ends (``faulthandler``; exit 1 and a
+#: traceback; under MPI the job ends with it) and the point counts as an attempt.
+#: ``SWEEP_HARD_TIMEOUT_MIN`` (seconds) overrides the minimum margin (tests).
+_HARD_FACTOR = 1.0
+_HARD_MIN = float(os.environ.get("SWEEP_HARD_TIMEOUT_MIN", "30"))
+_TIMEOUT_SIGNAL = signal.SIGUSR2
+
+
+class _Deadline:
+    """``point_timeout`` for the computation in the main thread.
+
+    Soft: a timer thread sends SIGUSR2 to the main thread at the limit and its handler
+    raises :class:`_PointTimeout` (between bytecodes: at once in Python code or a sleep,
+    when a numba kernel call returns). Hard: ``faulthandler`` ends the process a margin
+    later if the point is stuck in native code.
+    """
+
+    def __init__(self, seconds: float) -> None:
+        self.seconds = seconds
+        self._timer: Any = None
+        self._old: Any = None
+
+    def _raise(self, signum: int, frame: Any) -> None:
+        raise _PointTimeout(f"ran longer than point_timeout = {self.seconds:g} s")
+
+    def __enter__(self) -> _Deadline:
+        import faulthandler
+        import threading
+
+        if threading.current_thread() is not threading.main_thread():
+            return self
+        self._old = signal.signal(_TIMEOUT_SIGNAL, self._raise)
+        main = threading.main_thread().ident
+        self._timer = threading.Timer(self.seconds, signal.pthread_kill,
+                                      args=(main, _TIMEOUT_SIGNAL))
+        self._timer.daemon = True
+        self._timer.start()
+        hard = self.seconds + max(_HARD_MIN, _HARD_FACTOR * self.seconds)
+        faulthandler.dump_traceback_later(min(hard, _MAX_TIMER), exit=True)
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        import faulthandler
+
+        if self._timer is None:
+            return
+        self._timer.cancel()
+        faulthandler.cancel_dump_traceback_later()
+        signal.signal(_TIMEOUT_SIGNAL, self._old)
+        self._timer = None
+
+
+def resolve_compute(spec: str) -> Callable[[ModelConfig], Any]:
+    """Import ``"module:function"``."""
+    module, _, name = spec.partition(":")
+    if not module or not name:
+        raise ConfigError(f"--compute {spec!r}: expected 'module:function'")
+    try:
+        fn = importlib.import_module(module)
+        for part in name.split("."):
+            fn = getattr(fn, part)
+    except Exception as exc:  # noqa: BLE001 - ImportError, AttributeError, its own errors
+        raise ConfigError(f"--compute {spec!r}: cannot import it: {type(exc).__name__}:"
+                          f" {exc}") from None
+    if not callable(fn):
+        raise ConfigError(f"--compute {spec!r} is not callable")
+    return fn  # type: ignore[return-value]
+
+
+def compute_point(task: dict[str, Any], fn: Callable[[ModelConfig], Any],
+                  rank: int = 0) -> dict[str, Any]:
+    """Compute one point and describe the outcome; never raises for a point's fault.
+
+    Returns a dict with ``hash``, ``status``, ``message``, ``scalars``, ``profiles``,
+    ``residual_history`` and the provenance fields ``host``, ``rank``, ``pid``,
+    ``start_time``, ``end_time``, ``wall_time``.
+    """
+    start_wall, t0 = utc_now(), time.perf_counter()
+    out: dict[str, Any] = {"hash": task["hash"], "status": "failed", "message": "",
+                           "scalars": {}, "profiles": {}, "residual_history": np.zeros(0)}
+    try:
+        # not checked again here: the master checked every point's physics when it
+        # expanded the grid (sweep.config), and impossible points never reach a worker
+        cfg = ModelConfig.from_dict(task["config"])
+        limit = float(task.get("timeout") or 0.0)
+        if limit > 0:
+            with _Deadline(limit):
+                result = fn(cfg)
+        else:
+            result = fn(cfg)
+        data = result.to_dict() if hasattr(result, "to_dict") else dict(result)
+        profiles = {k: np.asarray(data[k], dtype=np.float64)
+                    for k in (*PROFILE_VARS, *REPLICA_VARS) if k in data}
+        out["profiles"] = profiles
+        out["residual_history"] = np.asarray(data.get("residual_history", []),
+                                             dtype=np.float64)
+        out["scalars"] = {k: plain(v) for k, v in data.items()
+                          if k not in profiles and k != "residual_history"
+                          and np.ndim(v) == 0}
+        status = str(data.get("status", ""))
+        bad = [k for k in ("a", "x_mean") if k in profiles
+               and not np.all(np.isfinite(profiles[k]))]
+        if status not in MODEL_STATUSES:
+            out["message"] = f"model returned unknown status {status!r}"
+        elif "a" not in profiles:
+            out["message"] = "model returned no amplitude profile 'a'"
+        elif bad:
+            out["message"] = "non-finite values (NaN/inf) in " + ", ".join(bad)
+        else:
+            out["status"] = status
+    except floewave.InvalidPointError as exc:
+        out["status"] = "invalid"
+        out["message"] = f"{type(exc).__name__}: {exc}"
+    except GraceExpired:
+        raise  # the in-process grace period ran out: the master stops
+    except _PointTimeout as exc:
+        out["status"] = "timeout"
+        out["scalars"], out["profiles"] = {}, {}
+        out["residual_history"] = np.zeros(0)
+        out["message"] = f"{exc} (rank {rank}, host {host()}, pid {os.getpid()})"
+    except BaseException as exc:  # noqa: BLE001 - a point's failure is data, not a crash
+        # SystemExit and KeyboardInterrupt raised by a point are its failure too
+        out["status"] = "failed"
+        out["scalars"], out["profiles"] = {}, {}
+        out["residual_history"] = np.zeros(0)
+        out["message"] = (f"{type(exc).__name__}: {exc} (rank {rank}, host {host()},"
+                          f" pid {os.getpid()})\n{traceback.format_exc()}")
+    out.update(host=host(), rank=rank, pid=os.getpid(), start_time=start_wall,
+               end_time=utc_now(), wall_time=time.perf_counter() - t0)
+    return out
+
+
+def worker_loop(comm: Any, compute: str = DEFAULT_COMPUTE) -> None:
+    """Run on ranks 1..N-1: receive tasks from rank 0 until ``None``, send back results.
+
+    Stop signals are ignored here: the master decides when to stop (grace period).
+    """
+    from .transport import TAG_RESULT, TAG_TASK, wait_message
+
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1):
+        with contextlib.suppress(ValueError, OSError):
+            signal.signal(sig, signal.SIG_IGN)
+    rank = comm.Get_rank()
+    try:
+        fn = resolve_compute(compute)
+        env = environment(with_git=False, with_mpi=True)
+    except Exception as exc:  # noqa: BLE001 - reported to the master, which stops
+        plain = isinstance(exc, SweepError)  # its message says it all
+        comm.send(("error", {"rank": rank, "host": host(),
+                             "message": str(exc) if plain else f"{exc!r}",
+                             "traceback": "" if plain else traceback.format_exc()}),
+                  dest=0, tag=TAG_RESULT)
+        fn, env = None, {}
+    else:
+        comm.send(("ready", env), dest=0, tag=TAG_RESULT)
+    while True:
+        wait_message(comm, 0, TAG_TASK)
+        task = comm.recv(source=0, tag=TAG_TASK)
+        if task is None:
+            return
+        if fn is None:
+            continue
+        if "warm_up" in task:  # before the campaign's clock starts (sweep.warmup)
+            comm.send(("warm", warm_up(task["warm_up"], compute)), dest=0, tag=TAG_RESULT)
+            continue
+        comm.send(("result", compute_point(task, fn, rank)), dest=0, tag=TAG_RESULT)
