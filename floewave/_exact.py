@@ -409,7 +409,7 @@ def drag_sums_exact(A, c, s, v, geom):
 
 @njit(**JIT)
 def drag_force_exact(A, c, s, v, geom):
-    """Only ``s2`` of :func:`drag_sums_exact` (counterpart of ``drag_force_sum``)."""
+    """Only ``s2`` of :func:`drag_sums_exact`."""
     return drag_sums_exact(A, c, s, v, geom)[0]
 
 
@@ -423,8 +423,9 @@ def drag_sums_exact_phase(A, theta, v, kL, n_x):
 @njit(**JIT)
 def general_floes(flags, idx, everyone):
     """Write the indices of the floes with ``flags[i] == 1`` (all floes if ``everyone``)
-    to the front of ``idx``; return their count. The second pass of :func:`drag_pass_exact`
-    and :func:`floewave._kernels.drag_pass` runs the general evaluation on those only."""
+    to the front of ``idx``; return their count. After the closed-form pass of
+    :func:`drag_pass_exact`, :func:`floewave._kernels.drag_pass` or
+    :func:`floewave._kernels.exact_pass`, only those floes get the general evaluation."""
     n = flags.shape[0]
     if everyone:
         for i in range(n):
@@ -445,7 +446,8 @@ def drag_pass_exact(ck, sk, cwt, swt, a, u_amp, vs, geom, accumulate, sc, idx):
     ``theta_i = k x_i - omega t`` from ``ck, sk = cos, sin(k x_i)`` and ``cwt, swt = cos,
     sin(omega t)``; ``A_i = a_i u_amp``, ``v_i = vs[i]``. Fills ``sc[0], sc[1] = cos, sin
     theta_i``, ``sc[2] = s2``, ``sc[3] = s3`` (only if ``accumulate``); ``sc[4]`` and the
-    int array ``idx`` are scratch (``sc`` has at least 5 rows and N_f columns; ``idx`` (N_f,)).
+    int array ``idx`` are scratch (``sc`` has at least 5 rows and n columns, ``idx`` n entries,
+    n the floes of all replicas).
 
     Two passes, same results as calling :func:`drag_sums_exact` floe by floe: a branch-free
     (vectorised) loop over all floes evaluates the one-sign case ``sigma W`` of

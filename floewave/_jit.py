@@ -11,8 +11,8 @@ generated code:
 
 - numba compiles every ``@njit`` function into its own code library and links each callee's
   *optimised* module into its caller's, which is optimised again as a whole;
-- a callee that LLVM does not inline (``eval_forces``, ``drag_pass``, ``general_floes`` … are
-  called out of line from ``advance``) exists twice in a cold process: its own library,
+- a callee that LLVM does not inline (then ``eval_forces``, ``drag_pass``, ``general_floes``
+  … were called out of line from ``advance``) exists twice in a cold process: its own library,
   compiled first, and the copy inside the caller's library. The JIT linker resolves the call
   to the first definition of the symbol it loaded — the callee's own library. A warm process
   loads only the caller's cached object and runs the other copy;
@@ -39,7 +39,7 @@ from __future__ import annotations
 JIT = dict(cache=True, fastmath=False, nogil=True, error_model="numpy")
 
 #: Per-step functions that never allocate: compiled without numba's reference counting
-#: (``_nrt=False``). With it, every call of ``eval_forces`` paid ~40 atomic NRT
+#: (``_nrt=False``). With it, every call of the (then) ``eval_forces`` paid ~40 atomic NRT
 #: incref/decref operations on its array arguments: measured ~110 ns per step, 15 % of a
 #: step of 84 floes (benchmarks/bench_kernel.py, 2026-11-22). Such a function must not
 #: create or return arrays (numba refuses to compile one that does).

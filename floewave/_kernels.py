@@ -37,10 +37,11 @@ drag and dissipation are sums over the n_x = L_x/dx cells of a floe of |w| w and
 ``w_j = A cos(theta + phi_j) - v`` at the cell phases ``phi_j = -h + j k dx``. A floe where
 w has one sign is summed in closed form from the cell tables' central moments; on the
 others the sign of w changes only at the roots of ``A cos(theta + phi) = v``, so the sum is
-the whole-floe sum plus, per root, twice a prefix sum of the cells before it (prefix tables
-of the cell phases in closed form, :func:`prefix_sums`): a handful of operations per root instead of a
-loop over n_x cells (50-300 at the paper's dx). Equal to the cell loop to rounding (relative
-1e-15 of the floe's scale (|A| + |v|)^m n_x, tested against :func:`drag_sums`).
+the whole-floe sum plus, per root, twice a prefix sum of the cells before it (geometric sums
+over the cell phases in closed form, :func:`prefix_sums`): a handful of operations per root
+instead of a loop over n_x cells (50-300 at the paper's dx). Equal to the cell loop to rounding (within
+1e-13 of the floe's scale (|A| + |v|)^m n_x, tested against :func:`drag_sums`; tables with
+k dx outside [KDX_MIN, KDX_MAX] take the cell loop).
 """
 from __future__ import annotations
 
@@ -51,7 +52,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ._exact import drag_pass_exact, drag_sums_exact, general_floes
+from ._exact import _H_POINT, drag_pass_exact, drag_sums_exact, general_floes
 from ._jit import JIT, JITN
 
 # option codes (decided once from ModelConfig)
@@ -226,11 +227,17 @@ M_SHE = 20
 M_T1 = 21        # 1 / (2 sin(m delta / 2)), m = 1, 2, 3 (geometric sums of cos(m psi_j))
 M_T2 = 22
 M_T3 = 23
-N_MOM = 24
+M_EXACT = 24     # 1: tables of the exact drag (exact_tables): roots at their own phase
+M_SCALE = 25     # n_x / (k L_x): the exact drag's integrals in cells
+N_MOM = 26
 # the geometric sums are evaluated with Taylor series of sin, cos of d, |d| <= delta / 2
 # (:func:`_sin_cos_small`): the prefix sums of drag_pass need delta = k dx up to this (at
-# most 0.035 in the paper's grid); finer tables are summed cell by cell
+# most 0.035 in the paper's grid); coarser tables are summed cell by cell
 KDX_MAX = 0.05
+# ... and down to this: the geometric sums carry 1 / (2 sin(m delta / 2)) ~ 1 / (m delta), so
+# their rounding grows as eps / delta (measured: 1.6e-13 of the floe's scale at delta = 1e-3,
+# 3e-12 at 5e-7); finer tables are summed cell by cell as well
+KDX_MIN = 1e-3
 
 _TWO_PI = 2.0 * math.pi
 
@@ -272,7 +279,7 @@ def drag_tables(cxi, sxi, P):
         fast = 0.0
     else:
         kdx = 2.0 * h / (n - 1)
-        if kdx > KDX_MAX:
+        if kdx > KDX_MAX or kdx < KDX_MIN:
             fast = 0.0
         for j in range(n):
             if (abs(math.cos(-h + j * kdx) - cxi[j]) > 1e-9
@@ -295,6 +302,90 @@ def drag_tables(cxi, sxi, P):
         sm = math.sin(0.5 * mm * kdx)
         mom[M_T1 + mm - 1] = 0.5 / sm if sm != 0.0 else 0.0
     return mom
+
+
+@njit(**JIT)
+def exact_tables(geom):
+    """The :func:`drag_tables` entries :func:`prefix_sums` reads, for the exact drag
+    (dx -> 0) of ``geom = exact_geometry(k L_x, n_x)``: the floe spans [-kL/2, kL/2], a root
+    contributes at its own phase (the integral up to it instead of the cells before it),
+    ``int cos(m psi) = sin(m psi) / m``, all in the quadrature's units (times n_x / kL)."""
+    h, ch, sh, scale, n_x, K20, K22, K31, K33 = geom
+    mom = np.zeros(N_MOM)
+    mom[M_N] = n_x
+    mom[M_CB] = sh / h if h > _H_POINT else 1.0     # floe means of cos, sin of the phase
+    mom[M_SB] = 0.0
+    # (short floes, kL < 2e-3: the per-floe path, whose series keep the accuracy there)
+    mom[M_FAST] = 1.0 if h > 1e-3 else 0.0
+    mom[M_H] = h
+    mom[M_HE] = h
+    mom[M_CHE] = ch
+    mom[M_SHE] = sh
+    mom[M_NROOT] = math.floor(2.0 * h / _TWO_PI) + 1.0
+    mom[M_T1] = scale
+    mom[M_T2] = scale / 2.0
+    mom[M_T3] = scale / 3.0
+    mom[M_EXACT] = 1.0
+    mom[M_SCALE] = scale
+    return mom
+
+
+@njit(**JITN)
+def exact_pass(ck, sk, cwt, swt, a, vs, P, mom, accumulate, sc, idx):
+    """The exact (dx -> 0) drag of every floe of the flattened ensemble, equal to
+    :func:`~floewave._exact.drag_sums_exact` floe by floe to rounding; returns the number
+    of floes with a root of w on them. ``mom`` from :func:`exact_tables`.
+
+    The one-sign closed form of :func:`~floewave._exact.drag_pass_exact` for every floe
+    (vectorised), then the floes with a root by :func:`prefix_sums`, as the quadrature's.
+    A point-like floe (kL ~ 0) takes the per-floe path.
+    """
+    n = ck.shape[0]
+    if sc.shape[0] < N_SC or sc.shape[1] < n + LANES or idx.shape[0] < n:
+        raise ValueError("exact_pass: scratch too small (sc needs N_SC rows and R N_f + LANES"
+                         " columns: new_scratch)")
+    geom = P.geom
+    h, ch, sh, scale, _n_x, K20, K22, K31, K33 = geom
+    if mom[M_FAST] < 0.5:
+        return drag_pass_exact(ck, sk, cwt, swt, a, P.u_amp, vs, geom, accumulate, sc, idx)
+    long_floe = h >= math.pi
+    ua = P.u_amp
+    for i in range(n):
+        c = ck[i] * cwt + sk[i] * swt
+        s = sk[i] * cwt - ck[i] * swt
+        sc[SC_C, i] = c
+        sc[SC_S, i] = s
+        A = a[i] * ua
+        v = vs[i]
+        # as drag_integrals: A < 0 is |A| with theta + pi (X = A c unchanged)
+        Aa = abs(A)
+        X = A * c
+        cs = -c if A < 0.0 else c
+        ss = -s if A < 0.0 else s
+        A2 = Aa * Aa
+        v2 = v * v
+        K1X = 2.0 * sh * X
+        C2 = K20 * A2 + K22 * X * X
+        W2 = C2 - 2.0 * v * K1X + 2.0 * h * v2
+        Q2 = (Aa - v) * (Aa + v)
+        Q = math.sqrt(max(Q2, 0.0))
+        vc = v * cs
+        Ach = Aa * ch
+        root = Q2 > 0.0 and (long_floe or vc + Q * ss >= Ach or vc - Q * ss >= Ach)
+        wc = X - v
+        sig = 1.0 if wc > 0.0 or (wc == 0.0 and v < 0.0) else -1.0
+        sc[SC_S2, i] = scale * (sig * W2)
+        if accumulate:
+            W3 = X * (K31 * A2 + K33 * X * X) - 3.0 * v * C2 + 3.0 * v2 * K1X \
+                - 2.0 * h * v2 * v
+            # one-sign floes: |w|^3 >= 0, a rounding-level negative clipped; the others
+            # keep the signed whole-floe sum for prefix_sums
+            sc[SC_S3, i] = scale * (sig * W3 if root else max(sig * W3, 0.0))
+        sc[SC_SIG, i] = sig
+        sc[SC_FLAG, i] = 1.0 if root else 0.0
+    m = general_floes(sc[SC_FLAG, :n], idx, False)
+    prefix_sums(sc, idx, m, a, ua, vs, mom, accumulate)
+    return m
 
 
 @njit(**JITN)
@@ -410,6 +501,7 @@ def prefix_sums(sc, idx, m, a, ua, vs, mom, accumulate):
     kdx = mom[M_KDX]
     inv_kdx = mom[M_INV_KDX]
     nroot = int(mom[M_NROOT])
+    fnroot = float(nroot)
     nx = mom[M_N]
     cb = mom[M_CB]
     sbb = mom[M_SB]
@@ -419,6 +511,8 @@ def prefix_sums(sc, idx, m, a, ua, vs, mom, accumulate):
     t1 = mom[M_T1]
     t2 = mom[M_T2]
     t3 = mom[M_T3]
+    exact = mom[M_EXACT] > 0.5
+    scale = mom[M_SCALE]
     gA = sc[SC_GATHER]         # |A|
     gc = sc[SC_GATHER + 1]     # cos, sin theta of |A| (theta + pi if A < 0)
     gs = sc[SC_GATHER + 2]
@@ -469,8 +563,10 @@ def prefix_sums(sc, idx, m, a, ua, vs, mom, accumulate):
         gm[t] = rm
         # roots on the floe (the same expression decides below which roots count) and the
         # sign after the last one; none: the sign of w's mean
-        n_p = math.floor((h - rp) * (1.0 / _TWO_PI)) + 1.0 if rp <= h else 0.0
-        n_m = math.floor((h - rm) * (1.0 / _TWO_PI)) + 1.0 if rm <= h else 0.0
+        # (at most nroot: the loop below enumerates that many, and a first root a few ulp
+        # below -h with 2h a few ulp below a multiple of 2 pi would count one more)
+        n_p = min(math.floor((h - rp) * (1.0 / _TWO_PI)) + 1.0, fnroot) if rp <= h else 0.0
+        n_m = min(math.floor((h - rm) * (1.0 / _TWO_PI)) + 1.0, fnroot) if rm <= h else 0.0
         lp = rp + _TWO_PI * (n_p - 1.0) if n_p > 0.0 else -1e300
         lm = rm + _TWO_PI * (n_m - 1.0) if n_m > 0.0 else -1e300
         v = gv[t]
@@ -502,12 +598,17 @@ def prefix_sums(sc, idx, m, a, ua, vs, mom, accumulate):
             fk = float(kk)
             for t in range(mp):
                 r0 = rows[t]
-                n_r = math.floor((h - r0) * (1.0 / _TWO_PI)) + 1.0 if r0 <= h else 0.0
+                n_r = (min(math.floor((h - r0) * (1.0 / _TWO_PI)) + 1.0, fnroot)
+                       if r0 <= h else 0.0)
                 on = fk < n_r
                 r = r0 + off if on else 0.0
-                b = math.floor((r + h) * inv_kdx) + 1.0
-                b = min(max(b, 0.0), nx)
-                d = (b * kdx - he) - r                   # edge of cell b minus the root
+                if exact:       # the integral up to the root (in cells): at the root
+                    b = (min(r, he) + he) * scale
+                    d = 0.0
+                else:           # the cells before the root: up to the edge of cell b
+                    b = math.floor((r + h) * inv_kdx) + 1.0
+                    b = min(max(b, 0.0), nx)
+                    d = (b * kdx - he) - r
                 A = gA[t]
                 v = gv[t]
                 p = gpp[t]
@@ -551,7 +652,8 @@ def drag_pass(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc, idx):
     evaluates the whole-floe sums in closed form: with mu the mean of w_j and
     d_j = w_j - mu, ``sum w^2 = n mu^2 + sum d^2``, ``sum w^3 = n mu^3 + 3 mu sum d^2 +
     sum d^3`` (no cancellation). The floes where w may change sign are then completed by
-    :func:`prefix_sums` (or the cell loop :func:`cell_sums` on foreign tables).
+    :func:`prefix_sums` (or by the cell loop :func:`cell_sums` on tables the prefix sums
+    cannot take: ``mom[M_FAST] = 0``).
     """
     n = ck.shape[0]
     if sc.shape[0] < N_SC or sc.shape[1] < n + LANES or idx.shape[0] < n:
@@ -661,6 +763,11 @@ def make_advance(opts: KernelOptions):
                              " of N_f >= 2")
         if init and accumulate:
             raise ValueError("advance: init only in a loop that does not accumulate")
+        if (u.shape[0] != nt or acc.shape[0] != nt or a.shape[0] != nt or x0.shape[0] != nt
+                or in_contact.shape[0] != nt
+                or (accumulate and (stats.shape[0] < N_STATS or stats.shape[1] != nt))):
+            raise ValueError("advance: x, u, acc, a, x0, in_contact (and stats) must all"
+                             " have R N_f entries (stats: N_STATS rows)")
         R = nt // nf
         dt = P.dt
         uh = work[W_UH, :nt]
@@ -703,8 +810,7 @@ def make_advance(opts: KernelOptions):
             # + F_s. Wave (Froude-Krylov) and ice-water drag: the drag sums of all floes
             # first, then one loop over the floes
             if drag == DRAG_EXACT:
-                drag_pass_exact(ck, sk, cwt, swt, a, P.u_amp, vs, P.geom, accumulate, sc,
-                                idx)
+                exact_pass(ck, sk, cwt, swt, a, vs, P, mom, accumulate, sc, idx)
             else:
                 drag_pass(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc, idx)
             for j in range(nt):

@@ -52,7 +52,8 @@ def forces(x: np.ndarray, v: np.ndarray, a: np.ndarray, x0: np.ndarray, wt: floa
 
 
 def advance(x, u, acc, a, x0, istep, nsteps, P, cxi, sxi):
-    """Numpy twin of the time loop :func:`floewave._kernels.make_advance` builds (no statistics); returns istep."""
+    """Numpy twin of the time loop :func:`floewave._kernels.make_advance` builds, for one
+    chain (``x[1:] - x[:-1]`` pairs every neighbour; no statistics); returns istep."""
     dt = P.dt
     for _ in range(nsteps):
         istep += 1

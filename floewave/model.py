@@ -47,7 +47,9 @@ class FloeChain:
         self.n = self.x0.shape[-1]
         self.replicas = self.x0.size // self.n
         self.work = K.new_work(self.x0.size)
-        self.mom = K.drag_tables(self.cxi, self.sxi, self.P)
+        # the tables' moments for the drag mode the loop runs (prefix_sums reads either)
+        self.mom = (K.exact_tables(self.P.geom) if self.P.drag == K.DRAG_EXACT
+                    else K.drag_tables(self.cxi, self.sxi, self.P))
         self.idx = np.zeros(self.x0.size, np.int64)
         self._spin = K.make_advance(K.kernel_options(self.P, False))
         self._average = K.make_advance(K.kernel_options(self.P, True))
@@ -82,7 +84,14 @@ class FloeChain:
         """
         a = np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=float), self.x0.shape))
         if not self._acc_ready or not np.array_equal(a, self._acc_a):
+            # the kernel re-evaluates every replica; a replica whose amplitudes did not
+            # change keeps its acceleration (as it would run alone: replica r's numbers
+            # must not depend on the others)
+            keep = (np.all(a == self._acc_a, axis=-1) if self._acc_ready
+                    else np.zeros(a.shape[:-1], dtype=bool))
+            saved = self.acc.copy()
             self._loop(self._spin, a, 0, np.zeros((K.N_STATS, 0)), True)
+            self.acc[keep] = saved[keep]
             self._acc_a = a.copy()
             self._acc_ready = True
         if stats is None:

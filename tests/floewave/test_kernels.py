@@ -43,9 +43,10 @@ def _random_floes(rng, n, A0):
                                    (3.0, 2.0), (1.5, 1.1)])
 @pytest.mark.parametrize("accumulate", [False, True])
 def test_two_pass_drag_equals_per_floe_sums(L_x, T, accumulate):
-    """drag_pass (closed form for one-sign floes, prefix sums over the roots for the rest)
-    and drag_pass_exact (one-sign case, general evaluation for the rest) equal the per-floe
-    cell loop drag_sums / drag_sums_exact to 1e-13 of the floe's scale n_x (|A| + |v|)^m,
+    """drag_pass (closed form for one-sign floes, prefix sums over the roots for the rest),
+    exact_pass (the same for the exact integrals) and drag_pass_exact (one-sign case,
+    root-finding for the rest) equal the per-floe cell loop drag_sums / the exact
+    drag_sums_exact to 1e-13 of the floe's scale n_x (|A| + |v|)^m,
     with floes of up to kL = 10 rad (four roots of w on a floe), and both passes are
     exercised."""
     from floewave import _kernels as K
@@ -62,10 +63,13 @@ def test_two_pass_drag_equals_per_floe_sums(L_x, T, accumulate):
     ck, sk = np.cos(th + 0.3), np.sin(th + 0.3)     # theta = (th + 0.3) - 0.3
     cwt, swt = np.cos(0.3), np.sin(0.3)
     P1 = P._replace(u_amp=0.05)
-    for exact in (False, True):
+    emom = K.exact_tables(P.geom)
+    for exact in (False, True, "kernel"):
         sc = K.new_scratch(n)
         idx = np.zeros(n, np.int64)
-        if exact:
+        if exact == "kernel":       # the kernel's exact path: prefix sums over the roots
+            m = K.exact_pass(ck, sk, cwt, swt, a, v * 0.05, P1, emom, accumulate, sc, idx)
+        elif exact:
             m = drag_pass_exact(ck, sk, cwt, swt, a, P1.u_amp, v * 0.05, P.geom, accumulate,
                                 sc, idx)
         else:
@@ -194,3 +198,28 @@ def test_replica_r_is_the_same_whatever_r_runs_with(opts):
         assert np.array_equal(s1, st[:, r, :])
     assert np.any(np.diff(ens.x, axis=1) - cfg.L_x < 0), "no contact exercised"
     assert not np.array_equal(ens.x[0], ens.x[1])
+
+
+def test_prefix_sums_at_the_root_count_boundary():
+    """A floe whose cell span 2h lies a few ulp below a multiple of 2 pi, with a root at its
+    end (the review's case: the root count and the enumeration once disagreed there by one
+    root, an error of 2 F(n)): equal to the cell loop, over 40 lengths around the boundary."""
+    from floewave import _kernels as K
+    k, n_x, A, v, th = 1.0, 200, 1.1254979767515874, 0.38230289469490575, 1.9173670619666847
+    L0 = 6.314759102693051
+    for ulps in range(-20, 20):
+        L = L0 + ulps * np.spacing(L0)
+        xi = (np.arange(n_x) + 0.5) * (L / n_x) - L / 2.0
+        cxi, sxi = np.cos(k * xi), np.sin(k * xi)
+        P = ModelConfig(L_x=1.5)
+        P = FloeChain(P, 1.0).P._replace(k=k, L_x=L, u_amp=1.0)
+        mom = K.drag_tables(cxi, sxi, P)
+        assert mom[K.M_FAST] == 1.0
+        sc = K.new_scratch(1)
+        idx = np.zeros(1, np.int64)
+        K.drag_pass(np.array([np.cos(th)]), np.array([np.sin(th)]), 1.0, 0.0, np.array([A]),
+                    np.array([v]), P, cxi, sxi, mom, True, sc, idx)
+        q2, q3 = K.drag_sums(A, np.cos(th), np.sin(th), v, cxi, sxi)
+        scale = n_x * (A + v) ** 2
+        assert abs(sc[K.SC_S2, 0] - q2) <= 1e-12 * scale, ulps
+        assert abs(sc[K.SC_S3, 0] - q3) <= 1e-12 * scale * (A + v), ulps

@@ -17,7 +17,7 @@ eps = [0.2, 0.6]
 """
 
 
-def test_kernel_shape_is_floes_drag_cells_mode_and_confinement():
+def test_kernel_shape_is_floes_drag_cells_mode_confinement_and_chains():
     c = parse_campaign(TOML)
     shapes = {kernel_shape(p.config) for p in c.points()}
     # eps does not change the kernel's speed; floe count and drag mode do
@@ -25,10 +25,15 @@ def test_kernel_shape_is_floes_drag_cells_mode_and_confinement():
     for p in c.points():
         cfg = p.config
         n_x = cfg.n_x if cfg.drag_integration == "quadrature" else 0
-        assert kernel_shape(cfg) == (cfg.n_floes, n_x, cfg.drag_integration, cfg.confined)
+        assert kernel_shape(cfg) == (cfg.n_floes, n_x, cfg.drag_integration, cfg.confined,
+                                     cfg.n_chains)
     cfg = c.points()[0].config
-    assert kernel_shape(cfg.replace(confined=True))[-1] is True
+    assert kernel_shape(cfg.replace(confined=True))[3] is True
+    assert kernel_shape(cfg.replace(confined=True))[4] == 1      # confined: one chain
     assert kernel_shape(cfg.replace(drag_integration="exact"))[1:3] == (0, "exact")
+    # the ensemble kernel's speed per replica-floe-step depends on R
+    assert kernel_shape(cfg.replace(replicas=4))[4] == 4
+    assert kernel_shape(cfg.replace(replicas=1))[4] == 1
 
 
 def test_projection_is_cost_over_rate_of_each_shape():
