@@ -39,9 +39,9 @@ w has one sign is summed in closed form from the cell tables' central moments; o
 others the sign of w changes only at the roots of ``A cos(theta + phi) = v``, so the sum is
 the whole-floe sum plus, per root, twice a prefix sum of the cells before it (geometric sums
 over the cell phases in closed form, :func:`prefix_sums`): a handful of operations per root
-instead of a loop over n_x cells (50-300 at the paper's dx). Equal to the cell loop to rounding (within
-1e-13 of the floe's scale (|A| + |v|)^m n_x, tested against :func:`drag_sums`; tables with
-k dx outside [KDX_MIN, KDX_MAX] take the cell loop).
+instead of a loop over n_x cells (50-300 at the paper's dx). Equal to the cell loop to
+rounding (within 1e-13 of the floe's scale (|A| + |v|)^m n_x, tested against
+:func:`drag_sums`; tables with k dx outside [KDX_MIN, KDX_MAX] take the cell loop).
 """
 from __future__ import annotations
 
@@ -52,8 +52,15 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ._exact import _H_POINT, drag_pass_exact, drag_sums_exact, general_floes
+from ._exact import _H_POINT, drag_pass_exact, drag_sums_exact, exact_geometry, general_floes
 from ._jit import JIT, JITN
+from .config import ModelConfig
+from .forces import (
+    effective_modulus,
+    froude_krylov_coefficient,
+    orbital_velocity_amplitude,
+    restitution_beta,
+)
 
 # option codes (decided once from ModelConfig)
 CONTACT_HERTZ_DISK = 0
@@ -99,7 +106,7 @@ LANES = 16       # gathered floes are padded to a multiple of this (vector body)
 
 
 class KernelParams(NamedTuple):
-    """Numbers the time loop needs, SI units (built by ``forces.kernel_params``)."""
+    """Numbers the time loop needs, SI units (built by :func:`kernel_params`)."""
 
     dt: float          # time step [s]
     n_t: int           # steps per period [-]
@@ -123,6 +130,36 @@ class KernelParams(NamedTuple):
     integrator: int    # INTEG_*
     drag: int          # DRAG_*: quadrature on the dx grid or the exact (dx -> 0) integrals
     geom: tuple        # floewave._exact.exact_geometry(k L_x, n_x) (used when drag = EXACT)
+
+
+def kernel_params(cfg: ModelConfig, k: float) -> KernelParams:
+    """Build the kernel's coefficient tuple for ``cfg`` and wavenumber ``k``."""
+    Ystar = effective_modulus(cfg)
+    r = cfg.L_x / 2.0
+    return KernelParams(
+        dt=cfg.dt,
+        n_t=cfg.n_t,
+        k=k,
+        omega=cfg.omega,
+        c_wave=froude_krylov_coefficient(cfg, k),
+        u_amp=orbital_velocity_amplitude(cfg, k),
+        c_drag=cfg.rho_w * cfg.C_sd * cfg.L_y * (cfg.L_x / cfg.n_x),
+        inv_mass=1.0 / ((1.0 + cfg.C_m) * cfg.mass),
+        one_cm=1.0 + cfg.C_m,
+        L_x=cfg.L_x,
+        k_s=cfg.k_s,
+        m_star=cfg.mass / 2.0,
+        beta=restitution_beta(cfg.eps),
+        kn_lin=Ystar * cfg.L_y * cfg.h_i / cfg.L_x,
+        kn_disk=math.pi * Ystar * cfg.h_i,
+        s_scale=(r / 2.0) / (2.0 * cfg.h_i**2),
+        contact=CONTACT_HERTZ_DISK if cfg.contact == "hertz_disk" else CONTACT_LINEAR,
+        damping=DAMPING_LIGGGHTS if cfg.damping == "liggghts" else DAMPING_EXACT,
+        clip=1 if cfg.clip_attraction else 0,
+        integrator=INTEG_PREDICTOR if cfg.integrator == "predictor" else INTEG_HALF_STEP,
+        drag=DRAG_QUADRATURE if cfg.drag_integration == "quadrature" else DRAG_EXACT,
+        geom=exact_geometry(k * cfg.L_x, float(cfg.n_x)),
+    )
 
 
 class KernelOptions(NamedTuple):
@@ -725,7 +762,7 @@ def floe_drag(A, c, s, v, accumulate, P, cxi, sxi):
     return s2, (s3 if accumulate else 0.0)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def make_advance(opts: KernelOptions):
     """The time loop for ``opts``, compiled once per process (cached on disk by numba).
 

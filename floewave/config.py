@@ -19,6 +19,7 @@ import math
 from dataclasses import dataclass, fields
 from typing import Any
 
+from .dispersion import G, solve_dispersion
 from .errors import ConfigError, FloewaveError, InvalidPointError
 
 __all__ = [
@@ -30,7 +31,7 @@ __all__ = [
     "G",
 ]
 
-G = 9.81  # [m s^-2] acceleration due to gravity (MODEL.md: g = 9.81)
+# (G: gravity, defined with the dispersion relations it belongs to; re-exported here)
 
 #: The seven swept dimensions of the paper's campaign (MODEL.md §7), in grid order.
 SWEPT_FIELDS = ("L_x", "T", "a0", "C_sd", "eps", "d_f", "dispersion")
@@ -290,8 +291,9 @@ class ModelConfig:
         periods = (n0_first + self.nT) + (iterations - 1) * (n0_later + self.nT)
         return periods * self.n_t * self.n_floes * self.n_chains
 
-    def check_physics(self) -> None:
-        """Raise :class:`InvalidPointError` if this point cannot be simulated.
+    def check_physics(self) -> tuple[float, float]:
+        """Raise :class:`InvalidPointError` if this point cannot be simulated; else return
+        the wavenumber k and group velocity c_g it solved for (eqs. 6, 7).
 
         Checks: T/dt and L_x/dx integral, at least two floes, and (via the dispersion
         solver) that eq. 6 has an admissible root (``ml`` below its cutoff).
@@ -302,9 +304,7 @@ class ModelConfig:
             raise InvalidPointError(
                 f"L_sheet / L_x = {self.L_sheet!r} / {self.L_x!r} gives {self.n_floes} floe(s);"
                 " at least 2 are needed")
-        from .dispersion import solve_dispersion  # local import: dispersion imports config
-
-        solve_dispersion(self)
+        return solve_dispersion(self)
 
     # ------------------------------------------------------------------ (de)serialise
     def to_dict(self) -> dict[str, Any]:

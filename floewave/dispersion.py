@@ -2,14 +2,19 @@
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.optimize import brentq
 
-from .config import G, ModelConfig
 from .errors import DispersionError
 
-__all__ = ["coefficients", "dispersion_residual", "omega_of_k", "group_velocity",
+if TYPE_CHECKING:       # the formulas read a ModelConfig's fields; they import no module of
+    from .config import ModelConfig  # floewave but errors (config imports this one)
+
+G = 9.81  # [m s^-2] acceleration due to gravity (MODEL.md: g = 9.81)
+
+__all__ = ["G", "coefficients", "dispersion_residual", "omega_of_k", "group_velocity",
            "solve_dispersion", "alpha_confined", "confined_rate_factor", "DispersionError"]
 
 
@@ -94,8 +99,12 @@ def confined_rate_factor(omega, k, c_g, h):
     return omega**3 / (c_g * np.tanh(k * h) ** 3)
 
 
-def alpha_confined(cfg: ModelConfig) -> float:
-    """Eq. 24: alpha_c = 4 C_sd omega^3 / (3 pi g c_g tanh^3 kh)  [m^-2]."""
-    k, cg = solve_dispersion(cfg)
+def alpha_confined(cfg: ModelConfig, k: float | None = None,
+                   c_g: float | None = None) -> float:
+    """Eq. 24: alpha_c = 4 C_sd omega^3 / (3 pi g c_g tanh^3 kh)  [m^-2] (``k``, ``c_g``:
+    the solution of eqs. 6-7 if the caller has it, else solved here)."""
+    if k is None or c_g is None:
+        k, c_g = solve_dispersion(cfg)
+    cg = c_g
     return float(4.0 * cfg.C_sd / (3.0 * math.pi * G)
                  * confined_rate_factor(cfg.omega, k, cg, cfg.h))

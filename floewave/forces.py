@@ -1,7 +1,8 @@
 """Floe forces of eq. 8 as small formulas (MODEL.md §3); the kernels use their coefficients.
 
-Each function states its equation; :func:`kernel_params` collects the coefficients the
-numba time loop needs into a :class:`~floewave._kernels.KernelParams`.
+Each function states its equation. This module imports no kernel:
+:func:`floewave._kernels.kernel_params` collects the coefficients the numba time loop
+needs from these formulas.
 """
 from __future__ import annotations
 
@@ -9,12 +10,10 @@ import math
 
 import numpy as np
 
-from . import _kernels as K
-from ._exact import exact_geometry
 from .config import ModelConfig
 
 __all__ = ["froude_krylov_coefficient", "wave_force", "orbital_velocity_amplitude",
-           "effective_modulus", "restitution_beta", "cell_offsets", "kernel_params",
+           "effective_modulus", "restitution_beta", "cell_offsets",
            "slope_force"]
 
 
@@ -63,33 +62,3 @@ def cell_offsets(cfg: ModelConfig) -> np.ndarray:
     """Midpoints xi_j [m] of the n_x = L_x/dx drag cells, relative to the floe centre."""
     n_x = cfg.n_x
     return (np.arange(n_x) + 0.5) * (cfg.L_x / n_x) - cfg.L_x / 2.0
-
-
-def kernel_params(cfg: ModelConfig, k: float) -> K.KernelParams:
-    """Build the kernel's coefficient tuple for ``cfg`` and wavenumber ``k``."""
-    Ystar = effective_modulus(cfg)
-    r = cfg.L_x / 2.0
-    return K.KernelParams(
-        dt=cfg.dt,
-        n_t=cfg.n_t,
-        k=k,
-        omega=cfg.omega,
-        c_wave=froude_krylov_coefficient(cfg, k),
-        u_amp=orbital_velocity_amplitude(cfg, k),
-        c_drag=cfg.rho_w * cfg.C_sd * cfg.L_y * (cfg.L_x / cfg.n_x),
-        inv_mass=1.0 / ((1.0 + cfg.C_m) * cfg.mass),
-        one_cm=1.0 + cfg.C_m,
-        L_x=cfg.L_x,
-        k_s=cfg.k_s,
-        m_star=cfg.mass / 2.0,
-        beta=restitution_beta(cfg.eps),
-        kn_lin=Ystar * cfg.L_y * cfg.h_i / cfg.L_x,
-        kn_disk=math.pi * Ystar * cfg.h_i,
-        s_scale=(r / 2.0) / (2.0 * cfg.h_i**2),
-        contact=K.CONTACT_HERTZ_DISK if cfg.contact == "hertz_disk" else K.CONTACT_LINEAR,
-        damping=K.DAMPING_LIGGGHTS if cfg.damping == "liggghts" else K.DAMPING_EXACT,
-        clip=1 if cfg.clip_attraction else 0,
-        integrator=K.INTEG_PREDICTOR if cfg.integrator == "predictor" else K.INTEG_HALF_STEP,
-        drag=K.DRAG_QUADRATURE if cfg.drag_integration == "quadrature" else K.DRAG_EXACT,
-        geom=exact_geometry(k * cfg.L_x, float(cfg.n_x)),
-    )

@@ -9,10 +9,10 @@ import numpy as np
 
 from . import _kernels as K
 from .config import ModelConfig
-from .dispersion import alpha_confined, solve_dispersion
+from .dispersion import alpha_confined
 from .ensemble import Records, estimate_point, initial_positions, march_rows, zone_of
 from .errors import NumericalError
-from .forces import cell_offsets, kernel_params
+from .forces import cell_offsets
 from .results import PointResult
 
 __all__ = ["FloeChain", "NumericalError", "march_amplitude", "dissipation", "residual",
@@ -31,7 +31,7 @@ class FloeChain:
     def __init__(self, cfg: ModelConfig, k: float, x0: np.ndarray | None = None):
         self.cfg = cfg
         self.k = k
-        self.P = kernel_params(cfg, k)
+        self.P = K.kernel_params(cfg, k)
         xi = cell_offsets(cfg)
         self.cxi = np.cos(k * xi)
         self.sxi = np.sin(k * xi)
@@ -227,9 +227,8 @@ def run_point(cfg: ModelConfig,
     Deterministic: the same ``cfg`` gives the same numbers bit for bit on one machine.
     """
     t_start = time.perf_counter()
-    cfg.check_physics()
-    k, c_g = solve_dispersion(cfg)
-    alpha_c = alpha_confined(cfg)
+    k, c_g = cfg.check_physics()          # the one solve of the dispersion relation
+    alpha_c = alpha_confined(cfg, k, c_g)
     R = cfg.n_chains
     x0s = np.array(initial_positions(cfg))
     chain = FloeChain(cfg, k, x0s)         # the R replicas in one kernel

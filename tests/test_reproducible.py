@@ -4,8 +4,9 @@ The kernels used to be compiled with fast-math, and a process that compiled them
 machine code than a process that loaded them from the on-disk cache (see
 :mod:`floewave._jit`): the Fig. 2 ``ml`` eps 0.6 point gave W_c 18.42 m cold and 15.92 m
 warm. Here short DEM points (every kernel path: closed-form and prefix-sum quadrature drag
-with one and two roots per floe, exact drag, the amplitude iteration; ensembles of 2 replicas, random and uniform placement, mean
-and independent coupling) run in fresh interpreters:
+with one and two roots per floe, exact drag, the amplitude iteration; ensembles of 2
+replicas, random and uniform placement, mean and independent coupling) run in fresh
+interpreters:
 
 - A: an empty cache directory, the quadrature point first, then the exact-drag point;
 - B: the cache A left (everything loaded, nothing compiled);

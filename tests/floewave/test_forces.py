@@ -7,7 +7,8 @@ from scipy.integrate import solve_ivp
 
 from floewave import ModelConfig, solve_dispersion
 from floewave import _kernels as K
-from floewave.forces import froude_krylov_coefficient, kernel_params, slope_force, wave_force
+from floewave._kernels import kernel_params
+from floewave.forces import froude_krylov_coefficient, slope_force, wave_force
 from floewave.model import FloeChain
 from tests.floewave.helpers import collision_config, two_floe_collision
 
