@@ -109,6 +109,21 @@ def pytest_collection_modifyitems(config, items):
     items.sort(key=rank)  # stable: a module's tests stay together
 
 
+def pytest_terminal_summary(terminalreporter):
+    """The ``("summary", line)`` user properties of the tests (what Slurm reported in
+    tests/test_slurm.py), after the results, in the order of the tests."""
+    lines = []
+    for reports in terminalreporter.stats.values():
+        for rep in reports:
+            for name, value in getattr(rep, "user_properties", ()):
+                if name == "summary" and getattr(rep, "when", "") == "teardown":
+                    lines.append(value)
+    if lines:
+        terminalreporter.write_line("")
+        for line in lines:
+            terminalreporter.write_line(line)
+
+
 @pytest.fixture(scope="session")
 def compiled_kernels():
     """The numba kernels of the small real campaigns (:data:`sweep.testing.SMALL_REAL_BASE`)
