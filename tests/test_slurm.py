@@ -62,7 +62,7 @@ _report: list[str] = []
 
 
 @pytest.fixture(scope="session")
-def slurm(request):
+def slurm():
     """A running single-node Slurm for the session (skips outside CI when unavailable)."""
     missing = missing_programs()
     problem = None
@@ -83,14 +83,15 @@ def slurm(request):
     yield cluster
     cluster.stop()
     shutil.rmtree(cluster.dir, ignore_errors=True)
-    if _report:
-        reporter = request.config.pluginmanager.get_plugin("terminalreporter")
-        capman = request.config.pluginmanager.get_plugin("capturemanager")
-        if reporter is not None and capman is not None:
-            with capman.global_and_fixture_disabled():
-                reporter.write_line("")
-                for line in _report:
-                    reporter.write_line(f"slurm: {line}")
+
+
+@pytest.fixture(autouse=True)
+def _summary(request):
+    """Each scenario's line goes to the end of the run's output (tests/conftest.py's
+    ``pytest_terminal_summary``; also from a ``pytest -n`` worker)."""
+    n = len(_report)
+    yield
+    request.node.user_properties += [("summary", f"slurm: {line}") for line in _report[n:]]
 
 
 def says(rec: dict[str, str]) -> str:

@@ -159,7 +159,10 @@ def test_grace_expiry_aborts_but_store_consistent(tmp_path):
            str(store), "--compute", "sweep.testing:sleepy_point"]
     p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                          env=_env())
-    time.sleep(3.0)
+    journal = tmp_path / "s.h5.journal"
+    deadline = time.monotonic() + 60  # the master has its store (not a stop at start-up)
+    while time.monotonic() < deadline and not (journal.exists() and journal.stat().st_size):
+        time.sleep(0.2)
     p.send_signal(signal.SIGTERM)
     out, err = p.communicate(timeout=60)
     assert p.returncode != 0

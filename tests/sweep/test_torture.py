@@ -305,7 +305,7 @@ def torture(config: Path, workdir: Path, *, kills: int = 10, n_ranks: int = 3, s
 
 
 @pytest.mark.skipif(MPIEXEC is None, reason="no mpiexec (pip install mpich)")
-def test_kill_9_whole_mpi_campaign_torture(tmp_path):
+def test_kill_9_whole_mpi_campaign_torture(tmp_path, compiled_kernels):
     config = tmp_path / "torture.toml"
     config.write_text(TORTURE_TOML)
     fig = torture(config, tmp_path, kills=10, n_ranks=3, seed=20261122)
