@@ -181,4 +181,7 @@ class MPITransport:
     def abort(self, code: int) -> None:
         sys.stdout.flush()
         sys.stderr.flush()
+        # rank 0's message reaches the terminal through the launcher's forwarding, which
+        # MPI_Abort tears down: give it a moment (seen: the message lost once under load)
+        time.sleep(0.5)
         self.comm.Abort(code)
