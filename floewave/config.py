@@ -324,6 +324,19 @@ class ModelConfig:
             raise ConfigError(f"unknown ModelConfig field(s): {', '.join(map(repr, unknown))}")
         return cls(**data)
 
+    def replace_validated(self, **values: Any) -> ModelConfig:
+        """A copy with fields set to values that were each validated (and coerced) by
+        :meth:`replace` of that one field on this config, without validating every field
+        again. For the campaign grid: one validation per distinct swept value, not one per
+        point. Only for fields without a cross-field rule (every swept field)."""
+        if not set(values) <= _SINGLE_FIELD_RULES:
+            raise ConfigError("replace_validated: only for fields without a cross-field rule"
+                              f" ({sorted(set(values) - _SINGLE_FIELD_RULES)})")
+        new = object.__new__(type(self))
+        new.__dict__.update(self.__dict__)
+        new.__dict__.update(values)
+        return new
+
     def replace(self, **changes: Any) -> ModelConfig:
         """A copy with some fields changed (validated again)."""
         unknown = sorted(set(changes) - {f.name for f in fields(self)})
@@ -333,6 +346,9 @@ class ModelConfig:
 
 
 _FIELD_NAMES = tuple(f.name for f in fields(ModelConfig))
+#: fields whose validity does not depend on another field (__post_init__ relates only rho_i
+#: and rho_w)
+_SINGLE_FIELD_RULES = frozenset(_FIELD_NAMES) - {"rho_i", "rho_w"}
 
 
 def _require(cfg: ModelConfig, name: str, ok: bool, what: str) -> None:
@@ -352,11 +368,14 @@ def _require_integral(name: str, value: float, step: float, step_name: str) -> N
 def _coerce(name: str, type_name: Any, value: Any) -> Any:
     """Check one field's type; ints are accepted for floats (1 == 1.0)."""
     type_name = type_name if isinstance(type_name, str) else type_name.__name__
-    bad = ConfigError(f"ModelConfig.{name} = {value!r}: expected {type_name}", field=name,
-                      problem=f"expected {type_name}")
+
+    def bad() -> ConfigError:      # built only when raised (this runs for every field)
+        return ConfigError(f"ModelConfig.{name} = {value!r}: expected {type_name}",
+                           field=name, problem=f"expected {type_name}")
+
     if type_name == "float":
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise bad
+            raise bad()
         value = float(value)
         if not math.isfinite(value):
             raise ConfigError(f"ModelConfig.{name} = {value!r}: must be finite", field=name,
@@ -366,14 +385,14 @@ def _coerce(name: str, type_name: Any, value: Any) -> Any:
         if isinstance(value, bool) or not isinstance(value, int):
             if isinstance(value, float) and value.is_integer():
                 return int(value)
-            raise bad
+            raise bad()
         return int(value)
     if type_name == "bool":
         if not isinstance(value, bool):
-            raise bad
+            raise bad()
         return value
     if type_name == "str":
         if not isinstance(value, str):
-            raise bad
+            raise bad()
         return value
     raise TypeError(f"unhandled field type {type_name!r}")

@@ -151,7 +151,9 @@ class Campaign:
         out = []
         for index, combo in enumerate(itertools.product(*self.sweep.values())):
             swept = dict(zip(names, combo, strict=False))
-            cfg = self.base.replace(**swept)
+            # each swept value was validated against the base when the file was read
+            # (_parse_sweep): the base is not validated again for every point
+            cfg = self.base.replace_validated(**swept)
             try:
                 cfg.check_physics()
                 invalid = ""

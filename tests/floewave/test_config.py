@@ -100,3 +100,22 @@ def test_counts_that_would_run_for_ever_are_refused(name):
     with pytest.raises(ConfigError, match=f"{name} = 10+ must be <= 1000000"):
         ModelConfig(**{name: 10**30})
     ModelConfig(**{name: 1_000_000})
+
+
+def test_replace_validated_is_replace_without_revalidating():
+    """The campaign grid sets already-validated swept values without validating every
+    field again: the same config (equal, same dict) as replace; cross-field fields are
+    refused; and it really skips validation (a value replace would refuse goes through,
+    which is why only values validated by replace may be passed)."""
+    import floewave
+    from floewave import ModelConfig
+    base = ModelConfig(C_sd=0.2)
+    swept = dict(L_x=1.5, T=1.4, a0=0.02, C_sd=0.1, eps=0.4, d_f=0.01, dispersion="ep")
+    assert set(swept) == set(floewave.SWEPT_FIELDS)
+    fast, slow = base.replace_validated(**swept), base.replace(**swept)
+    assert fast == slow and fast.to_dict() == slow.to_dict()
+    with pytest.raises(floewave.ConfigError, match="cross-field"):
+        base.replace_validated(rho_i=990.0)
+    assert base.replace_validated(eps=5.0).eps == 5.0     # not validated: the caller's job
+    with pytest.raises(floewave.ConfigError):
+        base.replace(eps=5.0)
