@@ -15,6 +15,8 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+import floewave
+
 from . import reader
 from .errors import PointNotFoundError, StoreError
 from .schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, REPLICA_VARS, column
@@ -145,7 +147,8 @@ def _load(path: str | Path) -> pd.DataFrame:
         campaign = reader.text(f.attrs.get("campaign_json", ""))
         # every row's config_json still hashes to its hash (StoreCorruptedError if not)
         reader.check_hashes(path, data["hash"], data["config_json"], reader.model_version(f),
-                            data["provenance"])
+                            data["provenance"],
+                            {k: data[k] for k in floewave.SWEPT_FIELDS if k in data})
     df = _typed(pd.DataFrame(data))
     df.attrs["units"] = {c.name: c.units for c in COLUMNS}
     df.attrs["long_name"] = {c.name: c.long_name for c in COLUMNS}

@@ -8,6 +8,8 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+import floewave
+
 from . import reader
 from .config import parse_campaign
 from .errors import CampaignMismatchError, Interrupted, StoreError
@@ -89,9 +91,11 @@ def merge(output: str | Path, inputs: list[str | Path]) -> str:
                 hashes.append(reader.text(f.attrs["campaign_hash"]))
                 texts.append(reader.text(f.attrs["campaign_toml"]))
                 # every row still hashes to its hash: a merge never spreads a bad row
-                cols = reader.table_columns(f, ("hash", "config_json", "provenance"))
+                cols = reader.table_columns(f, ("hash", "config_json", "provenance",
+                                                *floewave.SWEPT_FIELDS))
                 reader.check_hashes(path, cols["hash"], cols["config_json"],
-                                    reader.model_version(f), cols["provenance"])
+                                    reader.model_version(f), cols["provenance"],
+                                    {k: cols[k] for k in floewave.SWEPT_FIELDS if k in cols})
         except StoreError:
             raise
         except (OSError, KeyError, ValueError, RuntimeError, TypeError) as exc:

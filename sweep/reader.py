@@ -138,6 +138,8 @@ def _versions_of(provenances: Iterable[str] | None, n: int, version: Any) -> lis
                 own = json.loads(prov).get("model_version") if prov else None
             except (ValueError, AttributeError):
                 own = None
+            if not isinstance(own, (str, int)):
+                own = None
             got = cache[prov] = tuple(v for v in dict.fromkeys((own, version))
                                       if v is not None)
         out.append(got)
@@ -145,28 +147,51 @@ def _versions_of(provenances: Iterable[str] | None, n: int, version: Any) -> lis
 
 
 def hash_mismatches(hashes: Iterable[str], config_jsons: Iterable[str], version: Any,
-                    provenances: Iterable[str] | None = None) -> list[tuple[int, str]]:
+                    provenances: Iterable[str] | None = None,
+                    swept: dict[str, Any] | None = None) -> list[tuple[int, str]]:
     """``(row, hash)`` of every row whose non-empty ``config_json`` does not hash to its
     ``hash`` under the model version of its ``provenance`` (the model that computed
-    it) nor under the store's ``version`` (rows with neither are not checked)."""
+    it) nor under the store's ``version`` (rows with neither are not checked), or whose
+    swept columns (``swept``: column name -> values, the columns users select and group
+    by) differ from the values in its ``config_json``."""
     hashes, config_jsons = list(hashes), list(config_jsons)
     versions = _versions_of(provenances, len(hashes), version)
-    return [(i, h) for i, (h, cj, vs) in enumerate(zip(hashes, config_jsons, versions,
-                                                       strict=True))
-            if cj and vs and not any(config_hashes_to(cj, h, v) for v in vs)]
+    bad = []
+    for i, (h, cj, vs) in enumerate(zip(hashes, config_jsons, versions, strict=True)):
+        if not (cj and vs):
+            continue
+        if not any(config_hashes_to(cj, h, v) for v in vs) or (
+                swept and not _columns_match(cj, swept, i)):
+            bad.append((i, h))
+    return bad
+
+
+def _columns_match(config_json: str, swept: dict[str, Any], i: int) -> bool:
+    """Row ``i``'s swept columns equal the values of its ``config_json``."""
+    try:
+        cfg = json.loads(config_json)
+        cfg = cfg.get("config", cfg)
+    except (ValueError, AttributeError):
+        return False
+    for name, col in swept.items():
+        if name in cfg and col[i] != cfg[name]:
+            return False
+    return True
 
 
 def check_hashes(path: str | Path, hashes: Iterable[str], config_jsons: Iterable[str],
-                 version: Any, provenances: Iterable[str] | None = None) -> None:
+                 version: Any, provenances: Iterable[str] | None = None,
+                 swept: dict[str, Any] | None = None) -> None:
     """Raise :class:`StoreCorruptedError` naming the rows of :func:`hash_mismatches`."""
-    bad = hash_mismatches(hashes, config_jsons, version, provenances)
+    bad = hash_mismatches(hashes, config_jsons, version, provenances, swept)
     if not bad:
         return
     i, h = bad[0]
     more = f" (and {len(bad) - 1} more row(s))" if len(bad) > 1 else ""
     raise StoreCorruptedError(
         f"{path}: stored point {h} (table row {i}): its config_json no longer hashes to"
-        f" its hash{more}; the row was altered after it was written. The store's journal"
+        f" its hash, or its swept columns differ from it{more}; the row was altered after"
+        " it was written. The store's journal"
         " holds the row as written (sweep validate lists every such row): with an intact"
         " journal, moving the store file away and running the campaign again rebuilds it",
         [h for _, h in bad])

@@ -28,6 +28,8 @@ from typing import Any
 
 import numpy as np
 
+import floewave
+
 from .identity import HASH_LENGTH
 
 __all__ = ["SCHEMA_VERSION", "FORMAT", "Column", "COLUMNS", "PROFILE_VARS", "REPLICA_VARS",
@@ -335,7 +337,9 @@ def validate(path: str | Path) -> list[str]:
         from . import reader
 
         table = f["table"]
-        cols = reader.table_columns(f, ("hash", "status", "config_json", "provenance"), n)
+        swept_names = tuple(floewave.SWEPT_FIELDS)
+        cols = reader.table_columns(f, ("hash", "status", "config_json", "provenance",
+                                        *swept_names), n)
         hashes, status = list(cols["hash"]), list(cols["status"])
         n_floes = table["n_floes"][:n]
         replicas = table["replicas"][:n] if "replicas" in table else None
@@ -345,13 +349,16 @@ def validate(path: str | Path) -> list[str]:
             well_formed = [(i, h, cj, prov) for i, (h, cj, prov) in enumerate(zip(
                 hashes, cols["config_json"], cols["provenance"], strict=True))
                 if len(h) == HASH_LENGTH and set(h) <= set("0123456789abcdef")]
+            rows = [w[0] for w in well_formed]
             for k, h in reader.hash_mismatches([w[1] for w in well_formed],
                                                [w[2] for w in well_formed],
                                                reader.model_version(f),
-                                               [w[3] for w in well_formed]):
+                                               [w[3] for w in well_formed],
+                                               {c: [cols[c][r] for r in rows]
+                                                for c in swept_names if c in cols}):
                 problems.append(f"/table/config_json[{well_formed[k][0]}]: does not hash"
-                                f" to its hash {h} (the row was altered after it was"
-                                " written)")
+                                f" to its hash {h}, or the row's swept columns differ from"
+                                " it (the row was altered after it was written)")
         for i, (h, s) in enumerate(zip(hashes, status, strict=False)):
             if len(h) != HASH_LENGTH or any(c not in "0123456789abcdef" for c in h):
                 problems.append(f"/table/hash[{i}]: {h!r} is not a {HASH_LENGTH}-character"

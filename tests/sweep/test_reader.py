@@ -84,3 +84,19 @@ def test_status_command_exits_3_on_a_corrupted_store(store, run_main):
     proc = run_main(sweep.cli.main, ["status", store])
     assert proc.returncode == 3, (proc.stdout, proc.stderr)
     assert h in proc.stderr
+
+
+def test_an_altered_swept_column_is_caught(store, tmp_path):
+    """A row whose swept column (what users select and group by) was edited while its
+    config_json and hash were left alone is caught too: load raises, validate lists it,
+    merge refuses (a reviewer's case: table/eps[1] = 0.9 used to pass)."""
+    with h5py.File(store, "r+", locking=False) as f:
+        assert f["table/eps"][1] == 0.4
+        f["table/eps"][1] = 0.9
+        h = reader.text(f["table/hash"][1])
+    with pytest.raises(StoreCorruptedError, match=h):
+        sweep.load(store)
+    problems = sweep.validate(store)
+    assert len(problems) == 1 and "swept columns" in problems[0] and h in problems[0]
+    with pytest.raises(StoreCorruptedError, match=h):
+        merge(tmp_path / "fresh.h5", [store])
