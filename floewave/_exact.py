@@ -76,6 +76,9 @@ _TWO_PI = 2.0 * math.pi
 # half-width below which s = n_x f(theta) exactly: the floe average differs from the centre
 # value by O(h^2) (f = |w| w is C^1), below rounding; also avoids underflow for tiny kL
 _H_POINT = 1.0e-17
+# the scratch row of drag_pass_exact(defer=True)'s closed-form signs
+# (floewave._kernels.SC_SIG)
+SIG_ROW = 5
 
 
 @njit(**JIT)
@@ -439,9 +442,15 @@ def general_floes(flags, idx, everyone):
 
 
 @njit(**JIT)
-def drag_pass_exact(ck, sk, cwt, swt, a, u_amp, vs, geom, accumulate, sc, idx):
+def drag_pass_exact(ck, sk, cwt, swt, a, u_amp, vs, geom, accumulate, sc, idx,
+                    defer=False):
     """:func:`drag_sums_exact` of every floe of a chain; returns the number of floes that
     needed the general (root-finding) evaluation.
+
+    ``defer``: only the closed-form pass, for :func:`floewave._kernels.exact_pass` to
+    complete the floes with a root (``idx[:m]``): their whole-floe sums stay signed (s3 not
+    clipped) and ``sc[SIG_ROW]`` gets the sign the closed form gave them (``sc`` then
+    needs SIG_ROW + 1 rows).
 
     ``theta_i = k x_i - omega t`` from ``ck, sk = cos, sin(k x_i)`` and ``cwt, swt = cos,
     sin(omega t)``; ``A_i = a_i u_amp``, ``v_i = vs[i]``. Fills ``sc[0], sc[1] = cos, sin
@@ -487,9 +496,13 @@ def drag_pass_exact(ck, sk, cwt, swt, a, u_amp, vs, geom, accumulate, sc, idx):
         if accumulate:
             W3 = X * (K31 * A2 + K33 * X * X) - 3.0 * v * C2 + 3.0 * v2 * K1X \
                 - 2.0 * h * v2 * v
-            sc[3, i] = scale * max(sig * W3, 0.0)
+            sc[3, i] = scale * (sig * W3 if defer and root else max(sig * W3, 0.0))
+        if defer:
+            sc[SIG_ROW, i] = sig
         sc[4, i] = 1.0 if root else 0.0
     m = general_floes(sc[4, :n], idx, h <= _H_POINT)
+    if defer:
+        return m
     for t in range(m):
         i = idx[t]
         s2, s3 = drag_sums_exact(a[i] * u_amp, sc[0, i], sc[1, i], vs[i], geom)

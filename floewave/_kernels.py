@@ -52,7 +52,14 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ._exact import _H_POINT, drag_pass_exact, drag_sums_exact, exact_geometry, general_floes
+from ._exact import (
+    _H_POINT,
+    SIG_ROW,
+    drag_pass_exact,
+    drag_sums_exact,
+    exact_geometry,
+    general_floes,
+)
 from ._jit import JIT, JITN
 from .config import ModelConfig
 from .forces import (
@@ -90,7 +97,7 @@ SC_S = 1         # sin theta_i
 SC_S2 = 2        # drag sum of |u_rel| u_rel
 SC_S3 = 3        # drag sum of |u_rel|^3 (accumulating steps only)
 SC_FLAG = 4      # 1: the floe needs the general evaluation
-SC_SIG = 5       # sign the closed form gave the floe's whole-floe sums
+SC_SIG = SIG_ROW  # (5) sign the closed form gave the floe's whole-floe sums
 SC_GATHER = 6    # rows 6-18: the general floes gathered by cell_sums / prefix_sums
 N_GATHER = 13
 N_SC = SC_GATHER + N_GATHER
@@ -373,55 +380,19 @@ def exact_pass(ck, sk, cwt, swt, a, vs, P, mom, accumulate, sc, idx):
     :func:`~floewave._exact.drag_sums_exact` floe by floe to rounding; returns the number
     of floes with a root of w on them. ``mom`` from :func:`exact_tables`.
 
-    The one-sign closed form of :func:`~floewave._exact.drag_pass_exact` for every floe
-    (vectorised), then the floes with a root by :func:`prefix_sums`, as the quadrature's.
+    The one-sign closed form of :func:`~floewave._exact.drag_pass_exact` (``defer``) for
+    every floe (vectorised), then the floes with a root by :func:`prefix_sums`, as the
+    quadrature's.
     A point-like floe (kL ~ 0) takes the per-floe path.
     """
     n = ck.shape[0]
     if sc.shape[0] < N_SC or sc.shape[1] < n + LANES or idx.shape[0] < n:
         raise ValueError("exact_pass: scratch too small (sc needs N_SC rows and R N_f + LANES"
                          " columns: new_scratch)")
-    geom = P.geom
-    h, ch, sh, scale, _n_x, K20, K22, K31, K33 = geom
     if mom[M_FAST] < 0.5:
-        return drag_pass_exact(ck, sk, cwt, swt, a, P.u_amp, vs, geom, accumulate, sc, idx)
-    long_floe = h >= math.pi
-    ua = P.u_amp
-    for i in range(n):
-        c = ck[i] * cwt + sk[i] * swt
-        s = sk[i] * cwt - ck[i] * swt
-        sc[SC_C, i] = c
-        sc[SC_S, i] = s
-        A = a[i] * ua
-        v = vs[i]
-        # as drag_integrals: A < 0 is |A| with theta + pi (X = A c unchanged)
-        Aa = abs(A)
-        X = A * c
-        cs = -c if A < 0.0 else c
-        ss = -s if A < 0.0 else s
-        A2 = Aa * Aa
-        v2 = v * v
-        K1X = 2.0 * sh * X
-        C2 = K20 * A2 + K22 * X * X
-        W2 = C2 - 2.0 * v * K1X + 2.0 * h * v2
-        Q2 = (Aa - v) * (Aa + v)
-        Q = math.sqrt(max(Q2, 0.0))
-        vc = v * cs
-        Ach = Aa * ch
-        root = Q2 > 0.0 and (long_floe or vc + Q * ss >= Ach or vc - Q * ss >= Ach)
-        wc = X - v
-        sig = 1.0 if wc > 0.0 or (wc == 0.0 and v < 0.0) else -1.0
-        sc[SC_S2, i] = scale * (sig * W2)
-        if accumulate:
-            W3 = X * (K31 * A2 + K33 * X * X) - 3.0 * v * C2 + 3.0 * v2 * K1X \
-                - 2.0 * h * v2 * v
-            # one-sign floes: |w|^3 >= 0, a rounding-level negative clipped; the others
-            # keep the signed whole-floe sum for prefix_sums
-            sc[SC_S3, i] = scale * (sig * W3 if root else max(sig * W3, 0.0))
-        sc[SC_SIG, i] = sig
-        sc[SC_FLAG, i] = 1.0 if root else 0.0
-    m = general_floes(sc[SC_FLAG, :n], idx, False)
-    prefix_sums(sc, idx, m, a, ua, vs, mom, accumulate)
+        return drag_pass_exact(ck, sk, cwt, swt, a, P.u_amp, vs, P.geom, accumulate, sc, idx)
+    m = drag_pass_exact(ck, sk, cwt, swt, a, P.u_amp, vs, P.geom, accumulate, sc, idx, True)
+    prefix_sums(sc, idx, m, a, P.u_amp, vs, mom, accumulate)
     return m
 
 
