@@ -196,12 +196,7 @@ def contact_law(delta, v_n, P, contact, damping, clip):
     are arguments so that a caller with constant options (the built time loop) gets them
     folded away.
     """
-    if contact == CONTACT_LINEAR:
-        kn = P.kn_lin
-    else:
-        s = delta * P.s_scale
-        kn = P.kn_disk * ((0.9117 * s * s + 0.2722 * s + 0.003324)
-                          / (s * s + 1.524 * s + 0.03159))
+    kn = _stiffness(delta, P, contact)
     if damping == DAMPING_LIGGGHTS:
         gamma = -P.beta * math.sqrt(5.0 * kn * P.m_star)
     else:
@@ -213,13 +208,19 @@ def contact_law(delta, v_n, P, contact, damping, clip):
 
 
 @njit(**JITN)
-def contact_stiffness(delta, P):
-    """k_n for overlap ``delta`` [N m^-1] (the stiffness of :func:`contact_law`)."""
-    if P.contact == CONTACT_LINEAR:
+def _stiffness(delta, P, contact):
+    """k_n [N m^-1] at overlap ``delta``: ``hertz_disk`` f(s) (MODEL.md §3) or ``linear``."""
+    if contact == CONTACT_LINEAR:
         return P.kn_lin
     s = delta * P.s_scale
     return P.kn_disk * ((0.9117 * s * s + 0.2722 * s + 0.003324)
                         / (s * s + 1.524 * s + 0.03159))
+
+
+@njit(**JITN)
+def contact_stiffness(delta, P):
+    """k_n for overlap ``delta`` [N m^-1] (the stiffness of :func:`contact_law`)."""
+    return _stiffness(delta, P, P.contact)
 
 
 @njit(**JITN)

@@ -24,8 +24,7 @@ def kernel_shape(cfg: Any) -> tuple:
     """What the kernel speed depends on: floe count, drag cells and mode, confinement, and
     the number of chains run in one kernel (replicas)."""
     n_x = cfg.n_x if cfg.drag_integration == "quadrature" else 0
-    return (cfg.n_floes, n_x, cfg.drag_integration, cfg.confined,
-            getattr(cfg, "n_chains", 1))
+    return (cfg.n_floes, n_x, cfg.drag_integration, cfg.confined, cfg.n_chains)
 
 
 def calibrate(points: Iterable[Any]) -> tuple[dict[tuple, float], str]:
