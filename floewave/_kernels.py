@@ -536,14 +536,15 @@ def prefix_sums(sc, idx, m, a, ua, vs, mom, accumulate):
     gc2 = sc[SC_GATHER + 11]   # cos 2 alpha = p^2 - q^2, and cos 3 alpha
     gc3 = sc[SC_GATHER + 12]
     mp = ((m + LANES - 1) // LANES) * LANES
-    for t in range(m):
-        i = idx[t]
-        A = a[i] * ua
-        flip = A < 0.0             # A < 0 is |A| at theta + pi
-        gA[t] = abs(A)
-        gc[t] = -sc[SC_C, i] if flip else sc[SC_C, i]
-        gs[t] = -sc[SC_S, i] if flip else sc[SC_S, i]
-        gv[t] = vs[i]
+    # every floe (the common case of floes longer than ~1 m): idx is the identity
+    # (general_floes), so copy without it: a loop without indexed loads vectorises
+    dense = m == a.shape[0]
+    if dense:
+        for t in range(m):
+            _gather(sc, t, t, a, ua, vs, gA, gc, gs, gv)
+    else:
+        for t in range(m):
+            _gather(sc, idx[t], t, a, ua, vs, gA, gc, gs, gv)
     for t in range(m, mp):      # padding lanes: A = v = 0, results unused
         gA[t] = 0.0
         gc[t] = 1.0
@@ -562,8 +563,8 @@ def prefix_sums(sc, idx, m, a, ua, vs, mom, accumulate):
         gc3[t] = p * (4.0 * p * p - 3.0)
         bp = _angle(p * c + q * s, q * c - p * s)          # alpha - theta
         bm = _angle(p * c - q * s, -q * c - p * s)         # -alpha - theta
-        rp = bp + _TWO_PI * math.ceil((-h - bp) * (1.0 / _TWO_PI))
-        rm = bm + _TWO_PI * math.ceil((-h - bm) * (1.0 / _TWO_PI))
+        rp = bp + _TWO_PI * np.ceil((-h - bp) * (1.0 / _TWO_PI))
+        rm = bm + _TWO_PI * np.ceil((-h - bm) * (1.0 / _TWO_PI))
         none = q == 0.0 or A == 0.0     # tangent (|v| = |A|) or w constant: no sign change
         if none:
             rp = 1e300
@@ -574,8 +575,8 @@ def prefix_sums(sc, idx, m, a, ua, vs, mom, accumulate):
         # sign after the last one; none: the sign of w's mean
         # (at most nroot: the loop below enumerates that many, and a first root a few ulp
         # below -h with 2h a few ulp below a multiple of 2 pi would count one more)
-        n_p = min(math.floor((h - rp) * (1.0 / _TWO_PI)) + 1.0, fnroot) if rp <= h else 0.0
-        n_m = min(math.floor((h - rm) * (1.0 / _TWO_PI)) + 1.0, fnroot) if rm <= h else 0.0
+        n_p = min(np.floor((h - rp) * (1.0 / _TWO_PI)) + 1.0, fnroot) if rp <= h else 0.0
+        n_m = min(np.floor((h - rm) * (1.0 / _TWO_PI)) + 1.0, fnroot) if rm <= h else 0.0
         lp = rp + _TWO_PI * (n_p - 1.0) if n_p > 0.0 else -1e300
         lm = rm + _TWO_PI * (n_m - 1.0) if n_m > 0.0 else -1e300
         v = gv[t]
@@ -607,7 +608,7 @@ def prefix_sums(sc, idx, m, a, ua, vs, mom, accumulate):
             fk = float(kk)
             for t in range(mp):
                 r0 = rows[t]
-                n_r = (min(math.floor((h - r0) * (1.0 / _TWO_PI)) + 1.0, fnroot)
+                n_r = (min(np.floor((h - r0) * (1.0 / _TWO_PI)) + 1.0, fnroot)
                        if r0 <= h else 0.0)
                 on = fk < n_r
                 r = r0 + off if on else 0.0
@@ -615,7 +616,7 @@ def prefix_sums(sc, idx, m, a, ua, vs, mom, accumulate):
                     b = (min(r, he) + he) * scale
                     d = 0.0
                 else:           # the cells before the root: up to the edge of cell b
-                    b = math.floor((r + h) * inv_kdx) + 1.0
+                    b = np.floor((r + h) * inv_kdx) + 1.0
                     b = min(max(b, 0.0), nx)
                     d = (b * kdx - he) - r
                 A = gA[t]
@@ -636,13 +637,34 @@ def prefix_sums(sc, idx, m, a, ua, vs, mom, accumulate):
                     G = (0.25 * A * A * A * (3.0 * S1 + S3) - 1.5 * A * A * v * (b + S2)
                          + 3.0 * A * v * v * S1 - v * v * v * b)
                     g3[t] += w * G if on else 0.0
-    for t in range(m):
-        i = idx[t]
-        sig = sc[SC_SIG, i]
-        last = gl[t]
-        sc[SC_S2, i] = last * (sig * sc[SC_S2, i]) + g2[t]
-        if accumulate:
-            sc[SC_S3, i] = max(last * (sig * sc[SC_S3, i]) + g3[t], 0.0)
+    if dense:
+        for t in range(m):
+            _finish(sc, t, t, gl, g2, g3, accumulate)
+    else:
+        for t in range(m):
+            _finish(sc, idx[t], t, gl, g2, g3, accumulate)
+
+
+@njit(**JITN)
+def _gather(sc, i, t, a, ua, vs, gA, gc, gs, gv):
+    """Lane ``t`` of :func:`prefix_sums` from floe ``i``: |A|, cos, sin theta of |A|, v."""
+    A = a[i] * ua
+    flip = A < 0.0             # A < 0 is |A| at theta + pi
+    gA[t] = abs(A)
+    gc[t] = -sc[SC_C, i] if flip else sc[SC_C, i]
+    gs[t] = -sc[SC_S, i] if flip else sc[SC_S, i]
+    gv[t] = vs[i]
+
+
+@njit(**JITN)
+def _finish(sc, i, t, gl, g2, g3, accumulate):
+    """Floe ``i``'s drag sums from lane ``t`` of :func:`prefix_sums` and the closed form's
+    signed whole-floe sums."""
+    sig = sc[SC_SIG, i]
+    last = gl[t]
+    sc[SC_S2, i] = last * (sig * sc[SC_S2, i]) + g2[t]
+    if accumulate:
+        sc[SC_S3, i] = max(last * (sig * sc[SC_S3, i]) + g3[t], 0.0)
 
 
 @njit(**JITN)

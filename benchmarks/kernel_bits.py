@@ -1,0 +1,116 @@
+"""Is the time loop of this checkout bit for bit that of another commit?
+
+    python benchmarks/kernel_bits.py [--against REV] [--periods 0.5] [--keep DIR]
+
+A kernel change that only restructures loops (vectorisation, fission, branch-free selects)
+must not change a single bit of any trajectory: otherwise it is a new model version (every
+stored point would be computed again, and the docs' numbers too). This runs the same
+trajectories with this checkout's floewave and with a ``git worktree`` of ``REV`` (default
+``HEAD``: the last commit, i.e. the uncommitted change is checked), each in a fresh process
+with its own empty numba cache, and compares every state array (positions, velocities,
+accelerations, contact flags) and every window statistic with ``np.array_equal``.
+
+The trajectories: R = 8 replicas from random arrangements, every option the loop is built
+for (contact law, damping, clipping, integrator, drag mode) and the three floe sizes of the
+paper (kL from 1.4 to 8.4 rad: one or two roots per floe), spin-up and averaging steps,
+each replica with its own amplitude profile, then a change of the amplitudes (the
+re-evaluated first half-kick). Exit status 0 when every array is equal, 1 otherwise.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+#: option sets (ModelConfig fields) checked; L_x gives 84, 28 and 14 floes
+CASES = [
+    dict(L_x=0.5),
+    dict(L_x=1.5),
+    dict(L_x=3.0),
+    dict(L_x=0.5, drag_integration="exact"),
+    dict(L_x=1.5, drag_integration="exact"),
+    dict(L_x=3.0, drag_integration="exact"),
+    dict(L_x=0.5, contact="linear", damping="exact", clip_attraction=True),
+    dict(L_x=0.5, integrator="half_step", eps=0.8),
+    dict(L_x=1.5, contact="linear", integrator="half_step", drag_integration="exact",
+         clip_attraction=True),
+    dict(L_x=0.5, d_f=0.05, C_sd=0.2, eps=0.2),
+]
+
+_RUN = r"""
+import json, sys
+import numpy as np
+from floewave import ModelConfig, solve_dispersion
+from floewave import _kernels as K
+from floewave.ensemble import initial_positions
+from floewave.model import FloeChain
+cases, periods, out = json.loads(sys.argv[1]), float(sys.argv[2]), sys.argv[3]
+arrays = {}
+for n, case in enumerate(cases):
+    cfg = ModelConfig(T=1.2, **case)
+    k, _ = solve_dispersion(cfg)
+    x0 = np.array(initial_positions(cfg.replace(replicas=8)))
+    ch = FloeChain(cfg, k, x0)
+    rng = np.random.default_rng(n)
+    a = cfg.a0 * (0.5 + rng.random(x0.shape))     # every replica its own profile
+    steps = max(int(periods * cfg.n_t), 10)
+    ch.run(a, steps)
+    st = np.zeros((K.N_STATS,) + x0.shape)
+    ch.run(a, steps, st)
+    ch.run(a * 0.9, steps // 2)                   # new amplitudes: the init evaluation
+    ch.run(a * 0.9, steps // 2, st)
+    for name in ("x", "u", "acc", "in_contact"):
+        arrays[f"{n}_{name}"] = getattr(ch, name)
+    arrays[f"{n}_stats"] = st
+np.savez(out, **arrays)
+"""
+
+
+def run(checkout: Path, periods: float, out: Path) -> None:
+    """The trajectories of the floewave in ``checkout``, into ``out`` (.npz)."""
+    with tempfile.TemporaryDirectory() as cache:
+        env = dict(os.environ, PYTHONPATH=str(checkout), NUMBA_CACHE_DIR=cache,
+                   NUMBA_NUM_THREADS="1")
+        subprocess.run([sys.executable, "-c", _RUN, json.dumps(CASES), str(periods),
+                        str(out)], env=env, cwd=cache, check=True)
+
+
+def main() -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--against", default="HEAD", help="the commit to compare with")
+    p.add_argument("--periods", type=float, default=0.5,
+                   help="wave periods per phase (four phases per case)")
+    args = p.parse_args()
+    import numpy as np
+
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        ref = tmp / "ref"
+        subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q",
+                        str(ref), args.against], check=True)
+        try:
+            run(ref, args.periods, tmp / "ref.npz")
+            run(ROOT, args.periods, tmp / "new.npz")
+        finally:
+            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force",
+                            str(ref)], check=True)
+        a = np.load(tmp / "ref.npz")
+        b = np.load(tmp / "new.npz")
+        bad = [key for key in a.files if not np.array_equal(a[key], b[key])]
+    for n, case in enumerate(CASES):
+        keys = [key for key in a.files if key.startswith(f"{n}_")]
+        diff = [key.split("_", 1)[1] for key in keys if key in bad]
+        print(f"{json.dumps(case):<100} {'DIFFERENT: ' + ', '.join(diff) if diff else 'same bits'}")
+    print(f"{len(a.files) - len(bad)} of {len(a.files)} arrays bit for bit equal to"
+          f" {args.against}")
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
