@@ -44,3 +44,74 @@ JIT = dict(cache=True, fastmath=False, nogil=True, error_model="numpy")
 #: step of 84 floes (benchmarks/bench_kernel.py, 2026-11-22). Such a function must not
 #: create or return arrays (numba refuses to compile one that does).
 JITN = dict(JIT, _nrt=False)
+
+
+# --------------------------------------------------------------------------- the cache key
+#
+# numba keys a cached function by the SHA-256 of *its own* source file: a change in a callee
+# in another file (``_exact.py`` called from ``_kernels.py``) or in the flags above left the
+# caller's cached machine code in use, so a warm process ran the old callee and a cold one
+# the new: two results for one configuration (issue *trust*, noticed 2026-12-01). Every
+# kernel file's functions are therefore keyed by the SHA-256 of all of them: any change in
+# any kernel file recompiles every kernel, once.
+
+import functools  # noqa: E402
+import hashlib  # noqa: E402
+import os  # noqa: E402
+
+from numba.core import caching as _caching  # noqa: E402
+
+#: the files whose jitted functions call each other (and these flags)
+KERNEL_SOURCES = ("_jit.py", "_exact.py", "_kernels.py")
+_HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+@functools.cache
+def kernel_fingerprint() -> str:
+    """SHA-256 (hex) of the kernel files' names and bytes (read once per process)."""
+    h = hashlib.sha256()
+    for name in KERNEL_SOURCES:
+        with open(os.path.join(_HERE, name), "rb") as f:
+            h.update(name.encode() + b"\0" + f.read() + b"\0")
+    return h.hexdigest()
+
+
+class KernelSourcesLocator(_caching._CacheLocator):
+    """numba's own cache locator for a function of a kernel file (same directory, same
+    file names), with the source stamp extended by :func:`kernel_fingerprint`: the cached
+    code of every kernel is stale as soon as any kernel file changes."""
+
+    def __init__(self, inner):
+        self._inner = inner
+        self._fingerprint = kernel_fingerprint()
+
+    def ensure_cache_path(self):
+        self._inner.ensure_cache_path()
+
+    def get_cache_path(self):
+        return self._inner.get_cache_path()
+
+    def get_source_stamp(self):
+        return (self._inner.get_source_stamp(), self._fingerprint)
+
+    def get_disambiguator(self):
+        return self._inner.get_disambiguator()
+
+    @classmethod
+    def from_function(cls, py_func, py_file):
+        path = os.path.abspath(py_file)
+        if os.path.dirname(path) != _HERE or os.path.basename(path) not in KERNEL_SOURCES:
+            return None
+        for other in _IMPL._locator_classes:
+            if other is cls:
+                continue
+            inner = other.from_function(py_func, py_file)
+            if inner is not None:
+                return cls(inner)
+        return None
+
+
+# numba >= 0.61 calls it CacheImpl, earlier versions _CacheImpl
+_IMPL = getattr(_caching, "CacheImpl", None) or getattr(_caching, "_CacheImpl")
+if KernelSourcesLocator not in _IMPL._locator_classes:
+    _IMPL._locator_classes.insert(0, KernelSourcesLocator)

@@ -138,3 +138,61 @@ def test_campaign_bits_in_process_mpi_and_after_kill_and_resume(tmp_path):
     for store in (mpi, killed):
         res = compare(one, store)
         assert res["problems"] == [] and res["compared"] == 24, res["problems"][:5]
+
+
+CALLEE_SCRIPT = textwrap.dedent("""
+    import json
+    import numpy as np
+    import floewave
+    from floewave import ModelConfig, solve_dispersion
+    from floewave import _kernels as K
+
+    cfg = ModelConfig(L_x=0.5, T=1.2, drag_integration="exact")
+    k, _ = solve_dispersion(cfg)
+    P = K.kernel_params(cfg, k)
+    x = 0.3 + 0.55 * np.arange(4)
+    vs = np.full(4, 1.0)              # |v| > A: no root, the closed form of _exact.py
+    sc, idx = K.new_scratch(4), np.zeros(4, np.int64)
+    K.exact_pass(np.cos(k * x), np.sin(k * x), 1.0, 0.0, np.full(4, cfg.a0), vs, P,
+                 K.exact_tables(P.geom), False, sc, idx)
+    hits = sum(K.exact_pass.stats.cache_hits.values())
+    print(json.dumps(dict(file=floewave.__file__, s2=sc[K.SC_S2, :4].tolist(), hits=hits)))
+""")
+
+
+def test_a_change_in_a_callee_file_recompiles_the_cached_callers(tmp_path):
+    """``exact_pass`` (``_kernels.py``) calls ``drag_pass_exact`` (``_exact.py``). numba
+    keys a cached function by its own file only, so a changed ``_exact.py`` left the cached
+    ``exact_pass`` running the old callee in a warm process and the new one in a cold
+    process (two results for one configuration): every kernel file's functions are keyed by
+    all kernel files (:class:`floewave._jit.KernelSourcesLocator`). Here the callee's
+    closed-form drag is doubled in a copy of the package, whose cache a first run filled."""
+    import shutil
+    from pathlib import Path
+
+    src = Path(__file__).resolve().parent.parent / "floewave"
+    pkg = tmp_path / "src" / "floewave"
+    shutil.copytree(src, pkg, ignore=shutil.ignore_patterns("__pycache__"))
+    cache = tmp_path / "cache"
+    env = dict(os.environ, PYTHONPATH=str(pkg.parent), NUMBA_CACHE_DIR=str(cache))
+
+    def run():
+        out = subprocess.run([sys.executable, "-c", CALLEE_SCRIPT], env=env, cwd=tmp_path,
+                             check=True, capture_output=True, text=True).stdout
+        res = json.loads(out.strip().splitlines()[-1])
+        assert Path(res["file"]).resolve().parent == pkg.resolve()
+        return res
+
+    cold = run()
+    warm = run()
+    assert cold["hits"] == 0 and warm["hits"] >= 1      # the cache is used at all
+    assert warm["s2"] == cold["s2"]
+    exact = pkg / "_exact.py"
+    text = exact.read_text()
+    old = "sc[2, i] = scale * (sig * W2)"
+    assert text.count(old) == 1
+    exact.write_text(text.replace(old, "sc[2, i] = 2.0 * (scale * (sig * W2))"))
+    changed = run()
+    assert changed["hits"] == 0                          # recompiled, not loaded
+    assert changed["s2"] == [2.0 * v for v in cold["s2"]]
+    assert all(v != 0.0 for v in cold["s2"])
