@@ -1,6 +1,6 @@
 """Ensemble kernel speed against the single-chain kernel of model version 4, same run.
 
-    python benchmarks/bench_ensemble.py [--replicas 1 4 8 16] [--seconds 0.4] [--repeat 3]
+    python benchmarks/bench_ensemble.py [--replicas 1 4 8 16] [--seconds 0.2] [--repeat 8]
                                         [--compile] [--markdown]
 
 For 84, 28 and 14 floes (L_x = 0.5, 1.5, 3.0 m at T = 1.2 s, the paper's lab setup) and both
@@ -14,7 +14,10 @@ drag modes it times, after compilation and a spin-up of two periods (contacts ac
 The unit is floe-steps per second per core, and for an ensemble *replica*-floe-steps (R N_f
 per step). Spin-up steps and averaging steps (which add the window statistics) are timed
 separately: best of ``--repeat`` windows of about ``--seconds`` each, in CPU time of this
-thread (a core-second; the wall clock on a shared machine also counts other processes).
+thread (a core-second; the wall clock on a shared machine also counts other processes), and
+all kernels of one case (v4 and every R, spin-up and averaging) are timed round-robin, one
+window each per round, so that a slow phase of a shared virtual machine (seen: the same
+kernel 25 % slower for seconds at a time) slows all of them alike.
 ``--compile`` also times (CPU seconds), in fresh processes, the import and first point a
 worker runs with an empty numba cache (compilation) and with a filled one (loading);
 ``--compile-base DIR`` the same for another checkout (e.g. model version 4).
@@ -45,22 +48,31 @@ from floewave.ensemble import initial_positions  # noqa: E402
 from floewave.model import FloeChain  # noqa: E402
 
 
-def _best(fn, steps0: int, seconds: float, repeat: int) -> tuple[float, int]:
-    """(best seconds per step, steps per window): windows sized to ~``seconds``."""
+def _window(fn, steps0: int, seconds: float) -> int:
+    """Steps of a timing window of about ``seconds`` for ``fn(steps)``."""
     t = time.thread_time()
     fn(steps0)
     per = max(time.thread_time() - t, 1e-9) / steps0
-    steps = max(int(seconds / per), 10)
-    best = np.inf
+    return max(int(seconds / per), 10)
+
+
+def _interleaved(fns: list, seconds: float, repeat: int) -> list[float]:
+    """Best seconds per step of each ``fn(steps)``, timed round-robin: ``repeat`` rounds,
+    each timing one window of every function in turn, so that a slow phase of a shared
+    (virtual) machine hits all of them alike instead of one case's every window."""
+    steps = [_window(fn, 50, seconds) for fn in fns]
+    best = [np.inf] * len(fns)
     for _ in range(repeat):
-        t = time.thread_time()
-        fn(steps)
-        best = min(best, (time.thread_time() - t) / steps)
-    return best, steps
+        for j, fn in enumerate(fns):
+            t = time.thread_time()
+            fn(steps[j])
+            best[j] = min(best[j], (time.thread_time() - t) / steps[j])
+    return best
 
 
-def bench_v4(cfg: ModelConfig, seconds: float, repeat: int) -> tuple[float, float]:
-    """Floe-steps/s (spin-up, averaging) of the model-version-4 single-chain kernel."""
+def runners_v4(cfg: ModelConfig) -> tuple:
+    """(spin-up, averaging) step runners ``fn(steps)`` of the model-version-4 single-chain
+    kernel (compiled, spun up); each advances ``n`` floes per step."""
     k, _ = solve_dispersion(cfg)
     ch = FloeChain(cfg, k)
     P = K4.KernelParams(*ch.P)
@@ -80,14 +92,12 @@ def bench_v4(cfg: ModelConfig, seconds: float, repeat: int) -> tuple[float, floa
 
     run(2 * cfg.n_t, False)
     run(10, True)
-    spin, _ = _best(lambda s: run(s, False), 200, seconds, repeat)
-    avg, _ = _best(lambda s: run(s, True), 200, seconds, repeat)
-    return n / spin, n / avg
+    return (lambda s: run(s, False)), (lambda s: run(s, True)), n
 
 
-def bench_ensemble(cfg: ModelConfig, R: int, seconds: float,
-                   repeat: int) -> tuple[float, float]:
-    """Replica-floe-steps/s (spin-up, averaging) of today's kernel with R replicas."""
+def runners_ensemble(cfg: ModelConfig, R: int) -> tuple:
+    """(spin-up, averaging) step runners of today's kernel with R replicas (compiled, both
+    loops loaded, spun up); each advances R N_f replica-floes per step."""
     k, _ = solve_dispersion(cfg)
     x0 = np.array(initial_positions(cfg.replace(replicas=max(R, 2))))[:R]
     ch = FloeChain(cfg, k, x0)
@@ -95,9 +105,7 @@ def bench_ensemble(cfg: ModelConfig, R: int, seconds: float,
     st = np.zeros((K.N_STATS,) + x0.shape)
     ch.run(a, 2 * cfg.n_t)
     ch.run(a, 10, st)       # load the averaging loop too: not inside a timed window
-    spin, _ = _best(lambda s: ch.run(a, s), 100, seconds, repeat)
-    avg, _ = _best(lambda s: ch.run(a, s, st), 100, seconds, repeat)
-    return x0.size / spin, x0.size / avg
+    return (lambda s: ch.run(a, s)), (lambda s: ch.run(a, s, st)), x0.size
 
 
 _FIRST_POINT = """
@@ -123,8 +131,8 @@ def first_point_seconds(mode: str, cache: str, pythonpath: str | None = None) ->
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--replicas", type=int, nargs="+", default=[1, 4, 8, 16])
-    p.add_argument("--seconds", type=float, default=0.4)
-    p.add_argument("--repeat", type=int, default=3)
+    p.add_argument("--seconds", type=float, default=0.2)
+    p.add_argument("--repeat", type=int, default=8)
     p.add_argument("--compile", action="store_true")
     p.add_argument("--compile-base", metavar="DIR", default=None,
                    help="with --compile: also time the first point of the floewave checkout"
@@ -143,11 +151,13 @@ def main() -> None:
     for mode in ("quadrature", "exact"):
         for L_x in (0.5, 1.5, 3.0):
             cfg = ModelConfig(L_x=L_x, T=1.2, drag_integration=mode)
-            base = bench_v4(cfg, args.seconds, args.repeat)
-            ens = [bench_ensemble(cfg, R, args.seconds, args.repeat) for R in Rs]
+            kernels = [runners_v4(cfg)] + [runners_ensemble(cfg, R) for R in Rs]
+            fns = [ker[j] for ker in kernels for j in (0, 1)]
+            best = _interleaved(fns, args.seconds, args.repeat)
+            rates = [kernels[i // 2][2] / b for i, b in enumerate(best)]
             for j, step in enumerate(("spin", "avg")):
-                vals = [base[j]] + [e[j] for e in ens]
-                ratio = ens[ref][j] / base[j]
+                vals = rates[j::2]
+                ratio = vals[1 + ref] / vals[0]
                 if args.markdown:
                     print(f"| {mode} | {cfg.n_floes} | {step} | "
                           + " | ".join(f"{v / 1e6:.1f}" for v in vals)

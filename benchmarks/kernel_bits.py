@@ -1,6 +1,6 @@
 """Is the time loop of this checkout bit for bit that of another commit?
 
-    python benchmarks/kernel_bits.py [--against REV] [--periods 0.5] [--keep DIR]
+    python benchmarks/kernel_bits.py [--against REV] [--periods 0.5]
 
 A kernel change that only restructures loops (vectorisation, fission, branch-free selects)
 must not change a single bit of any trajectory: otherwise it is a new model version (every
@@ -8,7 +8,8 @@ stored point would be computed again, and the docs' numbers too). This runs the 
 trajectories with this checkout's floewave and with a ``git worktree`` of ``REV`` (default
 ``HEAD``: the last commit, i.e. the uncommitted change is checked), each in a fresh process
 with its own empty numba cache, and compares every state array (positions, velocities,
-accelerations, contact flags) and every window statistic with ``np.array_equal``.
+accelerations, contact flags) and every window statistic byte for byte (so -0.0 is not
++0.0 and NaN must be the same NaN).
 
 The trajectories: R = 8 replicas from random arrangements, every option the loop is built
 for (contact law, damping, clipping, integrator, drag mode) and the three floe sizes of the
@@ -68,6 +69,8 @@ for n, case in enumerate(cases):
     for name in ("x", "u", "acc", "in_contact"):
         arrays[f"{n}_{name}"] = getattr(ch, name)
     arrays[f"{n}_stats"] = st
+import floewave
+arrays["file"] = np.array(floewave.__file__)
 np.savez(out, **arrays)
 """
 
@@ -100,14 +103,17 @@ def main() -> int:
         finally:
             subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force",
                             str(ref)], check=True)
-        a = np.load(tmp / "ref.npz")
-        b = np.load(tmp / "new.npz")
-        bad = [key for key in a.files if not np.array_equal(a[key], b[key])]
+        a = dict(np.load(tmp / "ref.npz"))
+        b = dict(np.load(tmp / "new.npz"))
+        for arrays, where in ((a, ref), (b, ROOT)):       # each ran the floewave it should
+            assert Path(str(arrays.pop("file"))).resolve().parent == (where / "floewave").resolve()
+        bad = [key for key in a if a[key].dtype != b[key].dtype
+               or a[key].shape != b[key].shape or a[key].tobytes() != b[key].tobytes()]
     for n, case in enumerate(CASES):
-        keys = [key for key in a.files if key.startswith(f"{n}_")]
+        keys = [key for key in a if key.startswith(f"{n}_")]
         diff = [key.split("_", 1)[1] for key in keys if key in bad]
         print(f"{json.dumps(case):<100} {'DIFFERENT: ' + ', '.join(diff) if diff else 'same bits'}")
-    print(f"{len(a.files) - len(bad)} of {len(a.files)} arrays bit for bit equal to"
+    print(f"{len(a) - len(bad)} of {len(a)} arrays bit for bit equal to"
           f" {args.against}")
     return 1 if bad else 0
 

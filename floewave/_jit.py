@@ -58,6 +58,7 @@ JITN = dict(JIT, _nrt=False)
 import functools  # noqa: E402
 import hashlib  # noqa: E402
 import os  # noqa: E402
+import warnings  # noqa: E402
 
 from numba.core import caching as _caching  # noqa: E402
 
@@ -81,9 +82,9 @@ class KernelSourcesLocator(_caching._CacheLocator):
     file names), with the source stamp extended by :func:`kernel_fingerprint`: the cached
     code of every kernel is stale as soon as any kernel file changes."""
 
-    def __init__(self, inner):
+    def __init__(self, inner, fingerprint):
         self._inner = inner
-        self._fingerprint = kernel_fingerprint()
+        self._fingerprint = fingerprint
 
     def ensure_cache_path(self):
         self._inner.ensure_cache_path()
@@ -102,16 +103,23 @@ class KernelSourcesLocator(_caching._CacheLocator):
         path = os.path.abspath(py_file)
         if os.path.dirname(path) != _HERE or os.path.basename(path) not in KERNEL_SOURCES:
             return None
+        try:
+            fingerprint = kernel_fingerprint()
+        except OSError:     # not plain files (a zip, a frozen application): numba's own
+            warnings.warn("floewave: kernel sources not readable as files; the numba cache"
+                          " is keyed by each function's own file only", stacklevel=2)
+            return None
         for other in _IMPL._locator_classes:
             if other is cls:
                 continue
             inner = other.from_function(py_func, py_file)
             if inner is not None:
-                return cls(inner)
+                return cls(inner, fingerprint)
         return None
 
 
-# numba >= 0.61 calls it CacheImpl, earlier versions _CacheImpl
-_IMPL = getattr(_caching, "CacheImpl", None) or getattr(_caching, "_CacheImpl")
+# numba >= 0.61 calls it CacheImpl, earlier versions _CacheImpl. (NUMBA_CACHE_LOCATOR_CLASSES,
+# where numba has it, replaces this list: then the user's locators decide, without this key.)
+_IMPL = getattr(_caching, "CacheImpl", None) or _caching._CacheImpl
 if KernelSourcesLocator not in _IMPL._locator_classes:
     _IMPL._locator_classes.insert(0, KernelSourcesLocator)

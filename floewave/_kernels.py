@@ -536,9 +536,10 @@ def prefix_sums(sc, idx, m, a, ua, vs, mom, accumulate):
     gc2 = sc[SC_GATHER + 11]   # cos 2 alpha = p^2 - q^2, and cos 3 alpha
     gc3 = sc[SC_GATHER + 12]
     mp = ((m + LANES - 1) // LANES) * LANES
-    # every floe (the common case of floes longer than ~1 m): idx is the identity
-    # (general_floes), so copy without it: a loop without indexed loads vectorises
-    dense = m == a.shape[0]
+    # every floe (the common case of floes longer than ~1 m): idx is the identity, so copy
+    # without it (a loop without indexed loads vectorises). general_floes writes increasing
+    # indices, so idx[:m] is 0 .. m-1 exactly when its last entry is m - 1
+    dense = m > 0 and idx[m - 1] == m - 1
     if dense:
         for t in range(m):
             _gather(sc, t, t, a, ua, vs, gA, gc, gs, gv)

@@ -88,9 +88,14 @@ def _transform(part: str) -> str | None:
             return None
     words = shlex.split(part, comments=True)
     launcher: list[str] = []
+    if words[0] == "env":  # env -u NAME ... COMMAND: as written, COMMAND by the rules below
+        j = 1
+        while j < len(words) and words[j] == "-u":
+            j += 2
+        launcher, words = words[:j], words[j:]
     if words[0] == "mpiexec":  # at most 3 ranks; without MPICH installed, in-process
         n = int(words[words.index("-n") + 1])
-        launcher = ["mpiexec", "-n", str(min(n, 3))] if shutil.which("mpiexec") else []
+        launcher += ["mpiexec", "-n", str(min(n, 3))] if shutil.which("mpiexec") else []
         words = words[words.index("-n") + 2:]
     if words[:2] == ["sweep", "run"]:
         words += ["--compute", "sweep.testing:power_point", "--no-bar"]

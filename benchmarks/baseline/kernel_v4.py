@@ -26,7 +26,14 @@ import numpy as np
 from numba import njit
 
 from floewave._exact import drag_force_exact, drag_pass_exact, drag_sums_exact, general_floes
-from floewave._jit import JIT, JITN
+from floewave._jit import JIT as _JIT
+from floewave._jit import JITN as _JITN
+
+# not cached on disk: this file calls floewave/_exact.py but is not one of the kernel files
+# whose cache key covers all of them (floewave._jit.KernelSourcesLocator), so a cached copy
+# could run an old _exact.py
+JIT = dict(_JIT, cache=False)
+JITN = dict(_JITN, cache=False)
 
 # option codes (decided once from ModelConfig)
 CONTACT_HERTZ_DISK = 0

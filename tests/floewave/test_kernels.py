@@ -112,6 +112,55 @@ def test_two_pass_drag_falls_back_on_foreign_tables():
     assert sc[2, 0] == q2 and sc[3, 0] == q3
 
 
+@pytest.mark.parametrize("exact", [False, True])
+@pytest.mark.parametrize("accumulate", [False, True])
+def test_prefix_sums_of_every_floe_equal_the_indexed_path_bit_for_bit(exact, accumulate):
+    """When every floe has a root (m = n, the common case of 1.5 m and 3 m floes)
+    prefix_sums copies the floes without the index; with one floe more that has none (so
+    idx is not the identity) the same floes take the indexed gather: the same bits, and
+    the per-floe sums to 1e-13 of the floe's scale."""
+    from floewave import _kernels as K
+    from floewave._exact import drag_sums_exact
+    cfg = ModelConfig(L_x=3.0, T=1.2)              # kL = 8.4 > 2 pi: |v| < |A| has roots
+    k, _ = solve_dispersion(cfg)
+    chain = FloeChain(cfg, k)
+    P = chain.P._replace(u_amp=1.0)
+    mom = K.exact_tables(P.geom) if exact else K.drag_tables(chain.cxi, chain.sxi, P)
+    rng = np.random.default_rng(11)
+    n = 37
+    th = rng.uniform(-np.pi, np.pi, n + 1)
+    a = rng.uniform(0.5, 1.0, n + 1)
+    v = a * rng.uniform(-0.95, 0.95, n + 1)
+    v[0] = 5.0                                    # floe 0: no root (|v| > A)
+    out = []
+    for lo in (1, 0):                              # floes 1..n alone, then all n + 1
+        ck, sk = np.cos(th[lo:]), np.sin(th[lo:])
+        nn = n + 1 - lo
+        sc = K.new_scratch(nn)
+        idx = np.zeros(nn, np.int64)
+        if exact:
+            m = K.exact_pass(ck, sk, 1.0, 0.0, a[lo:], v[lo:], P, mom, accumulate, sc, idx)
+        else:
+            m = K.drag_pass(ck, sk, 1.0, 0.0, a[lo:], v[lo:], P, chain.cxi, chain.sxi, mom,
+                            accumulate, sc, idx)
+        assert m == n
+        assert (idx[m - 1] == m - 1) == (lo == 1)   # dense the first time, indexed next
+        out.append(sc[2:4, -n - K.LANES:-K.LANES].copy())
+    assert out[0][0].tobytes() == out[1][0].tobytes()
+    if accumulate:
+        assert out[0][1].tobytes() == out[1][1].tobytes()
+    for i in range(1, n + 1):
+        if exact:
+            q2, q3 = drag_sums_exact(a[i], np.cos(th[i]), np.sin(th[i]), v[i], P.geom)
+        else:
+            q2, q3 = K.drag_sums(a[i], np.cos(th[i]), np.sin(th[i]), v[i], chain.cxi,
+                                 chain.sxi)
+        scale = cfg.n_x * (a[i] + abs(v[i])) ** 2
+        assert abs(out[1][0, i - 1] - q2) <= 1e-13 * scale
+        if accumulate:
+            assert abs(out[1][1, i - 1] - q3) <= 1e-13 * scale * (a[i] + abs(v[i]))
+
+
 @pytest.mark.parametrize("L_x", [0.5, 3.0])
 @pytest.mark.parametrize("m", [1, 13, 17, 40])
 def test_cell_sums_are_per_floe_sums_bit_for_bit(L_x, m):
