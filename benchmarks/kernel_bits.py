@@ -70,7 +70,7 @@ for n, case in enumerate(cases):
         arrays[f"{n}_{name}"] = getattr(ch, name)
     arrays[f"{n}_stats"] = st
 import floewave
-arrays["file"] = np.array(floewave.__file__)
+arrays["source"] = np.array(floewave.__file__)
 np.savez(out, **arrays)
 """
 
@@ -106,7 +106,7 @@ def main() -> int:
         a = dict(np.load(tmp / "ref.npz"))
         b = dict(np.load(tmp / "new.npz"))
         for arrays, where in ((a, ref), (b, ROOT)):       # each ran the floewave it should
-            assert Path(str(arrays.pop("file"))).resolve().parent == (where / "floewave").resolve()
+            assert Path(str(arrays.pop("source"))).resolve().parent == (where / "floewave").resolve()
         bad = [key for key in a if a[key].dtype != b[key].dtype
                or a[key].shape != b[key].shape or a[key].tobytes() != b[key].tobytes()]
     for n, case in enumerate(CASES):
