@@ -106,7 +106,8 @@ def main() -> int:
         a = dict(np.load(tmp / "ref.npz"))
         b = dict(np.load(tmp / "new.npz"))
         for arrays, where in ((a, ref), (b, ROOT)):       # each ran the floewave it should
-            assert Path(str(arrays.pop("source"))).resolve().parent == (where / "floewave").resolve()
+            ran = Path(str(arrays.pop("source"))).resolve().parent
+            assert ran == (where / "floewave").resolve(), ran
         bad = [key for key in a if a[key].dtype != b[key].dtype
                or a[key].shape != b[key].shape or a[key].tobytes() != b[key].tobytes()]
     for n, case in enumerate(CASES):
