@@ -22,6 +22,17 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 
 
+def export_revision(rev: str, dest: Path, paths=("floewave", "sweep", "configs")) -> Path:
+    """Export ``paths`` of git revision ``rev`` of this repository into ``dest`` (``git
+    archive``: no worktree, nothing written to the repository); returns ``dest``, to put on
+    ``PYTHONPATH``."""
+    data = subprocess.run(["git", "-C", str(ROOT), "archive", "--format=tar", rev, *paths],
+                          check=True, capture_output=True).stdout
+    with tarfile.open(fileobj=io.BytesIO(data)) as tar:
+        tar.extractall(dest, filter="data")
+    return dest
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rev", default=None)
@@ -32,12 +43,7 @@ def main() -> int:
     env.pop("SLURM_NTASKS", None)
     config = args.config.resolve()
     if args.rev:
-        data = subprocess.run(["git", "-C", str(ROOT), "archive", "--format=tar", args.rev,
-                               "floewave", "sweep", "configs"],
-                              check=True, capture_output=True).stdout
-        with tarfile.open(fileobj=io.BytesIO(data)) as tar:
-            tar.extractall(tmp / "tree", filter="data")
-        env["PYTHONPATH"] = str(tmp / "tree")
+        env["PYTHONPATH"] = str(export_revision(args.rev, tmp / "tree"))
         config = tmp / "tree" / "configs" / args.config.name
     stores = []
     for name in ("compiled", "cached"):

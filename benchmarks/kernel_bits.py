@@ -5,8 +5,9 @@
 A kernel change that only restructures loops (vectorisation, fission, branch-free selects)
 must not change a single bit of any trajectory: otherwise it is a new model version (every
 stored point would be computed again, and the docs' numbers too). This runs the same
-trajectories with this checkout's floewave and with a ``git worktree`` of ``REV`` (default
-``HEAD``: the last commit, i.e. the uncommitted change is checked), each in a fresh process
+trajectories with this checkout's floewave and with that of ``REV`` (exported by ``git
+archive``; default ``HEAD``: the last commit, i.e. the uncommitted change is checked), each
+in a fresh process
 with its own empty numba cache, and compares every state array (positions, velocities,
 accelerations, contact flags) and every window statistic byte for byte (so -0.0 is not
 +0.0 and NaN must be the same NaN).
@@ -28,6 +29,9 @@ import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+from cache_paths import export_revision  # noqa: E402
 
 #: option sets (ModelConfig fields) checked; L_x gives 84, 28 and 14 floes
 CASES = [
@@ -94,15 +98,9 @@ def main() -> int:
 
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        ref = tmp / "ref"
-        subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q",
-                        str(ref), args.against], check=True)
-        try:
-            run(ref, args.periods, tmp / "ref.npz")
-            run(ROOT, args.periods, tmp / "new.npz")
-        finally:
-            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force",
-                            str(ref)], check=True)
+        ref = export_revision(args.against, tmp / "ref", ("floewave",))
+        run(ref, args.periods, tmp / "ref.npz")
+        run(ROOT, args.periods, tmp / "new.npz")
         a = dict(np.load(tmp / "ref.npz"))
         b = dict(np.load(tmp / "new.npz"))
         for arrays, where in ((a, ref), (b, ROOT)):       # each ran the floewave it should
