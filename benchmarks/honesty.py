@@ -17,6 +17,15 @@ standard error falls as 1/sqrt(iterations averaged)).
     python benchmarks/honesty.py --coupling independent
     python benchmarks/honesty.py --placements uniform random --random 0   # §4.1's claim
     python benchmarks/honesty.py --set nT=3 --replicas 4 --jobs 2
+    python benchmarks/honesty.py --reference --random 24     # against long reference runs
+
+``--reference``: two runs of one protocol share its biases, so the between-seed z cannot see
+them. Each point is also run as a long reference (:data:`REFERENCE`: the stationary protocol
+with a fixed transient of 85 periods and 150 periods averaged per replica, no early stop),
+with two seeds; the references are kept in ``benchmarks/data/references.json`` (computed
+once, reused) and each of the two production runs is compared with the mean of the two
+references, z = (x - x_ref) / sqrt(se^2 + se_ref^2). Target: RMS z in [0.8, 1.25] for a(x),
+a_end, W_c and every alpha, no |z| > 4.
 
 Stochastic: the figures change with the seeds drawn; they are statistics of chaotic
 runs. Results are cached in ``--cache`` (JSON per run) so a rerun only adds missing runs.
@@ -44,6 +53,14 @@ GRID = {"L_x": [0.5, 1.5, 3.0], "T": [1.1, 1.2, 1.4, 1.5, 1.6, 1.8, 2.0],
         "eps": [0.2, 0.4, 0.6, 0.8], "d_f": [0.005, 0.010, 0.020, 0.050],
         "dispersion": ["ep", "ow", "ml"]}
 SCALARS = ("W_c", "alpha_inner", "alpha_all", "alpha_edge", "alpha_exp", "a_end")
+#: the long reference run (``--reference``): 10 periods of spin-up, a fixed transient of 15
+#: windows (75 periods), then 30 windows (150 periods) averaged per replica
+REFERENCE = {"dt": 1e-3, "n0": 10, "coupling": "independent", "placement": "random",
+             "protocol": "stationary", "stationarity": "fixed", "transient_min": 15,
+             "n_average": 30, "max_iterations": 45, "target_stderr": 0.0,
+             "target_W_c_stderr": 0.0}
+REFERENCE_SEEDS = (101, 102)
+REFERENCE_FILE = Path(__file__).parent / "data" / "references.json"
 
 
 def points(n_random: int, seed: int) -> list[dict]:
@@ -65,7 +82,9 @@ def run_one(task: tuple[dict, str]) -> tuple[str, dict]:
     cfg = ModelConfig(**cfg_dict)
     t = time.perf_counter()
     r = run_point(cfg)
-    rec = {"a": r.a.tolist(), "a_stderr": r.a_stderr.tolist(), "status": r.status,
+    rec = {"config": cfg_dict, "reference": cfg_dict.get("stationarity") == "fixed"
+           and cfg_dict.get("transient_min") == REFERENCE["transient_min"],
+           "a": r.a.tolist(), "a_stderr": r.a_stderr.tolist(), "status": r.status,
            "iterations": r.iterations, "floe_steps": r.floe_steps,
            "wall": time.perf_counter() - t, "W_c_n": r.W_c_n, "layout": r.compact_zone,
            "W_c_replicas": np.asarray(r.W_c_replicas).tolist()}
@@ -87,10 +106,55 @@ def z_scores(r1: dict, r2: dict, name: str) -> np.ndarray:
     return np.atleast_1d(((x1 - x2) / np.sqrt(np.where(ok, var, 1.0)))[ok])
 
 
+def combine(r1: dict, r2: dict) -> dict:
+    """The mean of two independent runs with its standard error (per quantity)."""
+    out = {}
+    for name in ("a", *SCALARS):
+        x = (np.asarray(r1[name], float) + np.asarray(r2[name], float)) / 2
+        se = np.sqrt(np.asarray(r1[name + "_stderr"], float) ** 2
+                     + np.asarray(r2[name + "_stderr"], float) ** 2) / 2
+        out[name], out[name + "_stderr"] = x, se
+    return out
+
+
+def reference_table(pts: list, ens: list, cache: dict, refs: dict, replicas: int) -> None:
+    """z of every production run against the mean of its point's two references."""
+    zs: dict[str, list[np.ndarray]] = {"a": [], **{s: [] for s in SCALARS}}
+    print(f"\nagainst the references ({len(REFERENCE_SEEDS)} seeds each, {REFERENCE}):")
+    print(f"{'point':44s} {'W_c ref':>13s} {'z_Wc':>11s} {'a_end/a0 ref':>14s} "
+          f"{'z_aend':>11s} {'rms z_a':>8s}")
+    for p, (k1, k2), _ in ens:
+        rr = [refs[key_of({**p, **REFERENCE, "replicas": replicas, "seed": s})]
+              for s in REFERENCE_SEEDS]
+        ref = combine(*rr)
+        a0 = ModelConfig(**p).a0
+        row = []
+        for k in (k1, k2):
+            for name in zs:
+                zs[name].append(z_scores(cache[k], ref, name))
+            row.append((z_scores(cache[k], ref, "W_c"), z_scores(cache[k], ref, "a_end"),
+                        z_scores(cache[k], ref, "a")))
+        name = ",".join(f"{k}={v}" for k, v in p.items() if k != "dispersion") + \
+            f",{p['dispersion']}"
+
+        def f(z):
+            return f"{z[0]:5.2f}" if z.size else "  nan"
+        print(f"{name:44s} {ref['W_c']:6.2f}+-{ref['W_c_stderr']:4.2f} "
+              f"{f(row[0][0])}/{f(row[1][0])} {ref['a_end'] / a0:7.4f}+-"
+              f"{ref['a_end_stderr'] / a0:5.4f} {f(row[0][1])}/{f(row[1][1])} "
+              f"{math.sqrt(np.mean(np.concatenate([row[0][2], row[1][2]]) ** 2)):8.2f}")
+    print("\nRMS z against the references (target 0.8-1.25, no |z| > 4):")
+    for name, parts in zs.items():
+        z = np.concatenate(parts) if parts else np.zeros(0)
+        rms = math.sqrt(np.mean(z**2)) if z.size else math.nan
+        print(f"  {name:12s} RMS z = {rms:5.2f}  n = {z.size:4d}  |z|>4: "
+              f"{int((abs(z) > 4).sum())}  max |z| = {np.max(np.abs(z)) if z.size else 0:.2f}")
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--replicas", type=int, default=8)
-    ap.add_argument("--coupling", default="mean", choices=("mean", "independent"))
+    ap.add_argument("--coupling", default="independent", choices=("mean", "independent"))
     ap.add_argument("--placements", nargs=2, default=("random", "random"))
     ap.add_argument("--seeds", nargs=2, type=int, default=(1, 2))
     ap.add_argument("--random", type=int, default=8, help="random grid points (>= 8)")
@@ -99,6 +163,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--no-single", action="store_true", help="skip the R = 1 baseline")
     ap.add_argument("--cache", default="/tmp/floewave-honesty.json")
+    ap.add_argument("--reference", action="store_true",
+                    help="also compare each run with long reference runs (module docstring)")
+    ap.add_argument("--references", default=str(REFERENCE_FILE),
+                    help="JSON file of the reference runs (computed where missing)")
     args = ap.parse_args(argv)
     extra = {}
     for item in args.set:
@@ -120,7 +188,16 @@ def main(argv: list[str] | None = None) -> int:
         if not args.no_single:
             tasks.append((single, key_of(single)))
         ens.append((p, pair, key_of(single)))
-    todo = [t for t in tasks if t[1] not in cache]
+    refs: dict = {}
+    ref_path = Path(args.references)
+    if args.reference:
+        refs = json.loads(ref_path.read_text()) if ref_path.exists() else {}
+        for p in pts:
+            for seed in REFERENCE_SEEDS:
+                d = {**p, **REFERENCE, "replicas": args.replicas, "seed": seed}
+                if key_of(d) not in refs:
+                    tasks.append((d, key_of(d)))
+    todo = [t for t in tasks if t[1] not in cache and t[1] not in refs]
     todo = list({t[1]: t for t in todo}.values())
     print(f"{len(pts)} points, {len(tasks)} runs ({len(todo)} to compute), R = "
           f"{args.replicas}, coupling {args.coupling}, placements {args.placements}, "
@@ -128,8 +205,13 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     with mp.get_context("fork").Pool(args.jobs) as pool:
         for i, (key, rec) in enumerate(pool.imap_unordered(run_one, todo), 1):
-            cache[key] = rec
-            cache_path.write_text(json.dumps(cache))
+            if rec.get("reference"):
+                refs[key] = rec
+                ref_path.parent.mkdir(parents=True, exist_ok=True)
+                ref_path.write_text(json.dumps(refs, indent=0, sort_keys=True))
+            else:
+                cache[key] = rec
+                cache_path.write_text(json.dumps(cache))
             print(f"  {i}/{len(todo)} done ({time.perf_counter() - t0:.0f} s)", flush=True)
 
     zs: dict[str, list[np.ndarray]] = {"a": [], **{s: [] for s in SCALARS}}
@@ -169,6 +251,8 @@ def main(argv: list[str] | None = None) -> int:
         z = np.concatenate(parts) if parts else np.zeros(0)
         rms = math.sqrt(np.mean(z**2)) if z.size else math.nan
         print(f"  {name:12s} RMS z = {rms:5.2f}  n = {z.size:4d}  |z|>3: {int((abs(z) > 3).sum())}")
+    if args.reference:
+        reference_table(pts, ens, cache, refs, args.replicas)
     nc = sum(s == "not_converged" for s in statuses)
     print(f"\nnot_converged: {nc} of {len(statuses)} ensemble runs")
     if cost_R:

@@ -43,6 +43,13 @@ DRAG_INTEGRATIONS = ("quadrature", "exact")
 INTEGRATORS = ("predictor", "half_step")
 PLACEMENTS = ("uniform", "random")
 COUPLINGS = ("mean", "independent")
+PROTOCOLS = ("stationary", "noise_floor")
+#: the fewest time steps a binary contact may take (:meth:`ModelConfig.contact_steps`). The
+#: realised restitution is within 0.01 of dt 1e-4's when a contact takes >= 50 steps and
+#: 0.05-0.18 off at 9-11 (``benchmarks/dt_convergence.py``, 2026-12-02); the stiffest-limit
+#: estimate is a lower bound, about 0.4x the steps of a contact at 0.05 m/s
+MIN_CONTACT_STEPS = 20
+STATIONARITY = ("mser", "fixed")
 
 
 @dataclass(frozen=True)
@@ -83,7 +90,14 @@ class ModelConfig:
     integrator : ``"predictor"`` (velocity Verlet, velocity-dependent forces at the
         predicted end-of-step velocity u + dt*a: second order) or ``"half_step"``
         (forces at the half-step velocity as LIGGGHTS does: first order in the damping)
-    n0 : spin-up periods per iteration; nT : averaging periods per iteration
+    protocol : ``"stationary"`` (default: eq. 25 start, self-consistent march update, MSER
+        stationarity test, stop at the error-bar targets; :mod:`floewave.protocol`) or
+        ``"noise_floor"`` (the earlier protocol: a = a0 start, relaxed update, averaging
+        once the residual stops falling; with relax = 1 and noise_window = 0 the paper's
+        plain algorithm). ``relax``, ``noise_window`` and ``reuse_floor`` apply to
+        ``noise_floor`` only; ``transient_min`` to ``stationary`` only
+    n0 : spin-up periods per iteration; nT : averaging periods per iteration (the
+        stationary protocol's window)
     delta : convergence threshold on max_i |a_new - a| / a
     relax : under-relaxation of the amplitude update (the paper has 1)
     max_iterations : hard cap on iterations
@@ -97,6 +111,9 @@ class ModelConfig:
         error of W_c is at most this [m] (points with a compact zone in >= 2 replicas)
     reuse_floor : start the average with the samples of the ``noise_window`` iterations
         whose residuals revealed the noise floor (instead of discarding them)
+    transient_min : windows never averaged by the stationary protocol (whatever MSER says)
+    stationarity : the stationary protocol's transient: ``"mser"`` (MSER truncation, the
+        default) or ``"fixed"`` (the first ``transient_min`` windows; reference runs)
     n0_warm : spin-up periods of every iteration after the first when ``warm_start``
         (the state is already developed and a changes by at most ~relax x residual)
     warm_start : carry the DEM state over between iterations (default) instead of
@@ -160,20 +177,23 @@ class ModelConfig:
     damping: str = "liggghts"
     clip_attraction: bool = False
     # --- numerics ---
-    dt: float = 1.0e-4
+    dt: float = 1.0e-3
     dx: float = 0.01
     drag_integration: str = "quadrature"
     integrator: str = "predictor"
-    n0: int = 10
+    protocol: str = "stationary"
+    n0: int = 5
     nT: int = 5
     delta: float = 1.0e-3
     relax: float = 0.5
     max_iterations: int = 100
     noise_window: int = 4
-    n_average: int = 5
+    n_average: int = 8
     target_stderr: float = 0.01
     target_W_c_stderr: float = 1.0
     n0_warm: int = 0
+    transient_min: int = 4
+    stationarity: str = "mser"
     reuse_floor: bool = True
     warm_start: bool = True
     confined: bool = False
@@ -184,7 +204,7 @@ class ModelConfig:
     replicas: int = 8
     seed: int = 0
     placement: str = "random"
-    coupling: str = "mean"
+    coupling: str = "independent"
     # --- diagnostics ---
     gap_threshold: float = 1.0e-4
     compact_min_pairs: int = 3
@@ -216,8 +236,10 @@ class ModelConfig:
         _require(self, "noise_window", self.noise_window >= 0, "must be >= 0")
         _require(self, "n_average", self.n_average >= 2, "must be >= 2")
         _require(self, "n0_warm", self.n0_warm >= 0, "must be >= 0")
+        _require(self, "transient_min", self.transient_min >= 0, "must be >= 0")
         # counts that would make a point run for ever (or overflow the cost): refused here
-        for name in ("n0", "nT", "n0_warm", "max_iterations", "noise_window", "n_average"):
+        for name in ("n0", "nT", "n0_warm", "max_iterations", "noise_window", "n_average",
+                     "transient_min"):
             _require(self, name, getattr(self, name) <= 1_000_000, "must be <= 1000000")
         _require(self, "replicas", 1 <= self.replicas <= 4096, "must be in [1, 4096]")
         _require(self, "seed", 0 <= self.seed < 2**63, "must be in [0, 2**63)")
@@ -232,7 +254,9 @@ class ModelConfig:
         for name, allowed in (("dispersion", DISPERSIONS), ("contact", CONTACTS),
                               ("damping", DAMPINGS), ("drag_integration", DRAG_INTEGRATIONS),
                               ("integrator", INTEGRATORS), ("placement", PLACEMENTS),
-                              ("coupling", COUPLINGS)):
+                              ("coupling", COUPLINGS),
+                              ("protocol", PROTOCOLS),
+                              ("stationarity", STATIONARITY)):
             _require(self, name, getattr(self, name) in allowed, f"must be one of {allowed}")
 
     # ------------------------------------------------------------------ derived
@@ -291,15 +315,41 @@ class ModelConfig:
         periods = (n0_first + self.nT) + (iterations - 1) * (n0_later + self.nT)
         return periods * self.n_t * self.n_floes * self.n_chains
 
+    def contact_steps(self) -> float:
+        """Time steps in the shortest binary contact the contact law allows: the half period
+        pi sqrt(m* / k_n) of an undamped contact at the stiffest k_n (``linear``: Y* L_y h_i
+        / L_x; ``hertz_disk``: pi Y* h_i 0.9117, the limit of f(s)), with the added-mass
+        reduced mass m* = (1 + C_m) m / 2 (MODEL.md §3). A lower bound of the steps a real
+        contact takes (measured at 0.05 m/s, lab ice, dt 1e-3: 51-62 steps for
+        ``hertz_disk`` where this gives 22; ``benchmarks/dt_convergence.py``)."""
+        y_star = self.E / (2.0 * (1.0 - self.nu**2))
+        if self.contact == "linear":
+            k_n = y_star * self.L_y * self.h_i / self.L_x
+        else:
+            k_n = math.pi * y_star * self.h_i * 0.9117
+        m_star = (1.0 + self.C_m) * self.mass / 2.0
+        if k_n <= 0.0:
+            return math.inf
+        return math.pi * math.sqrt(m_star / k_n) / self.dt
+
     def check_physics(self) -> tuple[float, float]:
         """Raise :class:`InvalidPointError` if this point cannot be simulated; else return
         the wavenumber k and group velocity c_g it solved for (eqs. 6, 7).
 
-        Checks: T/dt and L_x/dx integral, at least two floes, and (via the dispersion
+        Checks: T/dt and L_x/dx integral, a binary contact resolved in at least
+        :data:`MIN_CONTACT_STEPS` steps (:meth:`contact_steps`; not for ``confined``), at least
+        two floes, and (via the dispersion
         solver) that eq. 6 has an admissible root (``ml`` below its cutoff).
         """
         _require_integral("T", self.T, self.dt, "dt")
         _require_integral("L_x", self.L_x, self.dx, "dx")
+        steps = self.contact_steps()
+        if not self.confined and steps < MIN_CONTACT_STEPS:
+            raise InvalidPointError(
+                f"dt = {self.dt!r} resolves a binary contact ({self.contact} law, stiffest"
+                f" limit: {steps * self.dt:.3g} s) in {steps:.1f} steps; at least"
+                f" {MIN_CONTACT_STEPS} are needed (dt <= {steps * self.dt / MIN_CONTACT_STEPS:.3g}"
+                " s; the paper's dt is 1e-4)", field="dt")
         if self.n_floes < 2:
             raise InvalidPointError(
                 f"L_sheet / L_x = {self.L_sheet!r} / {self.L_x!r} gives {self.n_floes} floe(s);"

@@ -29,11 +29,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._march import march_coefficients
 from .config import G, ModelConfig
 from .results import LAYOUTS, Zones, compact_zones, fit_exponential, fit_inverse, zone_fits
 
 __all__ = ["initial_positions", "replica_seed_sequence", "march_rows", "Records",
-           "estimate_point", "jackknife_se", "zone_of", "fit_zone"]
+           "estimate_point", "jackknife_se", "zone_of", "fit_zone", "coefficients",
+           "mean_coefficients", "effective_sample_size", "stderr"]
 
 
 def replica_seed_sequence(cfg: ModelConfig) -> np.random.SeedSequence:
@@ -101,6 +103,53 @@ def march_rows(cfg: ModelConfig, S_sd: np.ndarray, c_g: float, k: float) -> np.n
     return a
 
 
+def coefficients(S: np.ndarray, A: np.ndarray) -> np.ndarray:
+    """Dissipation coefficients c = S_sd / a^3 [W m^-5] of windows run with amplitudes
+    ``A`` [m] (same shape); NaN where a = 0 (no wave reached the floe: c not measured)."""
+    S = np.asarray(S, dtype=float)
+    A = np.asarray(A, dtype=float)
+    out = np.full(S.shape, np.nan)
+    ok = A > 0
+    out[ok] = S[ok] / (A[ok] * A[ok] * A[ok])
+    return out
+
+
+def mean_coefficients(C: np.ndarray, axis: int | tuple = 0) -> np.ndarray:
+    """The mean of coefficients ``C`` over ``axis``, ignoring NaN (unmeasured); a floe
+    never measured takes its upwave neighbour's value (0 at the ice edge)."""
+    C = np.asarray(C, dtype=float)
+    ok = np.isfinite(C)
+    count = ok.sum(axis=axis)
+    total = np.where(ok, C, 0.0).sum(axis=axis)
+    m = np.where(count > 0, total / np.maximum(count, 1), np.nan)
+    m = np.array(m, dtype=float, ndmin=1)
+    for i in range(m.shape[-1]):
+        prev = m[..., i - 1] if i > 0 else 0.0
+        m[..., i] = np.where(np.isfinite(m[..., i]), m[..., i], prev)
+    return m
+
+
+def effective_sample_size(samples: np.ndarray) -> float:
+    """n (1 - rho1) / (1 + rho1) with rho1 the lag-1 autocorrelation pooled over floes."""
+    n = samples.shape[0]
+    if n < 3:
+        return float(n)
+    d = samples - samples.mean(axis=0)
+    var = (d * d).sum(axis=0)
+    ok = var > 0
+    if not ok.any():
+        return float(n)
+    rho = float(np.mean((d[1:, ok] * d[:-1, ok]).sum(axis=0) / var[ok]))
+    rho = min(max(rho, 0.0), 0.95)
+    return max(n * (1.0 - rho) / (1.0 + rho), 2.0)
+
+
+def stderr(samples: list[np.ndarray]) -> np.ndarray:
+    """Per-floe standard error of the mean of iteration samples (autocorrelation-corrected)."""
+    S = np.asarray(samples)
+    return S.std(axis=0, ddof=1) / math.sqrt(effective_sample_size(S))
+
+
 @dataclass
 class Records:
     """What the averaging window kept of every replica.
@@ -111,6 +160,8 @@ class Records:
     W_c, compact_end : (J, R) the compact zone of each iteration's window and replica
         (:func:`zone_of` of that window's mean positions and gaps; NaN: none)
     layouts : J lists of R layouts of those zones
+    C : (J, R, N_f) dissipation coefficients S / a^3 of each window (the stationary
+        protocol; ``a`` is then the march of their mean, not a mean of ``a_new``)
     """
 
     S: np.ndarray
@@ -119,6 +170,7 @@ class Records:
     W_c: np.ndarray
     compact_end: np.ndarray
     layouts: list[list[str]]
+    C: np.ndarray | None = None
 
 
 def jackknife_se(loo: np.ndarray) -> np.ndarray:
@@ -191,7 +243,10 @@ def estimate_point(cfg: ModelConfig, rec: Records, c_g: float, k: float) -> dict
     has = np.isfinite(W_r)
 
     def estimate(sub: np.ndarray) -> dict:
-        if cfg.coupling == "mean":
+        if rec.C is not None:         # the march of the mean coefficient (protocol.py)
+            a = march_coefficients(cfg, mean_coefficients(rec.C[:, sub, :], (0, 1)),
+                                   c_g, k)
+        elif cfg.coupling == "mean":
             a_j = march_rows(cfg, rec.S[:, sub, :].mean(axis=1), c_g, k)   # (J, N_f)
             a = a_j.mean(axis=0)
         else:

@@ -10,10 +10,12 @@ import numpy as np
 from . import _kernels as K
 from .config import ModelConfig
 from .dispersion import alpha_confined
-from .ensemble import Records, estimate_point, initial_positions, march_rows, zone_of
+from .ensemble import Records, estimate_point, initial_positions, march_rows, stderr, zone_of
 from .errors import NumericalError
 from .forces import cell_offsets
+from .protocol import iterate_stationary
 from .results import PointResult
+from .window import Window
 
 __all__ = ["FloeChain", "NumericalError", "march_amplitude", "dissipation", "residual",
            "run_point", "Window"]
@@ -114,31 +116,6 @@ class FloeChain:
                                  f" step {self.istep}{where}")
 
 
-class Window:
-    """Statistics of one nT-period averaging window, normalised to per-step means."""
-
-    def __init__(self, cfg: ModelConfig, stats: np.ndarray, nsteps: int, x0: np.ndarray):
-        n = stats.shape[1]
-        rows = stats / nsteps
-        self.s3_mean = rows[K.ST_S3] / cfg.n_x      # <|u_rel|^3> over steps and cells
-        self.x_mean = rows[K.ST_X]
-        nan = np.full(1, np.nan)
-        if cfg.confined:
-            self.gap_mean = np.concatenate([np.diff(x0) - cfg.L_x, nan])
-            self.contact_fraction = np.concatenate([np.zeros(n - 1), nan])
-            self.collisions = np.concatenate([np.zeros(n - 1), nan])
-        else:
-            self.gap_mean = np.concatenate([rows[K.ST_GAP, :-1], nan])
-            self.contact_fraction = np.concatenate([rows[K.ST_CONTACT, :-1], nan])
-            self.collisions = np.concatenate([stats[K.ST_COLL, :-1], nan])
-        self.F_w_mean = rows[K.ST_FW]
-        self.F_c_mean = rows[K.ST_FC]
-        self.F_d_mean = rows[K.ST_FD]
-
-    FIELDS = ("s3_mean", "x_mean", "gap_mean", "contact_fraction", "collisions", "F_w_mean",
-              "F_c_mean", "F_d_mean")
-
-
 def dissipation(cfg: ModelConfig, s3_mean: np.ndarray) -> np.ndarray:
     """Eq. 19: S_sd,i = -rho_w C_sd <|u_rel|^3>_i  [W m^-2]."""
     return -cfg.rho_w * cfg.C_sd * s3_mean
@@ -172,27 +149,6 @@ def noise_floor_reached(history: list[float], window: int) -> bool:
     last = float(np.median(history[-window:]))
     prev = float(np.median(history[-2 * window:-window]))
     return last > 0.5 * prev
-
-
-def effective_sample_size(samples: np.ndarray) -> float:
-    """n (1 - rho1) / (1 + rho1) with rho1 the lag-1 autocorrelation pooled over floes."""
-    n = samples.shape[0]
-    if n < 3:
-        return float(n)
-    d = samples - samples.mean(axis=0)
-    var = (d * d).sum(axis=0)
-    ok = var > 0
-    if not ok.any():
-        return float(n)
-    rho = float(np.mean((d[1:, ok] * d[:-1, ok]).sum(axis=0) / var[ok]))
-    rho = min(max(rho, 0.0), 0.95)
-    return max(n * (1.0 - rho) / (1.0 + rho), 2.0)
-
-
-def stderr(samples: list[np.ndarray]) -> np.ndarray:
-    """Per-floe standard error of the mean of iteration samples (autocorrelation-corrected)."""
-    S = np.asarray(samples)
-    return S.std(axis=0, ddof=1) / math.sqrt(effective_sample_size(S))
 
 
 def max_stderr(samples: list[np.ndarray]) -> float:
@@ -232,6 +188,43 @@ def run_point(cfg: ModelConfig,
     R = cfg.n_chains
     x0s = np.array(initial_positions(cfg))
     chain = FloeChain(cfg, k, x0s)         # the R replicas in one kernel
+    if cfg.protocol == "stationary":
+        out = iterate_stationary(cfg, chain, x0s, k, c_g, alpha_c, progress)
+    else:
+        out = _iterate_noise_floor(cfg, chain, x0s, k, c_g, progress)
+    status, est, history, noise = out["status"], out["est"], out["history"], out["noise"]
+    iterations = len(history)
+    n = cfg.n_floes
+    wall = time.perf_counter() - t_start
+    return PointResult(
+        x_mean=est["x_mean"], a=est["a"], a_stderr=est["a_stderr"], S_sd=est["S_sd"],
+        gap_mean=est["gap_mean"], contact_fraction=est["contact_fraction"],
+        collisions=est["collisions"], F_w_mean=est["F_w_mean"], F_c_mean=est["F_c_mean"],
+        F_d_mean=est["F_d_mean"], n_floes=n, W_c=est["W_c"], compact_zone=est["compact_zone"],
+        compact_end=est["compact_end"], ice_extent=est["ice_extent"],
+        alpha_all=est["alpha_all"], alpha_all_resid=est["alpha_all_resid"],
+        alpha_edge=est["alpha_edge"], alpha_edge_resid=est["alpha_edge_resid"],
+        alpha_inner=est["alpha_inner"], alpha_inner_resid=est["alpha_inner_resid"],
+        alpha_exp=est["alpha_exp"], alpha_exp_resid=est["alpha_exp_resid"], alpha_c=alpha_c,
+        k=k, c_g=c_g, status=status, noise=noise, iterations=iterations,
+        residual=float(history[-1]), floe_steps=cfg.floe_steps_of(iterations),
+        wall_time=wall, kernel_mode=kernel_mode(cfg), a_end=est["a_end"], a0=cfg.a0,
+        residual_history=np.array(history), replicas=R, W_c_stderr=est["W_c_stderr"],
+        W_c_n=est["W_c_n"], alpha_all_stderr=est["alpha_all_stderr"],
+        alpha_edge_stderr=est["alpha_edge_stderr"],
+        alpha_inner_stderr=est["alpha_inner_stderr"],
+        alpha_exp_stderr=est["alpha_exp_stderr"], a_end_stderr=est["a_end_stderr"],
+        W_c_replicas=est["W_c_replicas"], compact_end_replicas=est["compact_end_replicas"],
+        x_mean_replicas=est["x_mean_replicas"], gap_mean_replicas=est["gap_mean_replicas"],
+        S_sd_replicas=est["S_sd_replicas"],
+    )
+
+
+def _iterate_noise_floor(cfg: ModelConfig, chain: FloeChain, x0s: np.ndarray, k: float,
+                         c_g: float, progress) -> dict:
+    """The ``noise_floor`` protocol (:func:`run_point`'s docstring): ``status``, ``est``,
+    ``history``, ``noise``."""
+    R = cfg.n_chains
     n = cfg.n_floes
     n_t = cfg.n_t
     a = np.full((R, n), cfg.a0)          # per replica (rows equal under coupling "mean")
@@ -293,7 +286,6 @@ def run_point(cfg: ModelConfig,
             if enough:
                 status = "converged_noisy"
                 break
-    iterations = len(history)
     assert last is not None
 
     kept = samples if samples else [last]
@@ -318,29 +310,7 @@ def run_point(cfg: ModelConfig,
         noise = float(np.median(history[-len(samples):]))
     else:
         noise = 0.0 if status == "converged" else float(history[-1])
-    wall = time.perf_counter() - t_start
-    return PointResult(
-        x_mean=est["x_mean"], a=est["a"], a_stderr=est["a_stderr"], S_sd=est["S_sd"],
-        gap_mean=est["gap_mean"], contact_fraction=est["contact_fraction"],
-        collisions=est["collisions"], F_w_mean=est["F_w_mean"], F_c_mean=est["F_c_mean"],
-        F_d_mean=est["F_d_mean"], n_floes=n, W_c=est["W_c"], compact_zone=est["compact_zone"],
-        compact_end=est["compact_end"], ice_extent=est["ice_extent"],
-        alpha_all=est["alpha_all"], alpha_all_resid=est["alpha_all_resid"],
-        alpha_edge=est["alpha_edge"], alpha_edge_resid=est["alpha_edge_resid"],
-        alpha_inner=est["alpha_inner"], alpha_inner_resid=est["alpha_inner_resid"],
-        alpha_exp=est["alpha_exp"], alpha_exp_resid=est["alpha_exp_resid"], alpha_c=alpha_c,
-        k=k, c_g=c_g, status=status, noise=noise, iterations=iterations,
-        residual=float(history[-1]), floe_steps=cfg.floe_steps_of(iterations),
-        wall_time=wall, kernel_mode=kernel_mode(cfg), a_end=est["a_end"], a0=cfg.a0,
-        residual_history=np.array(history), replicas=R, W_c_stderr=est["W_c_stderr"],
-        W_c_n=est["W_c_n"], alpha_all_stderr=est["alpha_all_stderr"],
-        alpha_edge_stderr=est["alpha_edge_stderr"],
-        alpha_inner_stderr=est["alpha_inner_stderr"],
-        alpha_exp_stderr=est["alpha_exp_stderr"], a_end_stderr=est["a_end_stderr"],
-        W_c_replicas=est["W_c_replicas"], compact_end_replicas=est["compact_end_replicas"],
-        x_mean_replicas=est["x_mean_replicas"], gap_mean_replicas=est["gap_mean_replicas"],
-        S_sd_replicas=est["S_sd_replicas"],
-    )
+    return {"status": status, "est": est, "history": history, "noise": noise}
 
 
 def _records(kept: list[tuple]) -> Records:

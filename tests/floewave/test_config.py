@@ -8,11 +8,13 @@ from floewave import ConfigError, InvalidPointError, ModelConfig
 
 def test_defaults_match_model_md():
     c = ModelConfig()
-    assert (c.n_floes, c.n_t, c.n_x) == (84, 12000, 50)
+    assert (c.n_floes, c.n_t, c.n_x) == (84, 1200, 50)      # dt 1e-3 (the paper's: 1e-4)
+    assert ModelConfig(dt=1e-4).n_t == 12000
     assert ModelConfig(L_x=1.5).n_floes == 28 and ModelConfig(L_x=3.0).n_floes == 14
     assert (c.h, c.L_y, c.h_i, c.rho_i, c.rho_w, c.E, c.nu, c.k_s) == (
         2.5, 10.0, 0.03, 910.0, 1000.0, 3e7, 0.3, 9e4)
-    assert (c.n0, c.nT, c.delta, c.dt, c.dx, c.max_iterations) == (10, 5, 1e-3, 1e-4, 0.01, 100)
+    assert (c.nT, c.delta, c.dt, c.dx) == (5, 1e-3, 1e-3, 0.01)
+    assert (c.protocol, c.coupling, c.stationarity) == ("stationary", "independent", "mser")
     assert c.contact == "hertz_disk" and c.damping == "liggghts" and not c.clip_attraction
 
 

@@ -28,7 +28,8 @@ def test_confined_profile_matches_eq25(disp, C_sd):
 
 def test_confined_S_sd_is_eq22():
     """Fixed floes: S_sd,i = -rho_w C_sd (4 / 3 pi) (a_i omega / tanh kh)^3 (eqs. 19, 22)."""
-    cfg = ModelConfig(confined=True, d_f=0.0, nT=1, max_iterations=1, noise_window=0)
+    cfg = ModelConfig(confined=True, d_f=0.0, nT=1, max_iterations=1, noise_window=0,
+                      protocol="noise_floor")
     r = run_point(cfg)
     k, _ = solve_dispersion(cfg)
     # after one iteration the window ran with a = a0 on every floe

@@ -51,7 +51,7 @@ def test_exact_mode_is_the_dx_to_zero_limit_of_the_quadrature(L_x):
 def test_fixed_floes_dissipation_is_eq22(mode):
     """u_i = 0: S_sd = -rho_w C_sd <|u_w0|^3> = -rho_w C_sd (4/3pi) (a omega / tanh kh)^3."""
     cfg = ModelConfig(confined=True, nT=1, max_iterations=1, noise_window=0,
-                      drag_integration=mode, L_x=1.5)
+                      drag_integration=mode, L_x=1.5, protocol="noise_floor")
     r = run_point(cfg)
     k, _ = solve_dispersion(cfg)
     expected = -cfg.rho_w * cfg.C_sd * 4 / (3 * math.pi) * (

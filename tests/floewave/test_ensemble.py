@@ -231,7 +231,7 @@ def test_replicas_that_could_not_differ_run_as_one_chain(changes):
 def test_a_layout_that_flips_without_one_replica_has_no_zone_error_bars():
     """R = 2, one replica compact, one not: the layout is a tie (edge); leaving out the
     compact replica gives none, so the zone fits have no jackknife error bar (NaN)."""
-    cfg = ModelConfig(L_x=0.5, replicas=2)
+    cfg = ModelConfig(L_x=0.5, replicas=2, coupling="mean")
     rec, _ = _records(cfg, 2, 2, np.random.default_rng(5), none=(1,))
     est = estimate_point(cfg, rec, 0.9, 3.0)
     assert est["compact_zone"] == "edge" and est["W_c_n"] == 1

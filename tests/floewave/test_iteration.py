@@ -1,11 +1,13 @@
-"""The attenuation iteration (MODEL.md §4) on a reduced full-DEM point."""
+"""The ``noise_floor`` attenuation iteration (MODEL.md §4) on a reduced full-DEM point (the
+stationary protocol's own tests: tests/floewave/test_protocol.py)."""
 import numpy as np
 import pytest
 
 from floewave import ModelConfig, run_point
 from floewave.model import march_amplitude, noise_floor_reached, residual
 
-REDUCED = dict(replicas=1, placement="uniform", L_x=1.5, n0=3, n0_warm=3, nT=2, noise_window=4,
+REDUCED = dict(protocol="noise_floor", dt=1e-4, coupling="mean",
+               replicas=1, placement="uniform", L_x=1.5, n0=3, n0_warm=3, nT=2, noise_window=4,
                max_iterations=80, relax=0.3,
                target_stderr=0.0, reuse_floor=False)
 
@@ -64,7 +66,7 @@ def test_run_point_is_deterministic():
 def test_paper_plain_algorithm_available():
     """relax = 1, no noise handling: the paper's iteration; it stops at max_iterations."""
     cfg = ModelConfig(eps=0.6, L_x=3.0, n0=2, nT=1, relax=1.0, noise_window=0,
-                      max_iterations=8)
+                      max_iterations=8, protocol="noise_floor")
     r = run_point(cfg)
     assert r.status in ("converged", "not_converged")
     # the status agrees with the residual history: it stopped at the first residual below
