@@ -17,8 +17,10 @@ at Fig. 2's ``ep`` eps 0.8 point), so it averaged a transient. This protocol:
    2000): on replica-mean series of window statistics (the sheet-mean and last-floe
    amplitude implied by the window alone, and the fraction of compact pairs) the truncation
    d minimising sum_{j>d} (y_j - ybar_d)^2 / (n - d)^2 is found; the series counts as
-   stationary after d when d <= n / 2 (MSER's own validity rule), and only windows after d
-   are ever averaged (never the first ``transient_min``);
+   stationary after d when d <= n / 2 (MSER's own validity rule) and, on the windows after
+   d, the first and second halves agree (:func:`halves_z`, a Geweke test with the
+   independent replicas as samples: MSER alone, on 12-20 windows, let slow drifts through);
+   only windows after d are ever averaged (never the first ``transient_min``);
 4. **stops** when the run is stationary, at least ``n_average`` windows are averaged and
    SE(a) <= ``target_stderr`` a0 and SE(W_c) <= ``target_W_c_stderr`` (status
    ``converged_noisy``); ``converged`` when the update stops changing a (residual <
@@ -69,6 +71,25 @@ def mser_truncation(y: np.ndarray, n_min: int) -> int:
     return d_best
 
 
+#: the largest |z| of the half-difference test (:func:`halves_z`) that counts as stationary
+GEWEKE_Z = 2.5
+
+
+def halves_z(Y: np.ndarray, floor: float) -> float:
+    """A Geweke-like drift test with the replicas as independent samples: per replica
+    (columns of ``Y``, (n, R)) the mean of the first half of the windows minus that of the
+    second; z = mean over replicas / its standard error (Geweke 1992, with independent
+    replicas in place of a spectral variance). ``floor`` bounds the standard error from
+    below (replicas of a non-chaotic point agree to rounding)."""
+    n, R = Y.shape
+    h = n // 2
+    if h < 1:
+        return 0.0
+    D = Y[:h].mean(axis=0) - Y[n - h:].mean(axis=0)
+    se = float(D.std(ddof=1) / np.sqrt(R)) if R > 1 else 0.0
+    return float(D.mean() / max(se, floor))
+
+
 class _Windows:
     """What the windows so far measured: per window j the dissipation S (R, N_f), the
     forcing a (R, N_f), the Window statistics and zones of every replica."""
@@ -91,8 +112,9 @@ class _Windows:
         implied = march_coefficients(cfg, mean_coefficients(C[None]), c_g, k)   # (R, N_f)
         compact = np.array([np.mean(np.asarray(w.gap_mean[:-1]) < cfg.gap_threshold)
                             for w in windows])
-        self.series.append(np.array([implied.mean(axis=1).mean(), implied[:, -1].mean(),
-                                     compact.mean()]))
+        # (3, R): per replica the sheet-mean and last-floe amplitude this window implies,
+        # and its fraction of compact pairs
+        self.series.append(np.array([implied.mean(axis=1), implied[:, -1], compact]))
 
     def __len__(self) -> int:
         return len(self.S)
@@ -108,10 +130,15 @@ class _Windows:
             return d, n > cfg.transient_min
         if n < cfg.n_average:
             return n - 1, False
-        Y = np.array(self.series)
-        d = max(mser_truncation(Y[:, s], cfg.n_average) for s in range(Y.shape[1]))
+        Y = np.array(self.series)                                   # (n, 3, R)
+        d = max(mser_truncation(Y[:, s].mean(axis=1), cfg.n_average)
+                for s in range(Y.shape[1]))
         d = max(d, min(cfg.transient_min, n - 1))
-        return d, d <= n // 2
+        if d > n // 2:
+            return d, False
+        floors = (1e-3 * cfg.a0, 1e-3 * cfg.a0, 1e-2)
+        return d, all(abs(halves_z(Y[d:, s], floors[s])) <= GEWEKE_Z
+                      for s in range(Y.shape[1]))
 
     def records(self, d: int) -> Records:
         """The windows after d as :class:`floewave.ensemble.Records`."""
@@ -202,6 +229,13 @@ def iterate_stationary(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g: 
             d = len(wins) // 2
         est = _estimate(cfg, wins, d, c_g, k)
     assert est is not None
+    if status != "converged" and R > 1:
+        # the last update's change, in quadrature: how far from its fixed point the
+        # iteration still was (replicas of a non-chaotic point agree to rounding, and their
+        # jackknife alone would not see it)
+        conv = np.abs(np.mean(a - wins.A[-1], axis=0))
+        est["a_stderr"] = np.sqrt(np.asarray(est["a_stderr"]) ** 2 + conv**2)
+        est["a_end_stderr"] = float(est["a_stderr"][-1])
     averaged = history[d:] if d < len(history) else history[-1:]
     return {"status": status, "est": est, "history": history,
             "noise": 0.0 if status == "converged" else float(np.median(averaged)),

@@ -1,0 +1,132 @@
+"""The stationary iteration protocol (floewave.protocol, floewave._march): the
+self-consistent march against eq. 20, the confined limit, the stationarity tests on series
+whose transient is known, and the time-step rule."""
+import math
+
+import numpy as np
+import pytest
+
+from floewave import InvalidPointError, ModelConfig, run_point
+from floewave._march import march_coefficients
+from floewave.ensemble import coefficients, mean_coefficients
+from floewave.model import march_amplitude
+from floewave.protocol import confined_profile, halves_z, mser_truncation
+
+
+def test_self_consistent_march_solves_eq20_with_its_own_dissipation():
+    """a from c, then S = c a^3 marched by eq. 20 gives a back (to rounding)."""
+    cfg = ModelConfig(L_x=0.5)
+    rng = np.random.default_rng(3)
+    c = -rng.uniform(0.5, 3.0, (3, cfg.n_floes)) * 1e2      # S / a^3 [W m^-5]
+    a = march_coefficients(cfg, c, c_g=0.9, k=3.0)
+    assert np.all(a > 0) and np.all(np.diff(a, axis=1) < 0)
+    for r in range(3):
+        again = march_amplitude(cfg, c[r] * a[r] ** 3, c_g=0.9, k=3.0)
+        np.testing.assert_allclose(again, a[r], rtol=1e-12, atol=0)
+
+
+def test_self_consistent_march_with_overwash_is_eq21():
+    cfg = ModelConfig(L_x=0.5, overwash=True, c_ow=0.05, s_min=0.0)
+    c = np.full(cfg.n_floes, -150.0)
+    a = march_coefficients(cfg, c, c_g=0.9, k=3.0)
+    np.testing.assert_allclose(march_amplitude(cfg, c * a**3, 0.9, 3.0), a, rtol=1e-12)
+
+
+def test_a_wave_that_dies_out_is_zero_beyond_never_nan():
+    """Cubic dissipation alone decays algebraically (as eq. 25 does); the wave dies only
+    where a floe would take more than its own energy (q a > 1 upwave): 0 from there on."""
+    cfg = ModelConfig(L_x=0.5)
+    strong = march_coefficients(cfg, np.full(cfg.n_floes, -1e6), c_g=0.9, k=3.0)
+    assert np.all(strong > 0) and np.all(np.diff(strong) < 0)
+    c = np.full(cfg.n_floes, -100.0)
+    c[0] = -1e9
+    a = march_coefficients(cfg, c, c_g=0.9, k=3.0)
+    assert np.all(np.isfinite(a)) and a[0] > 0 and np.all(a[1:] == 0.0)
+
+
+def test_coefficients_skip_floes_without_a_wave():
+    S = np.array([[-2.0, -1.0, 0.0, 0.0]])
+    A = np.array([[1.0, 0.5, 0.0, 0.0]])
+    c = coefficients(S, A)
+    assert c[0, 0] == -2.0 and c[0, 1] == -8.0 and np.all(np.isnan(c[0, 2:]))
+    # the mean ignores unmeasured windows; an unmeasured floe takes its upwave neighbour's
+    C = np.array([[[-1.0, np.nan, np.nan]], [[-3.0, -4.0, np.nan]]])
+    np.testing.assert_array_equal(mean_coefficients(C), [[-2.0, -4.0, -4.0]])
+
+
+def test_confined_point_converges_in_one_update_to_the_discrete_eq20_profile():
+    """Fixed floes: S = c a^3 exactly, so the first update is the fixed point; the second
+    window confirms it (status converged). The profile is the noise_floor protocol's
+    converged one (eq. 20, iterated to delta 1e-9) and close to eq. 25."""
+    cfg = ModelConfig(confined=True, d_f=0.0, C_sd=0.2, L_x=1.5)
+    r = run_point(cfg)
+    assert r.status == "converged" and r.iterations == 2
+    old = run_point(cfg.replace(protocol="noise_floor", relax=1.0, noise_window=0,
+                                delta=1e-9, max_iterations=200))
+    assert old.status == "converged"
+    np.testing.assert_allclose(r.a, old.a, rtol=1e-8)
+    eq25 = confined_profile(cfg, r.x_mean, r.alpha_c)
+    assert np.max(np.abs(r.a / eq25 - 1)) <= 5e-3
+
+
+def test_mser_finds_a_known_transient():
+    rng = np.random.default_rng(11)
+    y = np.concatenate([np.linspace(2.0, 1.0, 8), 1.0 + 0.05 * rng.standard_normal(24)])
+    assert 6 <= mser_truncation(y, 5) <= 10
+    flat = 1.0 + 0.05 * rng.standard_normal(30)
+    assert mser_truncation(flat, 5) <= 8
+    assert mser_truncation(np.ones(12), 5) == 0
+
+
+def test_halves_test_sees_a_drift_the_replicas_share():
+    rng = np.random.default_rng(7)
+    n, R = 16, 8
+    noise = 0.01 * rng.standard_normal((n, R))
+    drift = np.linspace(0.0, 0.03, n)[:, None]
+    assert abs(halves_z(noise + drift, 1e-6)) > 2.5
+    zs = [halves_z(0.01 * rng.standard_normal((n, R)), 1e-6) for _ in range(200)]
+    assert np.mean(np.abs(zs) > 2.5) < 0.1          # t with 7 dof: ~4 % beyond 2.5
+    # identical replicas (no chaos): the floor decides
+    same = np.tile(np.linspace(0, 1e-6, n)[:, None], (1, R))
+    assert abs(halves_z(same, 1e-3)) < 1e-2
+
+
+def test_a_point_stopped_before_stationarity_is_not_converged_with_finite_estimates():
+    cfg = ModelConfig(L_x=3.0, eps=0.6, max_iterations=6)
+    r = run_point(cfg)
+    assert r.status == "not_converged" and r.iterations == 6
+    assert np.all(np.isfinite(r.a)) and np.all(np.isfinite(r.a_stderr))
+    assert np.all(r.a > 0)
+
+
+def test_stationary_point_meets_its_targets():
+    cfg = ModelConfig(L_x=3.0, eps=0.6, T=1.4, C_sd=0.1, d_f=0.01)
+    r = run_point(cfg)
+    assert r.status == "converged_noisy"
+    assert np.max(r.a_stderr) <= cfg.target_stderr * cfg.a0
+    assert r.iterations >= cfg.transient_min + cfg.n_average
+    assert r.floe_steps == cfg.floe_steps_of(r.iterations)
+
+
+def test_fixed_transient_runs_exactly_its_windows():
+    cfg = ModelConfig(L_x=3.0, stationarity="fixed", transient_min=3, n_average=4,
+                      max_iterations=50, target_stderr=0.0, target_W_c_stderr=0.0)
+    r = run_point(cfg)
+    assert r.status == "converged_noisy" and r.iterations == 7
+
+
+@pytest.mark.parametrize("contact,dt,ok", [("hertz_disk", 1e-3, True), ("linear", 1e-3, False),
+                                           ("linear", 1e-4, True), ("hertz_disk", 1e-4, True)])
+def test_the_time_step_must_resolve_a_binary_contact(contact, dt, ok):
+    cfg = ModelConfig(contact=contact, dt=dt)
+    steps = cfg.contact_steps()
+    # the half period of the stiffest undamped contact, pi sqrt(m* / k), in steps
+    y = cfg.E / (2 * (1 - cfg.nu**2))
+    k = y * cfg.L_y * cfg.h_i / cfg.L_x if contact == "linear" else math.pi * y * cfg.h_i * 0.9117
+    assert steps == pytest.approx(math.pi * math.sqrt((1 + cfg.C_m) * cfg.mass / 2 / k) / dt)
+    if ok:
+        cfg.check_physics()
+    else:
+        with pytest.raises(InvalidPointError, match="dt"):
+            cfg.check_physics()
+    ModelConfig(contact=contact, dt=dt, confined=True).check_physics()   # no contacts
