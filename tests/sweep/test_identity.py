@@ -17,7 +17,7 @@ from sweep.identity import canonical_json, point_hash, short_hash
 # drag of floes with a root by closed-form prefix sums (equal to the cell loop to rounding:
 # other trajectories).
 KNOWN = {
-    "default": "c141c29d3390f708b99fe486982a69f07bd62f93c8ca91863659bf943daf0d30",
+    "default": "fc7bfa0b91dfe2ae79473be2c0a8ffffcd05e0fc5fce0dd7800946ab05d03a7c",
 }
 
 
@@ -27,7 +27,7 @@ UPDATE = ("ModelConfig's fields or defaults, or MODEL_VERSION, changed: every po
 
 
 def test_known_hash_of_default_config():
-    assert floewave.MODEL_VERSION == "5"
+    assert floewave.MODEL_VERSION == "6"
     assert point_hash(ModelConfig()) == KNOWN["default"], UPDATE
 
 
@@ -53,8 +53,8 @@ def test_known_hashes(changes, expected):
 
 
 PINNED = {
-    "KNOWN_1": "eaf49b05cfcff6382e8946f42fbcc61c82784085751f545a7472cd73baf72d5b",
-    "KNOWN_2": "edfeb2561f3230ec04daaeb4b56c4a711504e8ff19f6a014e88e652c4a004aee",
+    "KNOWN_1": "6ed7ae188987778cb95ab442cff712f581bd25fa56e1448fe6c3c3b75d0fb942",
+    "KNOWN_2": "6e31a3155aea67827744525a8ffd3a362d77d8a82f445e9dc94b8c2f85c5aa71",
 }
 
 
@@ -91,7 +91,8 @@ def _other_value(name, value):
     if isinstance(value, str):
         options = {"dispersion": "ep", "contact": "linear", "damping": "exact",
                    "drag_integration": "exact", "integrator": "half_step",
-                   "placement": "uniform", "coupling": "independent"}
+                   "placement": "uniform", "coupling": "mean",
+                   "protocol": "noise_floor", "stationarity": "fixed"}
         return options[name] if value != options[name] else "ml"
     if name in ("relax", "eps"):
         return 0.4 if value != 0.4 else 0.6
