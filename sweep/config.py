@@ -32,13 +32,13 @@ from .identity import canonical_json, point_hash, sha256_hex
 __all__ = ["Campaign", "Point", "RunOptions", "load_campaign", "parse_campaign",
            "DEFAULT_EXPECTED_ITERATIONS"]
 
-#: Iterations assumed per point for cost estimates when ``[run] expected_iterations``
-#: is not given. Measured with the default iteration (``benchmarks/plan_check.py``) on 128
-#: random paper-grid points (seeds 1-4): mean 21.8. Quiet points converge in ~5, noise-
-#: floor points end after ~2 x noise_window + n_average iterations, and the noisiest ~7-10 %
-#: (collisional, high eps and C_sd) run to max_iterations = 100, a heavy tail that makes
-#: small samples scatter (means of 11, 22, 23 and 28 for the four samples).
-DEFAULT_EXPECTED_ITERATIONS = 22
+#: Iterations (windows) assumed per point for cost estimates when ``[run]
+#: expected_iterations`` is not given. Measured with model version 6's stationary protocol
+#: (2026-12-02): mean 14.8 on ``benchmarks/plan_check.py --n 32 --seed 7``'s sample (every
+#: point at or near the minimum of transient_min + n_average = 14) and 17.1 over the 64
+#: production runs of ``benchmarks/honesty.py --reference --random 24`` (2 of them ran to
+#: max_iterations = 100: a heavy tail that makes small samples scatter).
+DEFAULT_EXPECTED_ITERATIONS = 16
 #: Most floes accepted in a sheet (L_sheet / L_x); the paper's largest is a few hundred.
 MAX_FLOES = 1_000_000
 #: Longest time [s] accepted for a ``[run]`` duration (a year).
