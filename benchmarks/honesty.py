@@ -171,7 +171,10 @@ def main(argv: list[str] | None = None) -> int:
     extra = {}
     for item in args.set:
         k, v = item.split("=", 1)
-        extra[k] = json.loads(v) if v[:1] not in "\"'" and not v.isalpha() else v
+        try:
+            extra[k] = json.loads(v)            # numbers, true/false, "quoted" strings
+        except json.JSONDecodeError:
+            extra[k] = v                        # a bare string (protocol=noise_floor)
     pts = points(args.random, args.grid_seed)
     cache_path = Path(args.cache)
     cache = json.loads(cache_path.read_text()) if cache_path.exists() else {}
