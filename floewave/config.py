@@ -112,6 +112,9 @@ class ModelConfig:
     reuse_floor : start the average with the samples of the ``noise_window`` iterations
         whose residuals revealed the noise floor (instead of discarding them)
     transient_min : windows never averaged by the stationary protocol (whatever MSER says)
+    transient_drag_times : the stationary protocol discards at least this many drag
+        relaxation times tau_d as transient (:func:`floewave.protocol.drag_time`; 0: no
+        such bound)
     stationarity : the stationary protocol's transient: ``"mser"`` (MSER truncation, the
         default) or ``"fixed"`` (the first ``transient_min`` windows; reference runs)
     n0_warm : spin-up periods of every iteration after the first when ``warm_start``
@@ -188,11 +191,12 @@ class ModelConfig:
     relax: float = 0.5
     max_iterations: int = 100
     noise_window: int = 4
-    n_average: int = 10
+    n_average: int = 8
     target_stderr: float = 0.01
     target_W_c_stderr: float = 1.0
     n0_warm: int = 0
-    transient_min: int = 4
+    transient_min: int = 6
+    transient_drag_times: float = 1.0
     stationarity: str = "mser"
     reuse_floor: bool = True
     warm_start: bool = True
@@ -237,6 +241,8 @@ class ModelConfig:
         _require(self, "n_average", self.n_average >= 2, "must be >= 2")
         _require(self, "n0_warm", self.n0_warm >= 0, "must be >= 0")
         _require(self, "transient_min", self.transient_min >= 0, "must be >= 0")
+        _require(self, "transient_drag_times", 0 <= self.transient_drag_times <= 1000,
+                 "must be in [0, 1000]")
         # counts that would make a point run for ever (or overflow the cost): refused here
         for name in ("n0", "nT", "n0_warm", "max_iterations", "noise_window", "n_average",
                      "transient_min"):

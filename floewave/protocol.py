@@ -90,6 +90,30 @@ def halves_z(Y: np.ndarray, floor: float) -> float:
     return float(D.mean() / max(se, floor))
 
 
+def drag_time(cfg: ModelConfig, k: float) -> float:
+    """tau_d = (1 + C_m) m / (rho_w C_sd L_y L_x u_w0) [s]: the time in which skin drag
+    (eq. 15, linearised about the orbital velocity u_w0 = a0 omega / tanh kh) relaxes a
+    floe's drift. The slowest transients seen are of this order (C_sd 0.005: tau_d about
+    80 s, a far-end amplitude still swinging by 0.05 a0 over the first 75 periods);
+    inf without drag."""
+    u_w0 = cfg.a0 * cfg.omega / np.tanh(k * cfg.h)
+    rate = cfg.rho_w * cfg.C_sd * cfg.L_y * cfg.L_x * u_w0
+    return float((1.0 + cfg.C_m) * cfg.mass / rate) if rate > 0 else float("inf")
+
+
+def transient_windows(cfg: ModelConfig, k: float) -> int:
+    """The fewest windows discarded as transient: ``transient_min``, or
+    ``transient_drag_times`` tau_d (:func:`drag_time`) when longer, at most half of
+    ``max_iterations`` (a function of the configuration alone)."""
+    tau = drag_time(cfg, k) * cfg.transient_drag_times
+    n = cfg.transient_min
+    if np.isfinite(tau):
+        n = max(n, int(np.ceil(tau / (cfg.nT * cfg.T))))
+    else:
+        n = cfg.max_iterations
+    return int(min(n, cfg.max_iterations // 2))
+
+
 class _Windows:
     """What the windows so far measured: per window j the dissipation S (R, N_f), the
     forcing a (R, N_f), the Window statistics and zones of every replica."""
@@ -119,11 +143,12 @@ class _Windows:
     def __len__(self) -> int:
         return len(self.S)
 
-    def truncation(self, cfg: ModelConfig) -> tuple[int, bool]:
+    def truncation(self, cfg: ModelConfig, d_min: int) -> tuple[int, bool]:
         """(d, stationary): the windows before d are a transient. ``stationarity =
         "fixed"``: d = ``transient_min``. ``"mser"``: before ``n_average`` windows only
         the last counts (d = n - 1, not stationary); then the latest MSER truncation of
-        the series, at least ``transient_min``, stationary when d <= n / 2."""
+        the series, at least ``d_min`` (:func:`transient_windows`), stationary when
+        d <= n / 2 and the halves agree."""
         n = len(self)
         if cfg.stationarity == "fixed":
             d = min(cfg.transient_min, n - 1)
@@ -133,7 +158,7 @@ class _Windows:
         Y = np.array(self.series)                                   # (n, 3, R)
         d = max(mser_truncation(Y[:, s].mean(axis=1), cfg.n_average)
                 for s in range(Y.shape[1]))
-        d = max(d, min(cfg.transient_min, n - 1))
+        d = max(d, min(d_min, n - 1))
         if d > n // 2:
             return d, False
         floors = (1e-3 * cfg.a0, 1e-3 * cfg.a0, 1e-2)
@@ -179,6 +204,7 @@ def iterate_stationary(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g: 
     n_t = cfg.n_t
     a = np.tile(confined_profile(cfg, x0s[0] - x0s[0, 0] + 0.5 * cfg.L_x, alpha_c), (R, 1))
     wins = _Windows()
+    d_min = transient_windows(cfg, k)
     history: list[float] = []
     status = "not_converged"
     d, stationary = 0, False
@@ -200,7 +226,7 @@ def iterate_stationary(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g: 
         S = np.array([-cfg.rho_w * cfg.C_sd * w.s3_mean for w in windows])
         zones = [zone_of(cfg, w.x_mean, w.gap_mean) for w in windows]
         wins.add(cfg, S, np.array(a), windows, zones, c_g, k)
-        d, stationary = wins.truncation(cfg)
+        d, stationary = wins.truncation(cfg, d_min)
         C_avg = mean_coefficients(np.array(wins.C[d:]))                 # (R, N_f)
         if cfg.coupling == "mean":
             C_avg = np.broadcast_to(mean_coefficients(C_avg), C_avg.shape)
@@ -216,7 +242,8 @@ def iterate_stationary(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g: 
         deterministic = cfg.confined and res < cfg.delta and len(wins) >= 2
         if deterministic or (stationary and len(wins) - d >= cfg.n_average):
             d_use = len(wins) - 1 if deterministic else d
-            est = _estimate(cfg, wins, d_use, c_g, k)
+            est = _with_convergence(cfg, _estimate(cfg, wins, d_use, c_g, k), a_new,
+                                    wins.A[-1])
             if deterministic and R == 1:        # a fixed point reached exactly
                 est["a_stderr"] = np.abs(a_new[0] - wins.A[-1][0])
                 est["a_end_stderr"] = float(est["a_stderr"][-1])
@@ -227,19 +254,32 @@ def iterate_stationary(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g: 
     if status == "not_converged":
         if not stationary:
             d = len(wins) // 2
-        est = _estimate(cfg, wins, d, c_g, k)
+        est = _with_convergence(cfg, _estimate(cfg, wins, d, c_g, k), a, wins.A[-1])
     assert est is not None
-    if status != "converged" and R > 1:
-        # the last update's change, in quadrature: how far from its fixed point the
-        # iteration still was (replicas of a non-chaotic point agree to rounding, and their
-        # jackknife alone would not see it)
-        conv = np.abs(np.mean(a - wins.A[-1], axis=0))
-        est["a_stderr"] = np.sqrt(np.asarray(est["a_stderr"]) ** 2 + conv**2)
-        est["a_end_stderr"] = float(est["a_stderr"][-1])
     averaged = history[d:] if d < len(history) else history[-1:]
     return {"status": status, "est": est, "history": history,
             "noise": 0.0 if status == "converged" else float(np.median(averaged)),
             "truncation": d}
+
+
+#: the smallest standard error of a reported, as a fraction of a0: below it two runs of a
+#: non-chaotic point (replicas agreeing to rounding) differ by more than their jackknife
+#: says (measured: 1e-9 a0 apart with standard errors of 1e-11 to 1e-10 a0)
+SE_FLOOR = 1e-6
+
+
+def _with_convergence(cfg: ModelConfig, est: dict, a_new: np.ndarray,
+                      a_old: np.ndarray) -> dict:
+    """An ensemble's SE(a) with the last update's change |mean_r (a_new - a)| in
+    quadrature (how far from its fixed point the iteration still was; the jackknife alone
+    does not see it) and at least :data:`SE_FLOOR` a0."""
+    if cfg.n_chains < 2:
+        return est
+    conv = np.abs(np.mean(a_new - a_old, axis=0))
+    se = np.sqrt(np.asarray(est["a_stderr"], dtype=float) ** 2 + conv**2)
+    est["a_stderr"] = np.maximum(se, SE_FLOOR * cfg.a0)
+    est["a_end_stderr"] = float(est["a_stderr"][-1])
+    return est
 
 
 def _residual(a_old: np.ndarray, a_new: np.ndarray) -> float:
