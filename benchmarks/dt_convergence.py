@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from honesty import SCALARS, key_of, points, run_one, z_scores  # noqa: E402
+from honesty import SCALARS, floored, key_of, points, run_one, z_scores  # noqa: E402
 
 from floewave import ModelConfig  # noqa: E402
 from floewave.model import FloeChain  # noqa: E402
@@ -125,14 +125,15 @@ def main(argv: list[str] | None = None) -> int:
     print(f"\nRMS z over {len(pts)} points (n: number of z values; band: the candidate's two"
           " seeds against each other)")
     print(f"{'dt':>8s} " + " ".join(f"{n:>17s}" for n in names))
+    def run(i, dt, seed):
+        return floored(cache[runs[(i, dt, seed)]], ModelConfig(**pts[i]).a0)
+
     for dt in args.candidates:
         row_dt, row_seed = [], []
         for name in names:
-            z_dt = np.concatenate([z_scores(cache[runs[(i, dt, s1)]],
-                                            cache[runs[(i, 1e-4, s1)]], name)
+            z_dt = np.concatenate([z_scores(run(i, dt, s1), run(i, 1e-4, s1), name)
                                    for i in range(len(pts))])
-            z_sd = np.concatenate([z_scores(cache[runs[(i, dt, s1)]],
-                                            cache[runs[(i, dt, s2)]], name)
+            z_sd = np.concatenate([z_scores(run(i, dt, s1), run(i, dt, s2), name)
                                    for i in range(len(pts))])
 
             def rms(z):
@@ -144,6 +145,13 @@ def main(argv: list[str] | None = None) -> int:
         mean_ratio = np.mean([cache[runs[(i, 1e-4, s1)]]["floe_steps"]
                               / cache[runs[(i, dt, s1)]]["floe_steps"] for i in range(len(pts))])
         print(f"floe-steps per point, dt 1e-4 / dt {dt:g}: {mean_ratio:.2f}")
+        da = [np.max(np.abs(np.subtract(run(i, dt, s1)["a"], run(i, 1e-4, s1)["a"])))
+              / ModelConfig(**pts[i]).a0 for i in range(len(pts))]
+        ds = [np.max(np.abs(np.subtract(run(i, dt, s1)["a"], run(i, dt, s2)["a"])))
+              / ModelConfig(**pts[i]).a0 for i in range(len(pts))]
+        print(f"max_i |a_i - a_i'| / a0, median (max) over points: dt {dt:g} vs 1e-4"
+              f" {np.median(da):.2e} ({np.max(da):.2e}); seed vs seed {np.median(ds):.2e}"
+              f" ({np.max(ds):.2e})")
     return 0
 
 

@@ -196,7 +196,7 @@ class ModelConfig:
     target_W_c_stderr: float = 1.0
     n0_warm: int = 0
     transient_min: int = 6
-    transient_drag_times: float = 1.0
+    transient_drag_times: float = 2.0
     stationarity: str = "mser"
     reuse_floor: bool = True
     warm_start: bool = True
