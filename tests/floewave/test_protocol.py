@@ -130,3 +130,24 @@ def test_the_time_step_must_resolve_a_binary_contact(contact, dt, ok):
         with pytest.raises(InvalidPointError, match="dt"):
             cfg.check_physics()
     ModelConfig(contact=contact, dt=dt, confined=True).check_physics()   # no contacts
+
+
+def test_the_transient_spans_the_drag_relaxation_time():
+    """tau_d = (1 + C_m) m / (rho_w C_sd L_y L_x u_w0): 1/C_sd, independent of L_x (mass
+    and drag area both scale with it); the transient is transient_drag_times tau_d long,
+    at least transient_min windows and at most half of max_iterations."""
+    from floewave import solve_dispersion
+    from floewave.protocol import drag_time, transient_windows
+
+    cfg = ModelConfig(C_sd=0.005, T=1.1)
+    k, _ = solve_dispersion(cfg)
+    u = cfg.a0 * cfg.omega / math.tanh(k * cfg.h)
+    tau = (1 + cfg.C_m) * cfg.mass / (cfg.rho_w * cfg.C_sd * cfg.L_y * cfg.L_x * u)
+    assert drag_time(cfg, k) == pytest.approx(tau, rel=1e-12)
+    assert drag_time(cfg.replace(L_x=3.0), k) == pytest.approx(tau, rel=1e-12)
+    assert drag_time(cfg.replace(C_sd=0.01), k) == pytest.approx(tau / 2, rel=1e-12)
+    n = transient_windows(cfg, k)
+    assert n == math.ceil(cfg.transient_drag_times * tau / (cfg.nT * cfg.T)) > cfg.transient_min
+    assert transient_windows(cfg.replace(C_sd=0.2), k) == cfg.transient_min
+    assert transient_windows(cfg.replace(C_sd=0.0), k) == cfg.max_iterations // 2
+    assert transient_windows(cfg.replace(transient_drag_times=0.0), k) == cfg.transient_min
