@@ -168,9 +168,15 @@ def _err(message: str | BaseException) -> None:
 
 
 # ---------------------------------------------------------------------- commands
+_START_UP_STOP: list[int] = []  # the first stop signal of the start-up (raised once)
+
+
 def _stop_during_start_up(signum: int, frame: Any) -> None:
     from .errors import Interrupted
 
+    if _START_UP_STOP:  # a repeat (the guard forwards what the group got too): once
+        return
+    _START_UP_STOP.append(signum)
     raise Interrupted(f"stopped by {signal.Signals(signum).name} during start-up, before"
                       " the store was opened; nothing was changed — the campaign is resumable: run"
                       " the same command again")
@@ -217,6 +223,12 @@ def cmd_run(args: argparse.Namespace) -> int:
         return exc.exit_status
     if rank == 0 and summary is not None:
         print(f"sweep: {summary}; store {args.store}")
+        missing = summary.total - summary.skipped - summary.computed
+        if missing > 0:  # never 0 with grid points missing
+            _err(Interrupted(f"{plural(missing, 'grid point')} of {summary.total} not"
+                             " stored; the campaign is resumable: run the same command"
+                             " again"))
+            return Interrupted.exit_status
     return EXIT_OK
 
 
@@ -420,8 +432,24 @@ _COMMANDS = {"run": cmd_run, "plan": cmd_plan, "status": cmd_status, "export": c
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``sweep`` console script; returns the exit status."""
-    _catch_stops_at_start_up(list(sys.argv[1:] if argv is None else argv))
+    """Entry point of the ``sweep`` console script; returns the exit status.
+
+    From the command line (``argv`` None), ``sweep run`` runs under its guard
+    (:mod:`sweep.guard`): a parent process that turns an exit with status 0 before the
+    campaign finished (``exit(0)`` in a compute function) into status 6."""
+    from . import guard
+
+    args_ = list(sys.argv[1:] if argv is None else argv)
+    child = argv is None and bool(args_) and args_[0] == "run" and guard.guarded()
+    _catch_stops_at_start_up(args_)
+    guard.unblock()
+    status = _main(argv)
+    if child:
+        guard.report_status(status)
+    return status
+
+
+def _main(argv: Sequence[str] | None) -> int:
     try:
         args = build_parser().parse_args(argv)
     except SweepError as exc:  # a stop during the parser's imports

@@ -71,7 +71,8 @@ _DEFERRED_SIGNALS = {signal.SIGINT, signal.SIGTERM, signal.SIGUSR1, signal.SIGAL
 #: Errors h5py raises for a file it cannot read (besides OSError).
 _H5_ERRORS = (OSError, RuntimeError, ValueError, KeyError, TypeError, IndexError)
 #: HDF5 messages that mean "in use", not "damaged".
-_IN_USE = re.compile(r"lock|already open|temporarily unavailable|in use", re.I)
+_IN_USE = re.compile(r"\block|already open|temporarily unavailable|\bin use\b", re.I)
+#: (HDF5's damage messages name its "sblock" (superblock): "lock" only as a word.)
 #: Journal records written per batch while rebuilding or replaying.
 _REPLAY_BATCH = 256
 
@@ -145,6 +146,19 @@ def _check_space(path: Path, needed: int, doing: str) -> None:
                          " command again")
 
 
+def _grid_hashes(campaign: Any) -> frozenset[str] | None:
+    """The hashes of every point of ``campaign``'s grid (all shards: a shard's store may
+    hold points of the others after a merge); ``None`` without a campaign. An
+    ``--extend``-ed campaign's grid holds every grid of its history."""
+    if campaign is None:
+        return None
+    if getattr(campaign, "shard_of", None) is not None:
+        import dataclasses
+
+        campaign = dataclasses.replace(campaign, shard_of=None)
+    return frozenset(p.hash for p in campaign.points())
+
+
 def _json(text: str) -> dict[str, Any]:
     import json
 
@@ -190,6 +204,7 @@ class Store:
         self._staged: list[Record] = []
         self._lines: list[bytes] = []
         self.scan = JournalScan()
+        self._grid: frozenset[str] | None = None
         parent = self.path.parent
         if not parent.is_dir():
             raise StoreError(f"{self.path}: directory {parent} does not exist")
@@ -222,7 +237,8 @@ class Store:
         self.model_version = (_json(campaign_json)["model_version"]
                               if (campaign_json := self._campaign_json(campaign))
                               else floewave.MODEL_VERSION)
-        scan = journal.scan(self.model_version, STATUSES)
+        self._grid = _grid_hashes(campaign)
+        scan = journal.scan(self.model_version, STATUSES, self._grid)
         state, info = self._inspect(scan)
         if campaign is None and state != "ok":
             raise StoreError(f"{self.path}: no usable store here")
@@ -369,7 +385,8 @@ class Store:
             self.journal.set_aside(bad)
         except OSError as exc:
             raise _oserror(self.journal.path, exc, "setting journal lines aside") from None
-        self.scan = self.journal.scan(self.model_version, STATUSES)  # offsets moved
+        # offsets moved
+        self.scan = self.journal.scan(self.model_version, STATUSES, self._grid)
         reasons: dict[str, int] = {}
         for _, _, reason in bad:
             reasons[reason] = reasons.get(reason, 0) + 1
@@ -497,7 +514,7 @@ class Store:
             raise _oserror(self.journal.path, exc, "writing the journal") from None
         self._note(f"{self.journal.path}: {len(missing)} stored point(s) were not in the"
                    " journal (removed or older than it); journaled again from the store")
-        self.scan = self.journal.scan(self.model_version, STATUSES)
+        self.scan = self.journal.scan(self.model_version, STATUSES, self._grid)
 
     def _migrate(self, f: Any) -> None:
         version = int(f.attrs.get("schema_version", 0))

@@ -19,7 +19,7 @@ from floewave import ModelConfig
 
 __all__ = ["fake_point", "raising_point", "nan_point", "trivial_point", "sleepy_point",
            "power_point", "faulty_point", "crashing_point", "stuck_point",
-           "sleepy_trivial_point", "POWER_M"]
+           "sleepy_trivial_point", "exiting_point", "c_exit_point", "POWER_M"]
 
 
 #: ``[base]`` of the small real campaigns of the kill/resume tests (torture, Slurm): 4 or
@@ -219,3 +219,24 @@ def sleepy_trivial_point(cfg: ModelConfig) -> dict[str, Any]:
     """:func:`trivial_point` after 2 ms (a steady stream of commits: reader tests)."""
     time.sleep(0.002)
     return trivial_point(cfg)
+
+
+def exiting_point(cfg: ModelConfig) -> dict[str, Any]:
+    """:func:`fake_point`, but the process ends with status 0 (``os._exit(0)``) for
+    eps = 0.4: no handler runs, as for a C ``_exit(0)``."""
+    import os
+
+    if cfg.eps == 0.4:
+        os._exit(0)
+    return fake_point(cfg)
+
+
+def c_exit_point(cfg: ModelConfig) -> dict[str, Any]:
+    """:func:`fake_point`, but the C library's ``exit(0)`` ends the process for
+    eps = 0.4 (a model library's ``exit(0)`` or Fortran ``STOP``: C atexit handlers run,
+    Python's do not)."""
+    if cfg.eps == 0.4:
+        import ctypes
+
+        ctypes.CDLL(None).exit(0)
+    return fake_point(cfg)

@@ -1,0 +1,222 @@
+"""The last holes of the store (issue 26): a point that exits 0, journal lines from
+another campaign, a truncated file, writers through a symlink, replayed journal blocks,
+output the schema cannot hold, a full disk, bit rot."""
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import h5py
+import pytest
+
+import sweep
+from sweep import parse_campaign, run_campaign
+from sweep.cli import main
+from sweep.journal import journal_path, rejected_path
+from sweep.testing import find_mpiexec
+
+TOML = "[base]\nL_sheet = 6.0\n[sweep]\nL_x = [0.5, 1.5]\neps = [0.2, 0.4, 0.6]\n"
+FAKE = "sweep.testing:fake_point"
+MPIEXEC = find_mpiexec()
+
+
+def _env(**extra):
+    env = dict(os.environ)
+    env.pop("SLURM_NTASKS", None)
+    env.pop("SWEEP_NO_GUARD", None)
+    env.update(extra)
+    return env
+
+
+def _sweep(*args, mpi=0, env=None, timeout=120):
+    cmd = [sys.executable, "-m", "sweep", *map(str, args)]
+    if mpi:
+        cmd = [MPIEXEC, "-n", str(mpi), *cmd]
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout,
+                          env=env or _env())
+
+
+# ---------------------------------------------------------------- 1. a point that exits 0
+@pytest.mark.parametrize("compute", ["exiting_point", "c_exit_point"])
+def test_a_point_that_exits_0_never_makes_the_campaign_succeed(tmp_path, compute):
+    """os._exit(0) / C exit(0) in a compute function: every run exits 6 ("stopped",
+    resumable) until the whole grid is stored (the point is ``crashed`` after [run]
+    max_attempts); only then 0."""
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(TOML.replace("[0.5, 1.5]", "[0.5]") + "[run]\nmax_attempts = 1\n")
+    path = tmp_path / "s.h5"
+    codes = []
+    for _ in range(6):
+        p = _sweep("run", cfg, "--store", path, "--compute", f"sweep.testing:{compute}",
+                   "--no-bar")
+        codes.append(p.returncode)
+        if p.returncode == 0:
+            break
+        assert p.returncode == 6, p.stderr
+        assert "ended with exit status 0 before the campaign finished" in p.stderr
+        assert "resumable" in p.stderr
+    assert codes[-1] == 0 and codes[:-1] and set(codes[:-1]) == {6}, codes
+    df = sweep.load(path).set_index("eps")
+    assert len(df) == 3 and df.loc[0.4, "status"] == "crashed"
+    assert sweep.validate(path) == []
+
+
+def test_the_guard_passes_on_status_and_signals(tmp_path):
+    """The guard is invisible otherwise: a finished campaign exits 0, a bad campaign
+    file 2, and a stop signal to the command still gives 6 (forwarded once: the
+    campaign keeps its grace period)."""
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(TOML)
+    path = tmp_path / "s.h5"
+    assert _sweep("run", cfg, "--store", path, "--compute", FAKE, "--no-bar").returncode == 0
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[base]\nnope = 1\n")
+    assert _sweep("run", bad, "--store", tmp_path / "b.h5").returncode == 2
+    slow = tmp_path / "slow.toml"
+    slow.write_text(TOML.replace("0.6]", "0.6, 0.7, 0.8, 0.9]") + "[run]\ngrace_period = 30\n")
+    store = tmp_path / "slow.h5"
+    p = subprocess.Popen([sys.executable, "-m", "sweep", "run", str(slow), "--store",
+                          str(store), "--compute", "sweep.testing:sleepy_point", "--no-bar"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         env=_env(), start_new_session=True)
+    journal = journal_path(store)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and not (journal.exists()
+                                               and b'"handout"' in journal.read_bytes()):
+        time.sleep(0.01)
+    os.killpg(p.pid, signal.SIGTERM)  # the group: guard and campaign both get it
+    out, err = p.communicate(timeout=60)
+    assert p.returncode == 6, err
+    # one request, not two: the running point finished within the grace period
+    assert "0 running point(s) abandoned" in err, err
+
+
+def test_run_never_exits_0_with_points_missing(tmp_path, monkeypatch, capsys):
+    """Belt and braces in the campaign process: a summary with grid points neither
+    skipped nor computed is status 6."""
+    import sweep.executor
+    from sweep.master import RunSummary
+
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(TOML)
+    monkeypatch.setattr(sweep.executor, "run_campaign",
+                        lambda *a, **k: RunSummary(total=6, skipped=2, computed=3))
+    assert main(["run", str(cfg), "--store", str(tmp_path / "s.h5")]) == 6
+    assert "1 grid point of 6 not stored" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(MPIEXEC is None, reason="no mpiexec (pip install mpich)")
+def test_a_worker_that_exits_0_never_makes_the_mpi_job_succeed(tmp_path):
+    """Under mpiexec a worker rank ending with 0 inside a point ends the job non-zero
+    (its guard exits 6; the launcher then kills the other ranks); the next runs resume
+    and only the one that stores the whole grid exits 0."""
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(TOML + "[run]\nmax_attempts = 1\n")
+    path = tmp_path / "s.h5"
+    codes = []
+    for _ in range(8):
+        p = _sweep("run", cfg, "--store", path, "--compute", "sweep.testing:exiting_point",
+                   "--no-bar", mpi=3)
+        codes.append(p.returncode)
+        if p.returncode == 0:
+            break
+    assert codes[-1] == 0 and 0 not in codes[:-1] and len(codes) > 1, codes
+    df = sweep.load(path)
+    assert len(df) == 6 and set(df[df["eps"] == 0.4]["status"]) == {"crashed"}
+    assert sweep.validate(path) == []
+
+
+# ---------------------------------------------------------------- store helpers
+def table(path):
+    df = sweep.load(path).set_index("hash").sort_index()
+    return df.drop(columns=["seq", "run", "host", "pid", "start_time", "end_time",
+                            "wall_time", "provenance"])
+
+
+def make_unclean(path):
+    with h5py.File(path, "r+", locking=False) as f:
+        f.attrs["writer_open"] = True
+
+
+def records(path):
+    return [line for line in journal_path(path).read_bytes().splitlines(keepends=True)
+            if line.startswith(b'{"row"')]
+
+
+# ---------------------------------------------------------------- 2. foreign journal lines
+@pytest.mark.parametrize("unclean", [False, True])
+def test_a_journal_line_of_another_campaign_is_set_aside(tmp_path, campaign, unclean,
+                                                         capsys):
+    """A checksummed record with a valid hash for a point not in this grid (same [base],
+    eps = 0.3) is set aside with its reason, never a row: from a clean store (replayed
+    as 'newer') and from an unclean one (rebuilt)."""
+    path, other = tmp_path / "s.h5", tmp_path / "o.h5"
+    run_campaign(campaign, str(path), compute=FAKE)
+    ref = table(path)
+    run_campaign(parse_campaign(TOML.replace("0.2, 0.4, 0.6", "0.3")), str(other),
+                 compute=FAKE)
+    foreign = records(other)
+    assert len(foreign) == 2
+    with open(journal_path(path), "ab") as fh:
+        fh.write(b"".join(foreign))
+    if unclean:
+        make_unclean(path)
+    capsys.readouterr()
+    s = run_campaign(campaign, str(path), compute=FAKE)
+    err = capsys.readouterr().err
+    assert s.computed == 0
+    assert "2 journal line(s) set aside" in err and "not in this campaign's grid" in err
+    assert table(path).equals(ref) and len(sweep.load(path)) == 6
+    assert sweep.validate(path) == []
+    rejected = [json.loads(x) for x in rejected_path(path).read_text().splitlines()]
+    assert [r["line"].encode() + b"\n" for r in rejected] == foreign
+
+
+def test_extend_keeps_the_points_of_the_smaller_grid(tmp_path, campaign):
+    """The grid check accepts an --extend-ed campaign's history (old grid values are in
+    the new grid): rebuilding after an extension keeps every point."""
+    path = tmp_path / "s.h5"
+    run_campaign(campaign, str(path), compute=FAKE)
+    bigger = parse_campaign(TOML.replace("0.2, 0.4, 0.6", "0.2, 0.3, 0.4, 0.6"))
+    assert run_campaign(bigger, str(path), compute=FAKE, extend=True).computed == 2
+    make_unclean(path)
+    assert run_campaign(bigger, str(path), compute=FAKE).computed == 0
+    assert len(sweep.load(path)) == 8
+
+
+# ---------------------------------------------------------------- 3. a truncated file
+@pytest.mark.parametrize("keep", ["half", "superblock"])
+def test_a_truncated_store_beside_its_journal_is_rebuilt(tmp_path, campaign, keep, capsys):
+    """HDF5's message for a truncated file names its 'sblock' (superblock): that is
+    damage, not 'in use'."""
+    path = tmp_path / "s.h5"
+    run_campaign(campaign, str(path), compute=FAKE)
+    ref = table(path)
+    data = path.read_bytes()
+    path.write_bytes(data[:len(data) // 2] if keep == "half" else data[:96])
+    capsys.readouterr()
+    s = run_campaign(campaign, str(path), compute="sweep.testing:raising_point")
+    err = capsys.readouterr().err
+    assert s.computed == 0 and "damaged" in err and "in use" not in err
+    assert table(path).equals(ref)
+    assert len(list(tmp_path.glob("s.h5.damaged-*"))) == 1
+    assert sweep.validate(path) == []
+
+
+# ---------------------------------------------------------------- 5. replayed journal lines
+def test_a_replayed_block_of_old_lines_does_not_revert_retried_points(tmp_path, campaign):
+    """The rebuild takes each point's record with the highest seq, not the last line."""
+    path = tmp_path / "s.h5"
+    run_campaign(campaign, str(path), compute="sweep.testing:raising_point")
+    failed = [line for line in records(path) if b'"status":"failed"' in line]
+    assert len(failed) == 2
+    run_campaign(campaign, str(path), compute=FAKE, retry_failed=True)
+    ref = table(path)
+    assert set(ref["status"]) <= {"converged", "converged_noisy"}
+    with open(journal_path(path), "ab") as fh:
+        fh.write(b"".join(failed))  # the old lines again, after their retried ones
+    make_unclean(path)
+    assert run_campaign(campaign, str(path), compute=FAKE).computed == 0
+    assert table(path).equals(ref)
