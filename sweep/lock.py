@@ -158,9 +158,17 @@ class Lock:
             self.stale_owner = _describe(os.pread(fd, 4096, 0).decode(errors="replace")) \
                 if os.fstat(fd).st_size else ""
             info = json.dumps(_identity()).encode()
-            os.ftruncate(fd, 0)
-            os.pwrite(fd, info, 0)
-            os.fsync(fd)
+            try:
+                os.ftruncate(fd, 0)
+                os.pwrite(fd, info, 0)
+                os.fsync(fd)
+            except OSError as exc:  # a full disk, a read-only or failing filesystem
+                os.close(fd)
+                full = exc.errno in (errno.ENOSPC, errno.EDQUOT)
+                raise StoreError(
+                    f"{self.path}: cannot write the lock file: {exc.strerror or exc}"
+                    + ("; free space and run the same command again (nothing was"
+                       " changed)" if full else "")) from None
             self.fd = fd
             return
         raise StoreError(f"{self.path}: the lock file keeps changing; is another writer"

@@ -39,6 +39,7 @@ import re
 import signal
 import stat
 import sys
+import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -46,7 +47,7 @@ from typing import Any
 import numpy as np
 
 from .campaign_check import check_campaign, check_legacy_journal
-from .errors import SchemaVersionError, StoreError
+from .errors import SchemaVersionError, StoreError, StoreLockedError
 from .journal import BadLine, Journal, JournalScan, decode, encode, journal_path, rejected_path
 from .lock import Lock, lock_path
 from .reader import text
@@ -189,7 +190,13 @@ class Store:
                  run_info: dict[str, Any] | None = None, lock: Any = None,
                  journal: Journal | None = None,
                  report: Callable[[str], None] | None = None) -> None:
-        self.path = Path(path)
+        if os.path.islink(path) and not os.path.exists(path):
+            raise StoreError(f"{path}: a symbolic link to nothing; remove it or use"
+                             " another --store")
+        # the file reached, not the name given: a symlink and its target are one store
+        # (one lock, one journal); hard links are caught by the flock on the file itself
+        self.path = Path(os.path.realpath(path))
+        self._inode_fd: int | None = None
         self.journal = journal or Journal(journal_path(self.path), rejected_path(self.path))
         self.journal_path = self.journal.path
         self._lock = lock or Lock(lock_path(self.path))
@@ -234,6 +241,8 @@ class Store:
         if journal.exists():
             journal.open_for_append()  # the second guard against two writers
         self._remove_stale_temps()
+        if self.path.is_file():
+            self._hold_file(self.path)
         self.model_version = (_json(campaign_json)["model_version"]
                               if (campaign_json := self._campaign_json(campaign))
                               else floewave.MODEL_VERSION)
@@ -420,6 +429,7 @@ class Store:
                 except OSError:
                     os.replace(self.path, aside)
                 self.damaged_kept = str(aside)
+            self._hold_file(tmp)  # the new file is held before it has the store's name
             os.replace(tmp, self.path)
             fsync_dir(self.path)
         except BaseException as exc:
@@ -471,6 +481,7 @@ class Store:
             tmp = self.path.with_name(f".{self.path.name}.rebuild-{os.getpid()}.tmp")
             H5Writer.create(tmp, campaign).close()
             fsync_path(tmp)
+            self._hold_file(tmp)
             os.replace(tmp, self.path)
             fsync_dir(self.path)
         _check_space(self.path, 0, "opening the store")
@@ -658,10 +669,64 @@ class Store:
             self.w.close()
             self.w = None
 
+    def _hold_file(self, path: Path) -> None:
+        """Write-lock the store file itself (its inode) for as long as this writer has
+        it: a second writer reaching the same file under another name (a hard link) is
+        refused. The lock file and journal are named after the path, which a hard link
+        does not share (a symlink is resolved before: ``os.path.realpath``).
+
+        An open-file-description lock (``F_OFD_SETLK``, Linux), not ``flock``: HDF5
+        readers that use their file locking take a shared ``flock`` of the file, and
+        must still be able to read it during a run; and unlike a POSIX ``lockf`` it is
+        not dropped when h5py closes another descriptor of the file in this process.
+        Where it is not available (not Linux, ``ENOLCK``...) hard links are not caught.
+        """
+        import errno
+        import fcntl
+        import struct
+
+        from .lock import KILLED_WRITER_WAIT
+
+        cmd = getattr(fcntl, "F_OFD_SETLK", None)
+        if cmd is None:
+            return
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CLOEXEC | os.O_NOFOLLOW)
+        except OSError:
+            return  # _inspect says why the path cannot be used
+        arg = struct.pack("hhqqi4x", fcntl.F_WRLCK, os.SEEK_SET, 0, 0, 0)
+        deadline = time.monotonic() + KILLED_WRITER_WAIT
+        while True:
+            try:
+                fcntl.fcntl(fd, cmd, arg)
+                break
+            except OSError as exc:
+                if exc.errno in (errno.EAGAIN, errno.EACCES) and time.monotonic() < deadline:
+                    time.sleep(0.02)  # a writer killed a moment ago may still be exiting
+                    continue
+                os.close(fd)
+                if exc.errno in (errno.EAGAIN, errno.EACCES):
+                    raise StoreLockedError(
+                        f"{self.path}: the file is being written by another live campaign"
+                        " under another name (a hard link to it?); wait for it to finish"
+                        " or stop it first") from None
+                return  # no such lock on this filesystem
+        old, self._inode_fd = self._inode_fd, fd
+        if old is not None:
+            with contextlib.suppress(OSError):
+                os.close(old)
+
+    def _release_file(self) -> None:
+        if self._inode_fd is not None:
+            with contextlib.suppress(OSError):
+                os.close(self._inode_fd)
+            self._inode_fd = None
+
     def _abandon(self) -> None:
         """Close everything without marking the file clean (an error on open)."""
         self._close_writer()
         self.journal.close()
+        self._release_file()
         self._lock.release()
 
     def close(self, outcome: str = "complete") -> None:
@@ -686,6 +751,7 @@ class Store:
                         pass  # left unclean: rebuilt from the journal next time
                 self._close_writer()
             self.journal.close()
+            self._release_file()
             self._lock.release()
 
     def __enter__(self) -> Store:

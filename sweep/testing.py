@@ -19,7 +19,8 @@ from floewave import ModelConfig
 
 __all__ = ["fake_point", "raising_point", "nan_point", "trivial_point", "sleepy_point",
            "power_point", "faulty_point", "crashing_point", "stuck_point",
-           "sleepy_trivial_point", "exiting_point", "c_exit_point", "POWER_M"]
+           "sleepy_trivial_point", "exiting_point", "c_exit_point", "misfit_point",
+           "POWER_M"]
 
 
 #: ``[base]`` of the small real campaigns of the kill/resume tests (torture, Slurm): 4 or
@@ -240,3 +241,21 @@ def c_exit_point(cfg: ModelConfig) -> dict[str, Any]:
 
         ctypes.CDLL(None).exit(0)
     return fake_point(cfg)
+
+
+def misfit_point(cfg: ModelConfig) -> dict[str, Any]:
+    """:func:`fake_point` with output the schema cannot hold, by eps: 0.1 a profile 'a'
+    of 3 values, 0.2 a 'gap_mean' of 10**6, 0.3 a complex 'F_w_mean', 0.4
+    alpha_all = inf, 0.5 iterations = -inf."""
+    out = fake_point(cfg)
+    if cfg.eps == 0.1:
+        out["a"] = out["a"][:3]
+    elif cfg.eps == 0.2:
+        out["gap_mean"] = np.zeros(10 ** 6)
+    elif cfg.eps == 0.3:
+        out["F_w_mean"] = out["F_w_mean"] * (1 + 1j)
+    elif cfg.eps == 0.4:
+        out["alpha_all"] = np.inf
+    elif cfg.eps == 0.5:
+        out["iterations"] = -np.inf
+    return out

@@ -138,6 +138,11 @@ def compute_point(task: dict[str, Any], fn: Callable[[ModelConfig], Any],
         else:
             result = fn(cfg)
         data = result.to_dict() if hasattr(result, "to_dict") else dict(result)
+        complex_ = [k for k in (*PROFILE_VARS, *REPLICA_VARS, "residual_history")
+                    if k in data and np.iscomplexobj(data[k])]
+        if complex_:  # np.asarray(..., float64) would drop the imaginary part
+            raise TypeError("complex values in " + ", ".join(complex_) + " (the schema"
+                            " holds real numbers)")
         profiles = {k: np.asarray(data[k], dtype=np.float64)
                     for k in (*PROFILE_VARS, *REPLICA_VARS) if k in data}
         out["profiles"] = profiles

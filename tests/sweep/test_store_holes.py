@@ -15,6 +15,7 @@ import sweep
 from sweep import parse_campaign, run_campaign
 from sweep.cli import main
 from sweep.journal import journal_path, rejected_path
+from sweep.store import Store
 from sweep.testing import find_mpiexec
 
 TOML = "[base]\nL_sheet = 6.0\n[sweep]\nL_x = [0.5, 1.5]\neps = [0.2, 0.4, 0.6]\n"
@@ -220,3 +221,111 @@ def test_a_replayed_block_of_old_lines_does_not_revert_retried_points(tmp_path, 
     make_unclean(path)
     assert run_campaign(campaign, str(path), compute=FAKE).computed == 0
     assert table(path).equals(ref)
+
+
+# ---------------------------------------------------------------- 4. other names, one file
+def test_a_symlink_names_the_same_store(tmp_path, campaign):
+    """The lock and journal are named after the file reached: a writer through a
+    symlink is refused while another writes the target, and the journal is the
+    target's."""
+    path, link = tmp_path / "s.h5", tmp_path / "a.h5"
+    run_campaign(campaign, str(path), compute=FAKE)
+    link.symlink_to(path.name)
+    s = Store(path, campaign, report=lambda m: None)
+    try:
+        with pytest.raises(sweep.StoreLockedError):
+            Store(link, campaign, report=lambda m: None)
+    finally:
+        s.close()
+    assert run_campaign(campaign, str(link), compute=FAKE).computed == 0
+    assert not (tmp_path / "a.h5.journal").exists() and not (tmp_path / "a.h5.lock").exists()
+    assert len(sweep.load(link)) == 6 and sweep.validate(path) == []
+
+
+def test_a_hard_link_is_refused_while_the_file_is_written(tmp_path, campaign):
+    """A hard link shares no name with the store: the flock on the file itself refuses
+    the second writer (nothing of it is written)."""
+    path, link = tmp_path / "s.h5", tmp_path / "h.h5"
+    run_campaign(campaign, str(path), compute=FAKE)
+    os.link(path, link)
+    s = Store(path, campaign, report=lambda m: None)
+    try:
+        with pytest.raises(sweep.StoreLockedError, match="hard link"):
+            Store(link, campaign, report=lambda m: None)
+    finally:
+        s.close()
+    assert not (tmp_path / "h.h5.journal").exists()
+    assert sweep.validate(path) == [] and len(sweep.load(path)) == 6
+
+
+def test_two_writers_through_a_symlink_never_ruin_the_store(tmp_path):
+    """The issue's case, two ``sweep run`` at once, ``--store S.h5`` and ``--store A.h5``
+    (a symlink to it): one is refused (exit 3) or finds everything stored, and the store
+    is whole."""
+    cfg = tmp_path / "c.toml"
+    eps = ", ".join(str(round(0.04 * i, 2)) for i in range(1, 21))
+    cfg.write_text(TOML.replace("0.2, 0.4, 0.6", eps))  # 40 points of 0.2 s: 8 s
+    path, link = tmp_path / "s.h5", tmp_path / "a.h5"
+    link.symlink_to(path.name)
+    cmd = [sys.executable, "-m", "sweep", "run", str(cfg), "--compute",
+           "sweep.testing:sleepy_point", "--no-bar", "--store"]
+    a = subprocess.Popen([*cmd, str(path)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         text=True, env=_env())
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and not (tmp_path / "s.h5.lock").exists():
+        time.sleep(0.01)
+    b = subprocess.run([*cmd, str(link)], capture_output=True, text=True, env=_env(),
+                       timeout=120)
+    a.communicate(timeout=120)
+    assert a.returncode == 0
+    assert b.returncode == 3 and "live campaign" in b.stderr, b.stderr
+    assert len(sweep.load(path)) == 40 and sweep.validate(path) == []
+
+
+# ---------------------------------------------------------------- 6. what the schema cannot hold
+def test_output_the_schema_cannot_hold_is_a_failed_point(tmp_path):
+    """Profiles of the wrong length (3 or 10**6 for a 12-floe point), complex arrays,
+    alpha_all = inf, iterations = -inf: each point is stored ``failed`` with its
+    reason, and the store stays valid."""
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(TOML.replace("0.2, 0.4, 0.6", "0.1, 0.2, 0.3, 0.4, 0.5, 0.6"))
+    path = tmp_path / "s.h5"
+    assert main(["run", str(cfg), "--store", str(path), "--compute",
+                 "sweep.testing:misfit_point", "--no-bar"]) == 0
+    df = sweep.load(path).set_index(["L_x", "eps"])
+    want = {0.1: "profile a: 3 values, expected n_floes = ",
+            0.2: "profile gap_mean: 1000000 values, expected n_floes = ",
+            0.3: "complex values in F_w_mean", 0.4: "alpha_all = 'inf'",
+            0.5: "iterations = '-inf'"}
+    for L_x in (0.5, 1.5):
+        for eps, needle in want.items():
+            assert df.loc[(L_x, eps), "status"] == "failed"
+            assert needle in df.loc[(L_x, eps), "message"], df.loc[(L_x, eps), "message"]
+        assert df.loc[(L_x, 0.6), "status"] == "converged"
+    assert sweep.validate(path) == []
+
+
+# ---------------------------------------------------------------- 7. a completely full disk
+def test_a_resume_on_a_full_disk_is_one_line_and_exit_3(tmp_path, monkeypatch, capsys):
+    """ENOSPC where the lock file's owner is written (the first write of a resume):
+    exit 3 and one line, no traceback; the store is untouched."""
+    import errno
+
+    import sweep.lock
+
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(TOML)
+    path = tmp_path / "s.h5"
+    assert main(["run", str(cfg), "--store", str(path), "--compute", FAKE, "--no-bar"]) == 0
+    before = path.read_bytes(), journal_path(path).read_bytes()
+    capsys.readouterr()
+
+    def full(fd, data, offset):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(sweep.lock.os, "pwrite", full)
+    assert main(["run", str(cfg), "--store", str(path), "--compute", FAKE, "--no-bar"]) == 3
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "No space left on device" in err and "free space" in err
+    assert "Traceback" not in err
+    assert (path.read_bytes(), journal_path(path).read_bytes()) == before
