@@ -106,6 +106,9 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--point-timeout", type=_seconds, metavar="SECONDS",
                    help="store a point that runs longer as 'timeout' (overrides [run]"
                    " point_timeout; 0: no limit)")
+    r.add_argument("--verify", action="store_true", help="on opening, compare the store"
+                   " with the journal's checksummed records (as validate --deep) and rebuild"
+                   " it from the journal if a value differs")
     r.add_argument("--no-bar", action="store_true", help="log lines even on a terminal")
     r.add_argument("--ignore-slurm-ntasks", action="store_true",
                    help="skip the check that the MPI size equals SLURM_NTASKS")
@@ -128,6 +131,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     v = sub.add_parser("validate", help="check a store against results_schema")
     v.add_argument("store", type=Path)
+    v.add_argument("--deep", action="store_true", help="also compare every stored value"
+                   " and profile with the journal's checksummed records (bit rot)")
 
     fg = sub.add_parser("figures", help="the paper's figures (Figs. 2, 3, 5, 6, W_c, "
                         "alpha(omega)) as PNG")
@@ -216,7 +221,8 @@ def cmd_run(args: argparse.Namespace) -> int:
         summary = run_campaign(campaign, str(args.store), compute=args.compute,
                                retry_failed=args.retry_failed, extend=args.extend, comm=comm,
                                progress_bar=False if args.no_bar else None,
-                               command=" ".join(sys.argv), point_timeout=args.point_timeout)
+                               command=" ".join(sys.argv), point_timeout=args.point_timeout,
+                               verify=args.verify)
     except SweepError as exc:
         if rank == 0:
             _err(exc)
@@ -378,11 +384,25 @@ def cmd_validate(args: argparse.Namespace) -> int:
     from .schema import validate
 
     problems = validate(args.store)
+    if args.deep and not any("not a readable HDF5 file" in p for p in problems):
+        from .verify import compare_with_journal
+
+        try:
+            deep = compare_with_journal(args.store)
+        except Exception as exc:  # noqa: BLE001 - a damaged file: say so, no traceback
+            deep = [f"{args.store}: cannot be compared with its journal:"
+                    f" {type(exc).__name__}: {exc}"]
+        if deep:
+            deep.append("the journal is the checksummed truth: `sweep run --verify` with"
+                        " the store's campaign rebuilds the file from it (the file is"
+                        " kept aside)")
+        problems += deep
     for p in problems:
         _err(p)
     if problems:
         return EXIT_STORE
-    print(f"sweep: {args.store} is a valid store")
+    print(f"sweep: {args.store} is a valid store"
+          + (" and every stored value is its journal's" if args.deep else ""))
     return EXIT_OK
 
 

@@ -180,6 +180,9 @@ class Store:
         ``<path>.lock`` and :class:`sweep.journal.Journal` of ``<path>.journal``.
     report : called with one line per notable event of the open (set-aside lines,
         rebuilds, damaged files kept aside); default: printed to stderr.
+    verify : compare a clean file with the journal's checksummed records
+        (:func:`sweep.verify.differences`); a file whose values differ is damaged
+        (bit rot) and rebuilt from the journal, kept aside first.
 
     Raises
     ------
@@ -189,7 +192,8 @@ class Store:
     def __init__(self, path: str | Path, campaign: Any = None, *, extend: bool = False,
                  run_info: dict[str, Any] | None = None, lock: Any = None,
                  journal: Journal | None = None,
-                 report: Callable[[str], None] | None = None) -> None:
+                 report: Callable[[str], None] | None = None, verify: bool = False) -> None:
+        self._verify = verify
         if os.path.islink(path) and not os.path.exists(path):
             raise StoreError(f"{path}: a symbolic link to nothing; remove it or use"
                              " another --store")
@@ -265,6 +269,8 @@ class Store:
         if scan.bad:
             self._set_aside(scan.bad)
             scan = self.scan
+        if self._verify and state == "ok" and self.scan.records:
+            state, info = self._verified(state, info)
         if state == "damaged" and not scan.records:
             raise StoreError(f"{self.path}: damaged ({info['why']}) and its journal holds no"
                              " record to rebuild it from; the file was left as it is")
@@ -388,6 +394,29 @@ class Store:
         if unclean and ours:
             return "unclean", info
         return "ok", info
+
+    def _verified(self, state: str, info: dict[str, Any]) -> tuple[str, dict[str, Any]]:
+        """``--verify``: the clean file against the journal. Values that differ make it
+        damaged (rebuilt from the journal), unless it holds points the journal lacks
+        (a rebuild would drop them: they are journaled first, the next --verify
+        rebuilds)."""
+        from .verify import differences
+
+        try:
+            found, _, missing = differences(self.path, self.journal)
+        except _H5_ERRORS as exc:
+            return "damaged", {"why": f"cannot be compared with its journal:"
+                                      f" {type(exc).__name__}: {exc}"}
+        if not found:
+            self._note(f"{self.path}: verified: every stored value is its journal's")
+            return state, info
+        if missing:
+            self._note(f"{self.path}: {len(found)} value(s) differ from the journal (e.g."
+                       f" {found[0]}) but {len(missing)} stored point(s) are not in it:"
+                       " not rebuilt now (they are journaled first; run --verify again)")
+            return state, info
+        return "damaged", {"why": f"{len(found)} value(s) differ from the journal's"
+                                  f" checksummed records, e.g. {found[0]}"}
 
     def _set_aside(self, bad: list[tuple[int, int, str]]) -> None:
         try:

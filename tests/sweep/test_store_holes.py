@@ -329,3 +329,46 @@ def test_a_resume_on_a_full_disk_is_one_line_and_exit_3(tmp_path, monkeypatch, c
     assert err.count("\n") == 1 and "No space left on device" in err and "free space" in err
     assert "Traceback" not in err
     assert (path.read_bytes(), journal_path(path).read_bytes()) == before
+
+
+# ---------------------------------------------------------------- 8. bit rot
+def _flip(path, where, byte=3):
+    """Flip one byte of dataset ``where``'s first value in the file (bit rot)."""
+    with h5py.File(path, "r", locking=False) as f:
+        ds = f[where]
+        offset = ds.id.get_offset()
+        if offset is None:  # chunked (the table columns)
+            offset = ds.id.get_chunk_info(0).byte_offset
+    with open(path, "r+b") as fh:
+        fh.seek(offset + byte)
+        b = fh.read(1)
+        fh.seek(offset + byte)
+        fh.write(bytes([b[0] ^ 0x5A]))
+
+
+def test_bit_rot_is_found_by_validate_deep_and_repaired_by_run_verify(tmp_path, capsys):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(TOML)
+    path = tmp_path / "s.h5"
+    assert main(["run", str(cfg), "--store", str(path), "--compute", FAKE, "--no-bar"]) == 0
+    ref = table(path)
+    assert main(["validate", "--deep", str(path)]) == 0
+    assert "every stored value is its journal's" in capsys.readouterr().out
+    h0 = sweep.load(path)["hash"][0]
+    _flip(path, "table/W_c")
+    _flip(path, f"profiles/{h0[:2]}/{h0}/a", byte=6)
+    assert main(["validate", str(path)]) == 0  # the schema check alone cannot see it
+    capsys.readouterr()
+    assert main(["validate", "--deep", str(path)]) == 3
+    err = capsys.readouterr().err
+    assert f"/table/W_c[0] (point {h0[:12]})" in err and "in the journal" in err
+    assert f"/profiles/{h0[:2]}/{h0}/a: differs from the journal" in err
+    assert err.count("sweep: error:") == 3  # two differences and the advice
+    # a resume without --verify does not look; with it the file is rebuilt
+    assert main(["run", str(cfg), "--store", str(path), "--compute", FAKE, "--no-bar",
+                 "--verify"]) == 0
+    err = capsys.readouterr().err
+    assert "2 value(s) differ from the journal" in err and "rebuilt from the journal" in err
+    assert table(path).equals(ref)
+    assert len(list(tmp_path.glob("s.h5.damaged-*"))) == 1
+    assert main(["validate", "--deep", str(path)]) == 0
