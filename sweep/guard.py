@@ -109,14 +109,15 @@ def _guard(child: int, r: int, mask: set[int]) -> int:
             break
         except InterruptedError:  # pragma: no cover - retried by Python already
             continue
+    for sig in _FORWARDED:  # the child is gone: nothing may kill the exit now
+        signal.signal(sig, signal.SIG_IGN)
     reported = b""
     with contextlib.suppress(OSError):
         reported = os.read(r, 1)
     os.close(r)
     if os.WIFSIGNALED(status):
         sig = os.WTERMSIG(status)
-        for s in _FORWARDED:
-            signal.signal(s, signal.SIG_DFL)
+        signal.signal(sig, signal.SIG_DFL)
         sys.stdout.flush()
         sys.stderr.flush()
         os.kill(os.getpid(), sig)

@@ -24,6 +24,11 @@ MAX_TIMER = 1e7
 REPEAT_WINDOW = 0.25
 
 
+#: Set once a campaign's :class:`StopSignals` are done (the run is over, whatever its
+#: outcome): a stop signal after that has nothing left to stop (``sweep.cli`` records it).
+campaign_over = False
+
+
 class GraceExpired(BaseException):
     """Raised in-process when the grace period after a stop signal runs out."""
 
@@ -78,6 +83,8 @@ class StopSignals:
             raise GraceExpired("grace period")
 
     def __exit__(self, *exc: Any) -> None:
+        global campaign_over
+        campaign_over = True
         if self.in_process:
             with contextlib.suppress(ValueError):
                 signal.setitimer(signal.ITIMER_REAL, 0)

@@ -74,6 +74,9 @@ _H5_ERRORS = (OSError, RuntimeError, ValueError, KeyError, TypeError, IndexError
 #: HDF5 messages that mean "in use", not "damaged".
 _IN_USE = re.compile(r"\block|already open|temporarily unavailable|\bin use\b", re.I)
 #: (HDF5's damage messages name its "sblock" (superblock): "lock" only as a word.)
+#: Longest store file name [bytes]: NAME_MAX (255) less what the names beside it add
+#: (".NAME.journal.rewrite-<pid>.tmp").
+_MAX_NAME = 255 - 32
 #: Journal records written per batch while rebuilding or replaying.
 _REPLAY_BATCH = 256
 
@@ -194,6 +197,10 @@ class Store:
                  journal: Journal | None = None,
                  report: Callable[[str], None] | None = None, verify: bool = False) -> None:
         self._verify = verify
+        if len(os.fsencode(Path(path).name)) > _MAX_NAME:
+            raise StoreError(f"{str(path)[:200]}...: the store's file name is too long (at"
+                             f" most {_MAX_NAME} bytes: the journal and temporary files"
+                             " beside it add to it)")
         if os.path.islink(path) and not os.path.exists(path):
             raise StoreError(f"{path}: a symbolic link to nothing; remove it or use"
                              " another --store")
@@ -217,6 +224,14 @@ class Store:
         self.scan = JournalScan()
         self._grid: frozenset[str] | None = None
         parent = self.path.parent
+        try:
+            parent.stat()
+        except FileNotFoundError:
+            pass
+        except OSError as exc:  # a name too long, a loop of symlinks...
+            shown = str(path) if len(str(path)) <= 200 else f"{str(path)[:200]}..."
+            raise StoreError(f"{shown}: cannot use this path: {exc.strerror or exc}"
+                             ) from None
         if not parent.is_dir():
             raise StoreError(f"{self.path}: directory {parent} does not exist")
         if not os.access(parent, os.W_OK | os.X_OK):

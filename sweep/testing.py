@@ -20,7 +20,7 @@ from floewave import ModelConfig
 __all__ = ["fake_point", "raising_point", "nan_point", "trivial_point", "sleepy_point",
            "power_point", "faulty_point", "crashing_point", "stuck_point",
            "sleepy_trivial_point", "exiting_point", "c_exit_point", "misfit_point",
-           "POWER_M"]
+           "stdout_closing_point", "POWER_M"]
 
 
 #: ``[base]`` of the small real campaigns of the kill/resume tests (torture, Slurm): 4 or
@@ -259,3 +259,15 @@ def misfit_point(cfg: ModelConfig) -> dict[str, Any]:
     elif cfg.eps == 0.5:
         out["iterations"] = -np.inf
     return out
+
+
+def stdout_closing_point(cfg: ModelConfig) -> dict[str, Any]:
+    """:func:`fake_point`, but eps = 0.4 closes ``sys.stdout`` and descriptor 1 first (a
+    model library that closes its output)."""
+    if cfg.eps == 0.4:
+        import os
+        import sys
+
+        sys.stdout.close()
+        os.close(1)
+    return fake_point(cfg)

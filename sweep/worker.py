@@ -108,6 +108,8 @@ def resolve_compute(spec: str) -> Callable[[ModelConfig], Any]:
         fn = importlib.import_module(module)
         for part in name.split("."):
             fn = getattr(fn, part)
+    except SweepError:  # a stop signal during the import (Interrupted) is not bad input
+        raise
     except Exception as exc:  # noqa: BLE001 - ImportError, AttributeError, its own errors
         raise ConfigError(f"--compute {spec!r}: cannot import it: {type(exc).__name__}:"
                           f" {exc}") from None

@@ -372,3 +372,127 @@ def test_bit_rot_is_found_by_validate_deep_and_repaired_by_run_verify(tmp_path, 
     assert table(path).equals(ref)
     assert len(list(tmp_path.glob("s.h5.damaged-*"))) == 1
     assert main(["validate", "--deep", str(path)]) == 0
+
+
+# ---------------------------------------------------------------- 9. stops during imports
+SLOW_IMPORT = """\
+import sys, time
+print("importing", flush=True)
+time.sleep(float(sys.argv[-1]) if sys.argv[-1].replace(".", "").isdigit() else 3.0)
+from sweep.testing import fake_point as point
+"""
+
+
+def test_a_stop_during_the_compute_import_is_status_6(tmp_path):
+    """SIGTERM while ``--compute``'s module is being imported: "stopped", exit 6 (not
+    exit 2 "--compute ... cannot import it: Interrupted")."""
+    (tmp_path / "slowmod.py").write_text(SLOW_IMPORT)
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(TOML)
+    env = _env(PYTHONPATH=os.pathsep.join([str(tmp_path), os.environ.get("PYTHONPATH", "")]))
+    p = subprocess.Popen([sys.executable, "-m", "sweep", "run", str(cfg), "--store",
+                          str(tmp_path / "s.h5"), "--compute", "slowmod:point", "--no-bar"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    assert p.stdout.readline().strip() == "importing"
+    p.send_signal(signal.SIGTERM)
+    out, err = p.communicate(timeout=60)
+    assert p.returncode == 6, err
+    assert "stopped by SIGTERM" in err and "cannot import" not in err
+    assert "Traceback" not in err
+
+
+@pytest.mark.parametrize("delay", [0.0, 0.02, 0.05, 0.1, 0.2, 0.4])
+def test_a_stop_in_the_first_instants_is_status_6(tmp_path, delay):
+    """SIGTERM or SIGINT from the first instants of ``sweep run`` (its handlers are
+    installed before any heavy import): 6 (or 0 once finished), never a traceback or a
+    death by the signal once the process catches it."""
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(TOML)
+    for sig in (signal.SIGTERM, signal.SIGINT):
+        p = subprocess.Popen([sys.executable, "-m", "sweep", "run", str(cfg), "--store",
+                              str(tmp_path / "s.h5"), "--compute", FAKE, "--no-bar"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             env=_env())
+        # SIGTERM's handler is sweep's (Python's own SIGINT handler exists from the
+        # interpreter's first instants: a SIGINT before sweep runs is Python's affair)
+        while p.poll() is None and not _catches(p.pid, signal.SIGTERM):
+            time.sleep(0.001)
+        time.sleep(delay)
+        p.send_signal(sig)
+        out, err = p.communicate(timeout=60)
+        assert p.returncode in (0, 6), (p.returncode, err)
+        assert "Traceback" not in err and "cannot import" not in err
+        if p.returncode == 0:
+            assert "6 grid points" in out
+
+
+def _catches(pid, sig):
+    try:
+        status = open(f"/proc/{pid}/status").read()
+    except OSError:
+        return False
+    mask = int(next(x for x in status.splitlines() if x.startswith("SigCgt:")).split()[1], 16)
+    return bool(mask & (1 << (sig - 1)))
+
+
+# ---------------------------------------------------------------- 10. hostile inputs
+def test_a_campaign_file_that_is_not_a_file_is_refused_at_once(tmp_path):
+    fifo = tmp_path / "fifo.toml"
+    os.mkfifo(fifo)
+    big = tmp_path / "big.toml"
+    big.write_text("# " + "x" * (1 << 20) + "\n" + TOML)
+    for cfg, needle in (("/dev/zero", "not a regular file"), (fifo, "not a regular file"),
+                        (big, "a campaign file is at most")):
+        p = _sweep("run", cfg, "--store", tmp_path / "s.h5", timeout=60)
+        assert p.returncode == 2 and needle in p.stderr, p.stderr
+        assert "Traceback" not in p.stderr
+    assert not (tmp_path / "s.h5").exists()
+
+
+def test_values_beyond_any_parameter_are_config_errors():
+    """a0, d_f, C_sd = 1e308, dt = 1e-300, eps = 5e-324: each named, nothing runs (sweep's
+    bound; floewave's own validation is unchanged)."""
+    text = ("[base]\nL_sheet = 6.0\na0 = 1e308\nd_f = 1e308\nC_sd = 1e308\ndt = 1e-300\n"
+            "[sweep]\neps = [5e-324, 0.5]\n")
+    with pytest.raises(sweep.ConfigError) as info:
+        parse_campaign(text)
+    messages = info.value.messages
+    for key in ("[base] a0 = 1e+308", "[base] d_f = 1e+308", "[base] C_sd = 1e+308",
+                "[base] dt = 1e-300", "[sweep] eps = 5e-324"):
+        assert any(key in m and "out of range [1e-12, 1e+12]" in m for m in messages), messages
+    parse_campaign("[base]\nL_sheet = 6.0\nC_sd = 0.0\n[sweep]\neps = [0.5]\n")  # zero is fine
+
+
+def test_hostile_paths_and_outputs_are_one_line(tmp_path):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(TOML)
+    deep = tmp_path / ("d" * 250) / ("d" * 250) / "s.h5"
+    long_path = str(tmp_path) + "/" + "/".join(["e" * 250] * 17) + "/s.h5"
+    for store in (long_path, tmp_path / ("n" * 240 + ".h5"), deep):
+        p = _sweep("run", cfg, "--store", store, "--compute", FAKE, "--no-bar")
+        assert p.returncode == 3 and "Traceback" not in p.stderr, p.stderr[-500:]
+        assert p.stderr.count("\n") == 1
+    path = tmp_path / "s.h5"
+    assert _sweep("run", cfg, "--store", path, "--compute", FAKE).returncode == 0
+    full = tmp_path / "full.csv"
+    full.symlink_to("/dev/full")
+    p = _sweep("export", path, "-o", full)
+    assert p.returncode == 3 and "No space left" in p.stderr and "Traceback" not in p.stderr
+    # a reader that stops early: `sweep status S.h5 --slowest 100 | head -1`
+    p = subprocess.Popen([sys.executable, "-m", "sweep", "status", str(path), "--slowest",
+                          "100"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=_env())
+    assert p.stdout.readline().startswith(str(path).encode())
+    p.stdout.close()
+    err = p.stderr.read().decode()
+    assert p.wait(timeout=60) == 0 and "Traceback" not in err, err
+
+
+# ---------------------------------------------------------------- 11. smaller
+def test_a_point_that_closes_stdout_does_not_break_the_summary(tmp_path):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(TOML)
+    p = _sweep("run", cfg, "--store", tmp_path / "s.h5", "--compute",
+               "sweep.testing:stdout_closing_point", "--no-bar")
+    assert p.returncode == 0, p.stderr
+    assert "6 grid points: 0 already stored, 6 stored now" in p.stderr
+    assert "Traceback" not in p.stderr
