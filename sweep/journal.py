@@ -156,6 +156,9 @@ class JournalScan:
     bad: list[tuple[int, int, str]] = field(default_factory=list)
     records: int = 0
     max_seq: int = -1
+    #: the highest run index a record or hand-out names (a rebuilt file's next run
+    #: continues from it)
+    max_run: int = -1
     legacy: int = 0  # records read without a checksum (journals of before version 2)
 
     @property
@@ -335,6 +338,8 @@ class Journal:
             if "handout" in obj:
                 h = obj["handout"]
                 if _is_hash(h):
+                    with contextlib.suppress(TypeError, ValueError):
+                        out.max_run = max(out.max_run, int(obj.get("run", -1)))
                     out.handouts.setdefault(h, []).append((int(obj.get("run", -1)),
                                                            int(obj.get("worker", -1)),
                                                            bool(obj.get("alone", False))))
@@ -352,6 +357,9 @@ class Journal:
             out.records += 1
             out.legacy += not checked
             out.max_seq = max(out.max_seq, seq)
+            run = row.get("run")
+            if isinstance(run, int) and not isinstance(run, bool):
+                out.max_run = max(out.max_run, run)
             if seq > out.latest.get(h, (-1,))[0]:  # by seq, not by file order
                 out.latest[h] = (seq, offset, str(row["status"]))
                 out.handouts.pop(h, None)

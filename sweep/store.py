@@ -459,6 +459,7 @@ class Store:
             w = H5Writer.create(tmp, campaign)
             w.prepare()
             quarantined = self._write_records(w, {off for _, off, _ in scan.latest.values()})
+            self._copy_runs(w.file)
             w.trim()
             w.file.attrs["rebuilt_from_journal"] = utc_now()
             w.durable()
@@ -495,6 +496,25 @@ class Store:
                        f" from the journal ({n} points)")
         elif n:
             self._note(f"{self.path}: missing; rebuilt from the journal ({n} points)")
+
+    def _copy_runs(self, new: Any) -> None:
+        """Keep the ``/runs`` history of the file being rebuilt, when it can be read
+        (an unclean file; a damaged one may not be); a run still "running" there died."""
+        import h5py
+
+        if not self.path.is_file():
+            return
+        try:
+            with h5py.File(self.path, "r", locking=False) as old:
+                if "runs" not in old:
+                    return
+                for name in old["runs"]:
+                    old.copy(old["runs"][name], new["runs"], name=name)
+                    g = new["runs"][name]
+                    if text(g.attrs.get("outcome", "")) == "running":
+                        g.attrs["outcome"] = "died (its writer did not close the store)"
+        except _H5_ERRORS:
+            pass  # the history is lost with the damaged file (kept aside)
 
     def _write_records(self, w: H5Writer, offsets: set[int]) -> int:
         """Write the journal records at ``offsets``; set aside those that cannot be
@@ -585,7 +605,10 @@ class Store:
     def _start_run(self, info: dict[str, Any]) -> int:
         assert self.w is not None
         runs = self.w.file.require_group("runs")
-        index = len(runs)
+        # after the last run the file or the journal knows of (a rebuild from the
+        # journal alone, its old file unreadable, must not start again at 0)
+        index = max(len(runs), max((int(n) for n in runs if n.isdigit()), default=-1) + 1,
+                    self.scan.max_run + 1)
         g = runs.create_group(str(index))
         g.attrs["started"] = utc_now()
         g.attrs["outcome"] = "running"

@@ -20,7 +20,7 @@ from floewave import ModelConfig
 __all__ = ["fake_point", "raising_point", "nan_point", "trivial_point", "sleepy_point",
            "power_point", "faulty_point", "crashing_point", "stuck_point",
            "sleepy_trivial_point", "exiting_point", "c_exit_point", "misfit_point",
-           "stdout_closing_point", "POWER_M"]
+           "stdout_closing_point", "stubborn_point", "POWER_M"]
 
 
 #: ``[base]`` of the small real campaigns of the kill/resume tests (torture, Slurm): 4 or
@@ -270,4 +270,16 @@ def stdout_closing_point(cfg: ModelConfig) -> dict[str, Any]:
 
         sys.stdout.close()
         os.close(1)
+    return fake_point(cfg)
+
+
+def stubborn_point(cfg: ModelConfig) -> dict[str, Any]:
+    """:func:`fake_point`, but eps = 0.4 swallows everything, its timeout included
+    (``except BaseException`` in a loop), and never returns."""
+    if cfg.eps == 0.4:
+        while True:
+            try:
+                time.sleep(3600)
+            except BaseException:  # noqa: BLE001, S110 - the point under test does this
+                pass
     return fake_point(cfg)

@@ -496,3 +496,47 @@ def test_a_point_that_closes_stdout_does_not_break_the_summary(tmp_path):
     assert p.returncode == 0, p.stderr
     assert "6 grid points: 0 already stored, 6 stored now" in p.stderr
     assert "Traceback" not in p.stderr
+
+
+def test_a_point_that_swallows_its_timeout_is_timeout_in_one_run(tmp_path):
+    """``except BaseException`` in a loop: in-process the point runs in a child process
+    killed a margin after point_timeout: ``timeout`` in this run (before: 7 runs of
+    2t + 30 s until ``crashed``); one that ends its process is ``crashed`` in this run."""
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(TOML + "[run]\npoint_timeout = 0.5\n")
+    path = tmp_path / "s.h5"
+    t0 = time.monotonic()
+    p = _sweep("run", cfg, "--store", path, "--compute", "sweep.testing:stubborn_point",
+               "--no-bar")
+    assert p.returncode == 0, p.stderr
+    assert time.monotonic() - t0 < 30
+    df = sweep.load(path).set_index(["L_x", "eps"])
+    assert list(df.xs(0.4, level="eps")["status"]) == ["timeout", "timeout"]
+    assert set(df.xs(0.2, level="eps")["status"]) == {"converged"}
+    other = tmp_path / "o.h5"
+    p = _sweep("run", cfg, "--store", other, "--compute", "sweep.testing:exiting_point",
+               "--no-bar")
+    assert p.returncode == 0, p.stderr
+    df = sweep.load(other).set_index(["L_x", "eps"])
+    assert list(df.xs(0.4, level="eps")["status"]) == ["crashed", "crashed"]
+    assert "its process ended with status 0" in df.xs(0.4, level="eps")["message"].iloc[0]
+    assert sweep.validate(path) == [] and sweep.validate(other) == []
+
+
+def test_a_rebuild_keeps_the_runs_and_their_numbering(tmp_path, campaign):
+    """A rebuilt unclean file keeps /runs (the dead run marked so); a file rebuilt from
+    the journal alone (removed) goes on after the journal's last run, not from 0."""
+    path = tmp_path / "s.h5"
+    run_campaign(campaign.shard(0, 2), str(path), compute=FAKE)
+    run_campaign(campaign, str(path), compute=FAKE)
+    make_unclean(path)
+    with h5py.File(path, "r+", locking=False) as f:
+        f["runs"]["1"].attrs["outcome"] = "running"  # as a killed run leaves it
+    run_campaign(campaign, str(path), compute=FAKE)
+    runs = sweep.analysis.store_runs(path)
+    assert [r["index"] for r in runs] == [0, 1, 2]
+    assert runs[1]["outcome"].startswith("died") and runs[2]["outcome"] == "complete"
+    path.unlink()
+    run_campaign(campaign, str(path), compute=FAKE)
+    assert [r["index"] for r in sweep.analysis.store_runs(path)] == [2]  # the journal's last
+    assert set(sweep.load(path)["run"]) == {0, 1}
