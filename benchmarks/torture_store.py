@@ -18,6 +18,7 @@ import argparse
 import json
 import os
 import random
+import re
 import shutil
 import signal
 import subprocess
@@ -36,6 +37,7 @@ from torture import _torture  # noqa: E402  (tests/sweep/test_torture.py, loaded
 MPIEXEC, compare = _torture.MPIEXEC, _torture.compare
 
 import h5py  # noqa: E402
+import numpy as np  # noqa: E402
 
 import sweep  # noqa: E402
 from sweep.journal import decode, encode, journal_path  # noqa: E402
@@ -249,6 +251,10 @@ def main() -> int:
     ap.add_argument("--seed", type=int, default=15)
     ap.add_argument("--workdir", type=Path)
     ap.add_argument("--no-mpi", action="store_true")
+    ap.add_argument("--holes", type=int, default=4, metavar="N",
+                    help="tries per case of issue 26's holes (0: skip them)")
+    ap.add_argument("--only-holes", action="store_true",
+                    help="only issue 26's holes (not the kill phases of issue 15)")
     args = ap.parse_args()
     work = args.workdir or Path(tempfile.mkdtemp(prefix="sweep-torture-store-"))
     work.mkdir(parents=True, exist_ok=True)
@@ -262,6 +268,15 @@ def main() -> int:
     for cfg, ref in ((small, ref_small), (big, ref_big)):
         rc, log = finish(["run", str(cfg), "--store", str(ref), "--compute", FAKE, "--no-bar"])
         assert rc == 0, log
+    use_mpi = MPIEXEC is not None and not args.no_mpi
+    if args.only_holes:
+        holes_table = holes(work, rng, big, ref_big, args.holes, use_mpi, problems)
+        print()
+        print(holes_table.table())
+        print(f"\nelapsed {time.monotonic() - t0:.0f} s; work directory {work}")
+        for p in problems[:40]:
+            print("PROBLEM:", p)
+        return 1 if problems else 0
     # a store whose rebuild takes long enough to be hit: 1,800 points
     rebuild, ref_rebuild = work / "rebuild.toml", work / "ref_rebuild.h5"
     many = ", ".join(repr(round(0.001 + 0.00165 * i, 5)) for i in range(600))
@@ -282,7 +297,6 @@ def main() -> int:
     print(f"resume {t_start:.2f} s; rebuild of {len(sweep.load(ref_rebuild))} points"
           f" {t_rebuild:.2f} s more", flush=True)
     phases = ["run", "resume-rebuild", "retry", "extend", "merge"]
-    use_mpi = MPIEXEC is not None and not args.no_mpi
     if use_mpi:
         phases.append("run (mpiexec -n 3)")
     per = max(1, args.kills // len(phases))
@@ -442,10 +456,285 @@ def main() -> int:
 
     print()
     print(tally.table())
+    if args.holes:
+        holes_table = holes(work, rng, big, ref_big, args.holes, use_mpi, problems)
+        print()
+        print(holes_table.table())
     print(f"\nelapsed {time.monotonic() - t0:.0f} s; work directory {work}")
     for p in problems[:40]:
         print("PROBLEM:", p)
     return 1 if problems else 0
+
+
+# ---------------------------------------------------------------- issue 26: the last holes
+class HoleTally(Tally):
+    """Per case: tries, survived (the store ended whole and every command said the
+    truth), ruined, lost, duplicated, silently wrong (a wrong row, or a command that
+    exited 0 with the grid incomplete / a damage unnoticed), tracebacks."""
+
+    COLS = ["tries", "survived", "ruined", "lost", "duplicated", "silently wrong",
+            "tracebacks"]
+
+    def table(self) -> str:
+        lines = ["| case | " + " | ".join(self.COLS) + " |",
+                 "|---|" + "---|" * len(self.COLS)]
+        total: Counter = Counter()
+        for phase, c in self.rows.items():
+            total.update(c)
+            lines.append(f"| {phase} | " + " | ".join(str(c.get(k, 0)) for k in self.COLS)
+                         + " |")
+        lines.append("| **total** | " + " | ".join(str(total.get(k, 0)) for k in self.COLS)
+                     + " |")
+        return "\n".join(lines)
+
+
+def _whole(tally: HoleTally, case: str, ref: Path, store: Path, rc: int, log: str,
+           problems: list[str], history: bool = False, wrong: int = 0) -> None:
+    """Finish-and-compare bookkeeping of one try (``wrong``: silently wrong already
+    seen by the case itself)."""
+    tally.add(case, tries=1, tracebacks=("Traceback" in log))
+    if rc != 0:
+        tally.add(case, ruined=1, **{"silently wrong": wrong})
+        problems.append(f"{case}: the finishing run exited {rc}: {log[-500:]}")
+        return
+    res = compare(ref, store)
+    a, b = set(sweep.load(ref)["hash"]), set(sweep.load(store)["hash"])
+    if history:
+        res["problems"] = [p for p in res["problems"] if not p.startswith(
+            ("duplicates: 0 in the table", "journal and table hold"))]
+    bad = {p.split()[0] for p in res["problems"] if not p.startswith(
+        ("hashes", "journal", "duplicates", "validate"))}
+    wrong += len(bad) + len(b - a)
+    dup = res["dup_table"] + (0 if history else res["dup_journal"])
+    tally.add(case, lost=len(a - b), duplicated=dup, **{"silently wrong": wrong})
+    if not res["problems"] and not wrong:
+        tally.add(case, survived=1)
+    problems += [f"{case}: {p}" for p in res["problems"][:5]]
+
+
+def _flip_byte(path: Path, dataset: str, rng: random.Random) -> None:
+    with h5py.File(path, "r", locking=False) as f:
+        ds = f[dataset]
+        offset = ds.id.get_offset()
+        if offset is None:
+            offset = ds.id.get_chunk_info(0).byte_offset
+        n = ds.shape[0] if ds.shape else 1
+    where = offset + 8 * rng.randrange(max(1, min(n, 50))) + rng.randrange(8)
+    with open(path, "r+b") as fh:
+        fh.seek(where)
+        b = fh.read(1)
+        fh.seek(where)
+        fh.write(bytes([b[0] ^ (1 << rng.randrange(8))]))
+
+
+_FULL_DISK = """
+import errno, os, sys
+import sweep.cli, sweep.lock
+def full(*a):
+    raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+sweep.lock.os.pwrite = full
+sys.exit(sweep.cli.main(sys.argv[1:]))
+"""
+
+
+def holes(work: Path, rng: random.Random, big: Path, ref_big: Path, tries: int,
+          use_mpi: bool, problems: list[str]) -> HoleTally:
+    """Issue 26's cases, ``tries`` times each: exit 0 in a point (in-process, C exit,
+    under mpiexec), foreign and replayed journal lines, truncated stores, writers
+    through a symlink and a hard link, output the schema cannot hold, a full disk at the
+    resume, HDF5 bit rot, stop signals during imports."""
+    tally = HoleTally()
+    hw = work / "holes"
+    hw.mkdir(exist_ok=True)
+    grid = len(sweep.load(ref_big))
+    base = ["--compute", FAKE, "--no-bar"]
+
+    def fin(store: Path, *extra: str) -> tuple[int, str]:
+        return finish(["run", str(big), "--store", str(store), *base, *extra])
+
+    # 1. a point that ends its process with status 0
+    crash_cfg = hw / "exit0.toml"
+    crash_cfg.write_text(BIG + "[run]\nmax_attempts = 1\n")
+    for case, compute, mpi in (("exit 0 in a point", "exiting_point", 0),
+                               ("C exit(0) in a point", "c_exit_point", 0),
+                               ("exit 0 in a point (mpiexec -n 3)", "exiting_point", 3)):
+        if mpi and not use_mpi:
+            continue
+        for i in range(tries):
+            store = hw / f"exit0-{mpi}-{compute}-{i}.h5"
+            wrong, tb, rc, log = 0, False, None, ""
+            for _ in range(12):
+                rc, log = finish(["run", str(crash_cfg), "--store", str(store), "--compute",
+                                  f"sweep.testing:{compute}", "--no-bar"], mpi=mpi)
+                tb = tb or "Traceback" in log
+                if rc == 0:
+                    break
+            df = sweep.load(store)
+            if rc == 0 and len(df) < grid:
+                wrong += 1  # "success" with points missing
+            crashed = df[df["eps"] == 0.4]
+            others = df[df["eps"] != 0.4]
+            ref = sweep.load(ref_big).set_index("hash")
+            wrong += int((crashed["status"] != "crashed").sum())
+            wrong += sum(ref.loc[h, "W_c"] != w and not (np.isnan(w) and np.isnan(
+                ref.loc[h, "W_c"])) for h, w in zip(others["hash"], others["W_c"], strict=True))
+            tally.add(case, tries=1, tracebacks=tb, lost=grid - len(df),
+                      duplicated=len(df) - df["hash"].nunique(), **{"silently wrong": wrong})
+            if rc != 0:
+                tally.add(case, ruined=1)
+                problems.append(f"{case}: never finished: {log[-300:]}")
+            elif not wrong and len(df) == grid and not sweep.validate(store):
+                tally.add(case, survived=1)
+
+    # 2. journal lines of another campaign (same [base], eps not in the grid)
+    other_cfg, other = hw / "other.toml", hw / "other.h5"
+    other_cfg.write_text(BIG.replace(EPS, "0.33, 0.66"))
+    finish(["run", str(other_cfg), "--store", str(other), *base])
+    foreign = [line for line in journal_path(other).read_bytes().splitlines(keepends=True)
+               if line.startswith(b'{"row"')]
+    for i in range(tries):
+        store = hw / f"foreign-{i}.h5"
+        fresh_copy(ref_big, store)
+        with open(journal_path(store), "ab") as fh:
+            fh.write(b"".join(rng.sample(foreign, rng.randint(1, len(foreign)))))
+        if i % 2:
+            unclean(store)
+        rc, log = fin(store)
+        _whole(tally, "foreign journal lines", ref_big, store, rc, log, problems)
+
+    # 5. a replayed block of old failed lines after their retried records
+    for i in range(tries):
+        store = hw / f"replay-{i}.h5"
+        finish(["run", str(big), "--store", str(store), "--compute",
+                "sweep.testing:faulty_point", "--no-bar"])
+        failed = [line for line in journal_path(store).read_bytes().splitlines(keepends=True)
+                  if b'"status":"failed"' in line]
+        fin(store, "--retry-failed")
+        with open(journal_path(store), "ab") as fh:
+            fh.write(b"".join(failed))
+        unclean(store)
+        rc, log = fin(store)
+        _whole(tally, "replayed journal block", ref_big, store, rc, log, problems,
+               history=True)
+
+    # 3. a truncated file beside a complete journal
+    for i in range(tries):
+        store = hw / f"truncated-{i}.h5"
+        fresh_copy(ref_big, store)
+        data = store.read_bytes()
+        cut = (len(data) // 2, 96, rng.randrange(96, len(data)))[i % 3]
+        store.write_bytes(data[:cut])
+        rc, log = fin(store)
+        _whole(tally, "truncated store", ref_big, store, rc, log, problems)
+
+    # 4. two writers, one through a symlink / a hard link
+    for kind in ("symlink", "hard link"):
+        for i in range(tries):
+            store = hw / f"{kind[:4]}-{i}.h5"
+            other_name = hw / f"{kind[:4]}-{i}-other.h5"
+            args = ["--compute", SLEEPY, "--no-bar"]
+            a = run_cmd(["run", str(big), "--store", str(store), *args])
+            deadline = time.monotonic() + 60
+            while time.monotonic() < deadline and not journal_path(store).exists():
+                time.sleep(0.01)
+            time.sleep(rng.uniform(0.0, 1.0))
+            if kind == "symlink":
+                other_name.symlink_to(store.name)
+            else:
+                os.link(store, other_name)
+            b = run_cmd(["run", str(big), "--store", str(other_name), *args])
+            out_a, err_a = a.communicate(timeout=600)
+            out_b, err_b = b.communicate(timeout=600)
+            # the hole: the second writer exits 0 having stored points while the first
+            # ran (it starts well within the first's 12 s); refused (3) is right
+            now = re.search(r"(\d+) stored now", out_b)
+            wrong = int(a.returncode == 0 and b.returncode == 0 and bool(now)
+                        and int(now.group(1)) > 0)
+            if b.returncode not in (0, 3):
+                problems.append(f"two writers ({kind}): the second exited {b.returncode}:"
+                                f" {err_b[-300:]}")
+            rc, log = fin(store)
+            _whole(tally, f"two writers ({kind})", ref_big, store, rc,
+                   log + err_a + err_b, problems, wrong=wrong)
+
+    # 6. output the schema cannot hold
+    mis_cfg = hw / "misfit.toml"
+    mis_cfg.write_text("[base]\nL_sheet = 6.0\n[sweep]\nL_x = [0.5, 1.5]\n"
+                       "eps = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6]\n")
+    for i in range(tries):
+        store = hw / f"misfit-{i}.h5"
+        rc, log = finish(["run", str(mis_cfg), "--store", str(store), "--compute",
+                          "sweep.testing:misfit_point", "--no-bar"])
+        tally.add("wrong-shape output", tries=1, tracebacks="Traceback" in log)
+        if rc != 0:
+            tally.add("wrong-shape output", ruined=1)
+            continue
+        df = sweep.load(store)
+        wrong = int((df[df["eps"] < 0.55]["status"] != "failed").sum())
+        wrong += bool(sweep.validate(store))
+        tally.add("wrong-shape output", lost=12 - len(df), **{"silently wrong": wrong})
+        if not wrong and len(df) == 12:
+            tally.add("wrong-shape output", survived=1)
+
+    # 7. a resume on a completely full disk (ENOSPC at the lock's write)
+    for i in range(tries):
+        store = hw / f"full-{i}.h5"
+        fresh_copy(ref_big, store)
+        p = subprocess.run([PY, "-c", _FULL_DISK, "run", str(big), "--store", str(store),
+                            *base], capture_output=True, text=True, env=env(), timeout=120)
+        tb = "Traceback" in p.stderr
+        wrong = int(p.returncode == 0)
+        if p.returncode != 3 or p.stderr.count("\n") != 1:
+            problems.append(f"full disk: exit {p.returncode}: {p.stderr[-300:]}")
+        rc, log = fin(store)
+        _whole(tally, "full-disk resume", ref_big, store, rc, log + p.stderr, problems,
+               wrong=wrong)
+
+    # 8. HDF5 bit rot: validate --deep must see it; run --verify repairs it
+    cols = ["W_c", "alpha_all", "a_end", "iterations", "residual"]
+    for i in range(tries * 2):
+        store = hw / f"rot-{i}.h5"
+        fresh_copy(ref_big, store)
+        h = rng.choice(list(sweep.load(store)["hash"]))
+        where = (f"table/{rng.choice(cols)}" if i % 2 == 0 else
+                 f"profiles/{h[:2]}/{h}/{rng.choice(['a', 'x_mean', 'S_sd'])}")
+        _flip_byte(store, where, rng)
+        v = finish(["validate", "--deep", str(store)])
+        seen = v[0] == 3
+        if not seen:
+            problems.append(f"bit rot at {where}: validate --deep exited {v[0]}")
+        rc, log = fin(store, "--verify")
+        _whole(tally, "HDF5 bit rot (validate --deep, run --verify)", ref_big, store, rc,
+               log + v[1], problems, wrong=int(not seen))
+
+    # 9. stop signals during imports and start-up (in-process)
+    for i in range(tries * 3):
+        store = hw / f"stop-{i}.h5"
+        fresh_copy(ref_big, store)
+        sig = (signal.SIGTERM, signal.SIGINT, signal.SIGUSR1)[i % 3]
+        p = run_cmd(["run", str(big), "--store", str(store), *base])
+        while p.poll() is None and not _catches_term(p.pid):
+            time.sleep(0.001)
+        time.sleep(rng.uniform(0.0, 0.7))
+        p.send_signal(sig)
+        out, err = p.communicate(timeout=120)
+        bad = p.returncode not in (0, 6)
+        if bad:
+            problems.append(f"stop during imports: exit {p.returncode}: {err[-300:]}")
+        rc, log = fin(store)
+        _whole(tally, "stop signals during imports", ref_big, store, rc, log + err, problems,
+               wrong=int(bad))
+    return tally
+
+
+def _catches_term(pid: int) -> bool:
+    """Whether sweep's SIGTERM handler is installed in process ``pid``."""
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return False
+    mask = int(next(x for x in status.splitlines() if x.startswith("SigCgt:")).split()[1], 16)
+    return bool(mask & (1 << (signal.SIGTERM - 1)))
 
 
 def hostile(work: Path) -> list[tuple[str, list[str], object]]:

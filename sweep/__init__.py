@@ -45,7 +45,8 @@ _LAZY = {
 _MODULES = {"analysis", "cli", "config", "errors", "executor", "figures", "identity",
             "journal", "lock", "merge", "papercheck", "plan", "progress", "provenance",
             "reader", "record", "schema", "stats", "store", "testing", "writer",
-            "campaign_check", "master", "signals", "transport", "worker"}
+            "campaign_check", "master", "signals", "transport", "worker", "guard",
+            "verify"}
 
 
 def __getattr__(name: str) -> Any:

@@ -81,11 +81,12 @@ def journal_points(path: str | Path) -> int | None:
     journal write and its HDF5 write, or a killed run whose next start writes them).
     A quick count: the hash of each record line, not its checksum.
     """
+    import os
     import re
 
     from .journal import journal_path
 
-    jp = journal_path(path)
+    jp = journal_path(os.path.realpath(path))  # beside the file, as the writer names it
     if not jp.exists():
         return None
     pattern = re.compile(rb'"hash":"([0-9a-f]{64})"')

@@ -15,8 +15,6 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from floewave._paths import output_dir_problem, output_file_problem
-
 from .errors import EXIT_INTERNAL, EXIT_OK, EXIT_STORE, ConfigError, Interrupted, SweepError
 
 __all__ = ["main", "build_parser"]
@@ -106,6 +104,9 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--point-timeout", type=_seconds, metavar="SECONDS",
                    help="store a point that runs longer as 'timeout' (overrides [run]"
                    " point_timeout; 0: no limit)")
+    r.add_argument("--verify", action="store_true", help="on opening, compare the store"
+                   " with the journal's checksummed records (as validate --deep) and rebuild"
+                   " it from the journal if a value differs")
     r.add_argument("--no-bar", action="store_true", help="log lines even on a terminal")
     r.add_argument("--ignore-slurm-ntasks", action="store_true",
                    help="skip the check that the MPI size equals SLURM_NTASKS")
@@ -128,6 +129,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     v = sub.add_parser("validate", help="check a store against results_schema")
     v.add_argument("store", type=Path)
+    v.add_argument("--deep", action="store_true", help="also compare every stored value"
+                   " and profile with the journal's checksummed records (bit rot)")
 
     fg = sub.add_parser("figures", help="the paper's figures (Figs. 2, 3, 5, 6, W_c, "
                         "alpha(omega)) as PNG")
@@ -168,9 +171,19 @@ def _err(message: str | BaseException) -> None:
 
 
 # ---------------------------------------------------------------------- commands
-def _stop_during_start_up(signum: int, frame: Any) -> None:
-    from .errors import Interrupted
+_START_UP_STOP: list[int] = []  # the first stop signal of the start-up (raised once)
+_LATE_STOP: list[int] = []  # stop signals after the campaign's own handlers were done
 
+
+def _stop_during_start_up(signum: int, frame: Any) -> None:
+    from . import signals
+
+    if signals.campaign_over:  # nothing left to stop: the command ends as it would
+        _LATE_STOP.append(signum)
+        return
+    if _START_UP_STOP:  # a repeat (the guard forwards what the group got too): once
+        return
+    _START_UP_STOP.append(signum)
     raise Interrupted(f"stopped by {signal.Signals(signum).name} during start-up, before"
                       " the store was opened; nothing was changed — the campaign is resumable: run"
                       " the same command again")
@@ -188,6 +201,11 @@ def _catch_stops_at_start_up(argv: Sequence[str]) -> None:
     leaving would leave the workers waiting; the default action ends the job."""
     if not argv or argv[0] not in ("run", "merge"):
         return
+    from . import signals
+
+    signals.campaign_over = False  # a new command: its stops stop it
+    _START_UP_STOP.clear()
+    _LATE_STOP.clear()
     if any(v in os.environ for v in _LAUNCHER_VARS):
         return
     for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1):
@@ -210,13 +228,23 @@ def cmd_run(args: argparse.Namespace) -> int:
         summary = run_campaign(campaign, str(args.store), compute=args.compute,
                                retry_failed=args.retry_failed, extend=args.extend, comm=comm,
                                progress_bar=False if args.no_bar else None,
-                               command=" ".join(sys.argv), point_timeout=args.point_timeout)
+                               command=" ".join(sys.argv), point_timeout=args.point_timeout,
+                               verify=args.verify)
     except SweepError as exc:
         if rank == 0:
             _err(exc)
         return exc.exit_status
     if rank == 0 and summary is not None:
-        print(f"sweep: {summary}; store {args.store}")
+        try:
+            print(f"sweep: {summary}; store {args.store}", flush=True)
+        except (OSError, ValueError):  # stdout closed (by a point, or the reader)
+            print(f"sweep: {summary}; store {args.store}", file=sys.stderr)
+        missing = summary.total - summary.skipped - summary.computed
+        if missing > 0:  # never 0 with grid points missing
+            _err(Interrupted(f"{plural(missing, 'grid point')} of {summary.total} not"
+                             " stored; the campaign is resumable: run the same command"
+                             " again"))
+            return Interrupted.exit_status
     return EXIT_OK
 
 
@@ -340,6 +368,8 @@ def cmd_export(args: argparse.Namespace) -> int:
     suffix = args.output.suffix.lower()
     if suffix not in (".csv", ".parquet"):
         raise ConfigError(f"--output {args.output}: expected a .csv or .parquet file name")
+    from floewave._paths import output_file_problem
+
     problem = output_file_problem(args.output, "--output")
     if problem:
         raise ConfigError(problem)
@@ -347,10 +377,16 @@ def cmd_export(args: argparse.Namespace) -> int:
         raise ConfigError(f"--output {args.output}: Parquet needs pyarrow:"
                           " pip install 'floewave[parquet]' (or write .csv)")
     df = load(args.store)
-    if suffix == ".csv":
-        df.to_csv(args.output, index=False)
-    else:
-        df.to_parquet(args.output, index=False)
+    try:
+        if suffix == ".csv":
+            df.to_csv(args.output, index=False)
+        else:
+            df.to_parquet(args.output, index=False)
+    except OSError as exc:  # a full disk (/dev/full), an I/O error
+        from .errors import StoreError
+
+        raise StoreError(f"--output {args.output}: cannot be written:"
+                         f" {exc.strerror or exc}") from None
     print(f"sweep: wrote {plural(len(df), 'row')} to {args.output}")
     return EXIT_OK
 
@@ -366,11 +402,25 @@ def cmd_validate(args: argparse.Namespace) -> int:
     from .schema import validate
 
     problems = validate(args.store)
+    if args.deep and not any("not a readable HDF5 file" in p for p in problems):
+        from .verify import compare_with_journal
+
+        try:
+            deep = compare_with_journal(args.store)
+        except Exception as exc:  # noqa: BLE001 - a damaged file: say so, no traceback
+            deep = [f"{args.store}: cannot be compared with its journal:"
+                    f" {type(exc).__name__}: {exc}"]
+        if deep:
+            deep.append("the journal is the checksummed truth: `sweep run --verify` with"
+                        " the store's campaign rebuilds the file from it (the file is"
+                        " kept aside)")
+        problems += deep
     for p in problems:
         _err(p)
     if problems:
         return EXIT_STORE
-    print(f"sweep: {args.store} is a valid store")
+    print(f"sweep: {args.store} is a valid store"
+          + (" and every stored value is its journal's" if args.deep else ""))
     return EXIT_OK
 
 
@@ -387,6 +437,8 @@ def cmd_figures(args: argparse.Namespace) -> int:
 
     if args.max < 1:
         raise ConfigError(f"--max {args.max}: must be at least 1")
+    from floewave._paths import output_dir_problem
+
     problem = output_dir_problem(args.out, "--out")
     if problem:
         raise ConfigError(problem)
@@ -420,8 +472,57 @@ _COMMANDS = {"run": cmd_run, "plan": cmd_plan, "status": cmd_status, "export": c
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``sweep`` console script; returns the exit status."""
-    _catch_stops_at_start_up(list(sys.argv[1:] if argv is None else argv))
+    """Entry point of the ``sweep`` console script; returns the exit status.
+
+    From the command line (``argv`` None), ``sweep run`` runs under its guard
+    (:mod:`sweep.guard`): a parent process that turns an exit with status 0 before the
+    campaign finished (``exit(0)`` in a compute function) into status 6."""
+    from . import guard
+
+    args_ = list(sys.argv[1:] if argv is None else argv)
+    _catch_stops_at_start_up(args_)  # first: a stop from the first instants is status 6
+    try:
+        child = argv is None and bool(args_) and args_[0] == "run" and guard.guarded()
+        guard.unblock()
+        status = _main(argv)
+    except Interrupted as exc:  # before _main's own handling
+        _err(exc)
+        status = exc.exit_status
+        child = False
+    if _START_UP_STOP and status not in (EXIT_OK, Interrupted.exit_status):
+        # a stop raised inside an import can surface as another error (an ImportError,
+        # a --compute that "cannot be imported"): it was the stop
+        _err(Interrupted(f"stopped by {signal.Signals(_START_UP_STOP[0]).name} during"
+                         " start-up; the campaign is resumable: run the same command"
+                         " again"))
+        status = Interrupted.exit_status
+    try:
+        sys.stdout.flush()
+    except BrokenPipeError:
+        _quiet_stdout()
+    except (OSError, ValueError):
+        pass
+    if argv is None:  # the command line: a stop from now on cannot kill the exit
+        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1):
+            signal.signal(sig, signal.SIG_IGN)
+    if _LATE_STOP and status == EXIT_OK:
+        print(f"sweep: {signal.Signals(_LATE_STOP[0]).name} arrived after the campaign had"
+              " finished: nothing was left to stop", file=sys.stderr)
+    if child:
+        guard.report_status(status)
+    return status
+
+
+def _quiet_stdout() -> None:
+    """Point stdout at /dev/null (its reader went away: no error at the exit's flush)."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass
+
+
+def _main(argv: Sequence[str] | None) -> int:
     try:
         args = build_parser().parse_args(argv)
     except SweepError as exc:  # a stop during the parser's imports
@@ -435,7 +536,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (KeyError, FileNotFoundError) as exc:
         _err(str(exc))
         return EXIT_STORE
+    except BrokenPipeError:  # `sweep status S.h5 | head -1`: the reader has what it wanted
+        _quiet_stdout()
+        return EXIT_OK
     except Exception:  # noqa: BLE001 - a bug: show it
+        if _START_UP_STOP:  # an import cut short by the stop, not a bug
+            return EXIT_INTERNAL  # main says "stopped" and returns 6
         traceback.print_exc()
         return EXIT_INTERNAL
 

@@ -17,6 +17,7 @@ import dataclasses
 import functools
 import itertools
 import math
+import stat
 import tomllib
 from dataclasses import dataclass, field, fields
 from pathlib import Path
@@ -171,6 +172,27 @@ class Campaign:
 
 _RUN_TYPES = {f.name: f.type for f in fields(RunOptions)}
 _MODEL_FIELDS = {f.name for f in fields(ModelConfig)}
+_FLOAT_FIELDS = {f.name for f in fields(ModelConfig) if f.type in (float, "float")}
+#: Largest campaign file [bytes] (the paper's grid is 3 KB): ``sweep run /dev/zero``
+#: or a huge file by mistake is refused, not read without bound.
+MAX_CAMPAIGN_BYTES = 1 << 20
+#: Magnitudes a real parameter of a campaign may have (SI units), zero apart: no
+#: parameter of the model lies outside, and values beyond overflow (a0 = 1e308) or
+#: underflow (dt = 1e-300, eps = 5e-324) the model's arithmetic. Sweep's own bound, on
+#: top of floewave's validation.
+MAGNITUDE = (1e-12, 1e12)
+
+
+def _magnitude_problem(key: str, value: Any) -> str:
+    """Why a real parameter's value is out of :data:`MAGNITUDE` ("" when it is not)."""
+    if key not in _FLOAT_FIELDS or isinstance(value, bool) or \
+            not isinstance(value, (int, float)):
+        return ""
+    v = abs(float(value))
+    if v == 0 or not math.isfinite(v) or MAGNITUDE[0] <= v <= MAGNITUDE[1]:
+        return ""  # zero, and non-finite values, are floewave's to judge
+    return (f"magnitude {v:.3g} is out of range [{MAGNITUDE[0]:g}, {MAGNITUDE[1]:g}] (SI"
+            " units): no parameter of the model is there")
 
 
 def load_campaign(path: str | Path) -> Campaign:
@@ -187,7 +209,17 @@ def load_campaign(path: str | Path) -> Campaign:
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        st = path.stat()
+        if not stat.S_ISREG(st.st_mode):  # /dev/zero reads forever, a FIFO blocks
+            raise ConfigError(f"{path}: not a regular file; a campaign file is a TOML file")
+        if st.st_size > MAX_CAMPAIGN_BYTES:
+            raise ConfigError(f"{path}: {st.st_size:,} bytes; a campaign file is at most"
+                              f" {MAX_CAMPAIGN_BYTES:,} (is this the right file?)")
+        with open(path, "rb") as fh:
+            data = fh.read(MAX_CAMPAIGN_BYTES + 1)
+        if len(data) > MAX_CAMPAIGN_BYTES:
+            raise ConfigError(f"{path}: more than {MAX_CAMPAIGN_BYTES:,} bytes")
+        text = data.decode("utf-8")
     except (OSError, UnicodeDecodeError) as exc:
         raise ConfigError(f"{path}: cannot read campaign file: {exc}") from None
     return parse_campaign(text, str(path))
@@ -254,6 +286,10 @@ def _parse_base(table: dict[str, Any], source: str, errors: list[str]) -> ModelC
             errors.append(f"{source}: [base] {key} = {value!r}: unknown parameter"
                           f"{did_you_mean(key)} (the parameters: 'floewave run --help')")
             continue
+        problem = _magnitude_problem(key, value)
+        if problem:
+            errors.append(f"{source}: [base] {key} = {value!r}: {problem}")
+            continue
         try:
             ModelConfig(**{key: value})
         except (floewave.ConfigError, TypeError) as exc:
@@ -287,6 +323,10 @@ def _parse_sweep(table: dict[str, Any], base: ModelConfig | None, source: str,
             continue
         resolved = []
         for value in values:
+            problem = _magnitude_problem(key, value)
+            if problem:
+                errors.append(f"{source}: [sweep] {key} = {value!r}: {problem}")
+                continue
             try:
                 cfg = (base or ModelConfig()).replace(**{key: value})
             except (floewave.ConfigError, TypeError) as exc:

@@ -75,12 +75,14 @@ def check_launch(size: int, environ: dict[str, str] | None = None) -> None:
 def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_COMPUTE,
                  retry_failed: bool = False, extend: bool = False, comm: Any = None,
                  progress_bar: bool | None = None, command: str = "",
-                 point_timeout: float | None = None) -> RunSummary | None:
+                 point_timeout: float | None = None,
+                 verify: bool = False) -> RunSummary | None:
     """Run (or resume) ``campaign`` into the store at ``store_path``.
 
     With ``comm`` (an MPI communicator of size > 1) rank 0 is the master and the other
     ranks are workers (they return ``None``); otherwise the campaign runs in-process.
-    ``point_timeout`` [s] overrides ``[run] point_timeout`` (0: none).
+    ``point_timeout`` [s] overrides ``[run] point_timeout`` (0: none); ``verify``:
+    compare the store with its journal on opening (:class:`sweep.store.Store`).
     The workers' start-up is checked before the store is touched; stop signals are
     caught from before the store is opened (a stop during the open or its rebuild is
     honoured right after it: :class:`Interrupted`).
@@ -105,7 +107,8 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
                     compute=compute)
         summary = RunSummary(total=campaign.size, in_process=not mpi)
         with StopSignals(campaign.run.grace_period, in_process=not mpi) as signals:
-            store = Store(store_path, campaign, extend=extend, run_info=info)
+            store = Store(store_path, campaign, extend=extend, run_info=info,
+                          verify=verify)
             outcome = "complete"
             try:
                 if signals.requested:

@@ -28,11 +28,11 @@ from __future__ import annotations
 
 import contextlib
 import datetime as _dt
-import fcntl
 import json
 import os
+import time
 import zlib
-from collections.abc import Iterator
+from collections.abc import Container, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -156,6 +156,9 @@ class JournalScan:
     bad: list[tuple[int, int, str]] = field(default_factory=list)
     records: int = 0
     max_seq: int = -1
+    #: the highest run index a record or hand-out names (a rebuilt file's next run
+    #: continues from it)
+    max_run: int = -1
     legacy: int = 0  # records read without a checksum (journals of before version 2)
 
     @property
@@ -218,10 +221,11 @@ class Journal:
         except OSError as exc:
             raise StoreError(f"{path}: cannot open the journal: {exc.strerror or exc}"
                              ) from None
+        from .lock import KILLED_WRITER_WAIT, flock_waiting, holders_of
+
         try:
-            fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+            flock_waiting(fh.fileno(), time.monotonic() + KILLED_WRITER_WAIT)
         except BlockingIOError:
-            from .lock import holders_of
 
             pids = [p for p in holders_of(path) if p != os.getpid()]
             fh.close()
@@ -301,9 +305,17 @@ class Journal:
                 yield offset, line
                 offset += len(line)
 
-    def scan(self, model_version: str, statuses: tuple[str, ...]) -> JournalScan:
+    def scan(self, model_version: str, statuses: tuple[str, ...],
+             grid: Container[str] | None = None) -> JournalScan:
         """One pass over the journal: identity, last good record per point, hand-outs,
-        and the lines to set aside (with their reasons)."""
+        and the lines to set aside (with their reasons).
+
+        The last good record of a point is the one with the highest ``seq`` (not the
+        last in the file: a block of old lines appended again must not revert a point).
+        With ``grid`` (the hashes of the campaign's grid points), a record of any other
+        point after a campaign line is set aside too: a checksummed line of another
+        campaign (a journal of before version 2, without campaign lines, is checked
+        whole by :func:`sweep.campaign_check.check_legacy_journal`)."""
         out = JournalScan()
         for offset, line in self.lines():
             if not line.strip():
@@ -326,6 +338,8 @@ class Journal:
             if "handout" in obj:
                 h = obj["handout"]
                 if _is_hash(h):
+                    with contextlib.suppress(TypeError, ValueError):
+                        out.max_run = max(out.max_run, int(obj.get("run", -1)))
                     out.handouts.setdefault(h, []).append((int(obj.get("run", -1)),
                                                            int(obj.get("worker", -1)),
                                                            bool(obj.get("alone", False))))
@@ -336,11 +350,19 @@ class Journal:
                 continue
             row = obj["row"]
             h, seq = row["hash"], int(row["seq"])
+            if grid is not None and out.headers and h not in grid:
+                out.bad.append((offset, len(line), f"point {h[:12]} is not in this"
+                                " campaign's grid (a line of another campaign?)"))
+                continue
             out.records += 1
             out.legacy += not checked
             out.max_seq = max(out.max_seq, seq)
-            out.latest[h] = (seq, offset, str(row["status"]))
-            out.handouts.pop(h, None)
+            run = row.get("run")
+            if isinstance(run, int) and not isinstance(run, bool):
+                out.max_run = max(out.max_run, run)
+            if seq > out.latest.get(h, (-1,))[0]:  # by seq, not by file order
+                out.latest[h] = (seq, offset, str(row["status"]))
+                out.handouts.pop(h, None)
         return out
 
     def read(self, offsets: set[int] | None = None) -> Iterator[dict[str, Any]]:

@@ -24,14 +24,34 @@ import fcntl
 import json
 import os
 import socket
+import time
 from pathlib import Path
 from typing import Any
 
 from .errors import StoreError, StoreLockedError
 
-__all__ = ["Lock", "lock_path", "pid_alive", "holders_of"]
+__all__ = ["Lock", "lock_path", "pid_alive", "holders_of", "flock_waiting",
+           "KILLED_WRITER_WAIT"]
 
 _NO_FLOCK = {errno.ENOLCK, errno.EOPNOTSUPP, errno.ENOSYS, errno.EINVAL}
+
+
+#: [s] how long a held lock (or journal) is tried again before it is refused: a writer
+#: killed a moment ago releases its flocks within milliseconds.
+KILLED_WRITER_WAIT = 1.0
+
+
+def flock_waiting(fd: int, deadline: float) -> None:
+    """``flock(LOCK_EX | LOCK_NB)``, tried again every 20 ms until ``time.monotonic()``
+    reaches ``deadline`` (then :class:`BlockingIOError`)."""
+    while True:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            return
+        except BlockingIOError:
+            if time.monotonic() >= deadline:
+                raise
+            time.sleep(0.02)
 
 
 def lock_path(path: str | Path) -> Path:
@@ -105,11 +125,16 @@ class Lock:
                              ) from None
 
     def acquire(self) -> None:
-        """Take the lock or raise :class:`StoreLockedError` naming its holder."""
+        """Take the lock or raise :class:`StoreLockedError` naming its holder.
+
+        A held lock is tried again for :data:`KILLED_WRITER_WAIT` seconds first: a
+        writer killed a moment ago may still be exiting (the campaign process of a
+        ``sweep run`` whose guard got ``kill -9``, :mod:`sweep.guard`)."""
+        deadline = time.monotonic() + KILLED_WRITER_WAIT
         for _ in range(20):
             fd = self._open()
             try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                flock_waiting(fd, deadline)
             except BlockingIOError:
                 owner = os.pread(fd, 4096, 0).decode(errors="replace")
                 os.close(fd)
@@ -133,9 +158,17 @@ class Lock:
             self.stale_owner = _describe(os.pread(fd, 4096, 0).decode(errors="replace")) \
                 if os.fstat(fd).st_size else ""
             info = json.dumps(_identity()).encode()
-            os.ftruncate(fd, 0)
-            os.pwrite(fd, info, 0)
-            os.fsync(fd)
+            try:
+                os.ftruncate(fd, 0)
+                os.pwrite(fd, info, 0)
+                os.fsync(fd)
+            except OSError as exc:  # a full disk, a read-only or failing filesystem
+                os.close(fd)
+                full = exc.errno in (errno.ENOSPC, errno.EDQUOT)
+                raise StoreError(
+                    f"{self.path}: cannot write the lock file: {exc.strerror or exc}"
+                    + ("; free space and run the same command again (nothing was"
+                       " changed)" if full else "")) from None
             self.fd = fd
             return
         raise StoreError(f"{self.path}: the lock file keeps changing; is another writer"

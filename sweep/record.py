@@ -83,7 +83,7 @@ class Record:
         """A Record as stored: ``record`` (a Record or a dict of the same members)
         converted to the schema's kinds (:class:`sweep.writer.Unstorable` names a value
         that cannot be; a row without ``hash`` is unstorable)."""
-        from .writer import Unstorable, normalise_record
+        from .writer import Unstorable, check_profiles, normalise_record
 
         if isinstance(record, Record) and record.normal:
             return record
@@ -91,6 +91,7 @@ class Record:
                                else record.as_dict())
         if "hash" not in rec["row"]:
             raise Unstorable("no 'hash'")
+        check_profiles(rec["row"], rec["profiles"])
         return cls(rec["row"], rec["profiles"], rec["residual_history"], normal=True)
 
     @classmethod
@@ -171,11 +172,14 @@ def _row_of(point: Any, out: Mapping[str, Any], config: dict[str, Any] | None,
         try:
             if kind == "str":
                 row[name] = str(value)
-            elif kind == "int":
-                row[name] = (int(value) if value is not None and math.isfinite(value)
-                             else -1)
+            elif kind == "int":  # None or NaN: missing (-1); +-inf is no count
+                row[name] = (-1 if value is None or (isinstance(value, float)
+                                                     and math.isnan(value))
+                             else int(value))
             else:
                 row[name] = float(value) if value is not None else math.nan
+                if math.isinf(row[name]):  # NaN means "none"; infinity is no result
+                    raise ValueError("not finite")
         except (TypeError, ValueError, OverflowError):
             unusable.append(f"{name} = {str(value)[:40]!r}")
     try:

@@ -11,12 +11,22 @@ from __future__ import annotations
 import contextlib
 import signal
 import sys
+import time
 from typing import Any
 
-__all__ = ["StopSignals", "GraceExpired", "MAX_TIMER"]
+__all__ = ["StopSignals", "GraceExpired", "MAX_TIMER", "REPEAT_WINDOW"]
 
 #: Longest interval [s] given to ``setitimer`` (larger values overflow it).
 MAX_TIMER = 1e7
+#: [s] the same stop signal again within this time is the same request: a signal sent
+#: to the process group reaches the campaign and its guard, which forwards it
+#: (:mod:`sweep.guard`); a second Ctrl-C a person types comes later than this.
+REPEAT_WINDOW = 0.25
+
+
+#: Set once a campaign's :class:`StopSignals` are done (the run is over, whatever its
+#: outcome): a stop signal after that has nothing left to stop (``sweep.cli`` records it).
+campaign_over = False
 
 
 class GraceExpired(BaseException):
@@ -32,6 +42,7 @@ class StopSignals:
         self.in_process = in_process
         self.active = True
         self._old: dict[int, Any] = {}
+        self._last: tuple[int, float] = (0, -1.0)
 
     def __enter__(self) -> StopSignals:
         for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1):
@@ -51,6 +62,10 @@ class StopSignals:
 
     def _handle(self, signum: int, frame: Any) -> None:
         name = signal.Signals(signum).name
+        now = time.monotonic()
+        last, self._last = self._last, (signum, now)
+        if last[0] == signum and now - last[1] < REPEAT_WINDOW:
+            return  # the same request delivered twice (group and guard)
         if not self.active:
             self.requested = self.requested or name
             return
@@ -68,6 +83,8 @@ class StopSignals:
             raise GraceExpired("grace period")
 
     def __exit__(self, *exc: Any) -> None:
+        global campaign_over
+        campaign_over = True
         if self.in_process:
             with contextlib.suppress(ValueError):
                 signal.setitimer(signal.ITIMER_REAL, 0)

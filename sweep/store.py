@@ -39,6 +39,7 @@ import re
 import signal
 import stat
 import sys
+import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -46,7 +47,7 @@ from typing import Any
 import numpy as np
 
 from .campaign_check import check_campaign, check_legacy_journal
-from .errors import SchemaVersionError, StoreError
+from .errors import SchemaVersionError, StoreError, StoreLockedError
 from .journal import BadLine, Journal, JournalScan, decode, encode, journal_path, rejected_path
 from .lock import Lock, lock_path
 from .reader import text
@@ -71,7 +72,11 @@ _DEFERRED_SIGNALS = {signal.SIGINT, signal.SIGTERM, signal.SIGUSR1, signal.SIGAL
 #: Errors h5py raises for a file it cannot read (besides OSError).
 _H5_ERRORS = (OSError, RuntimeError, ValueError, KeyError, TypeError, IndexError)
 #: HDF5 messages that mean "in use", not "damaged".
-_IN_USE = re.compile(r"lock|already open|temporarily unavailable|in use", re.I)
+_IN_USE = re.compile(r"\block|already open|temporarily unavailable|\bin use\b", re.I)
+#: (HDF5's damage messages name its "sblock" (superblock): "lock" only as a word.)
+#: Longest store file name [bytes]: NAME_MAX (255) less what the names beside it add
+#: (".NAME.journal.rewrite-<pid>.tmp").
+_MAX_NAME = 255 - 32
 #: Journal records written per batch while rebuilding or replaying.
 _REPLAY_BATCH = 256
 
@@ -145,6 +150,19 @@ def _check_space(path: Path, needed: int, doing: str) -> None:
                          " command again")
 
 
+def _grid_hashes(campaign: Any) -> frozenset[str] | None:
+    """The hashes of every point of ``campaign``'s grid (all shards: a shard's store may
+    hold points of the others after a merge); ``None`` without a campaign. An
+    ``--extend``-ed campaign's grid holds every grid of its history."""
+    if campaign is None:
+        return None
+    if getattr(campaign, "shard_of", None) is not None:
+        import dataclasses
+
+        campaign = dataclasses.replace(campaign, shard_of=None)
+    return frozenset(p.hash for p in campaign.points())
+
+
 def _json(text: str) -> dict[str, Any]:
     import json
 
@@ -165,6 +183,9 @@ class Store:
         ``<path>.lock`` and :class:`sweep.journal.Journal` of ``<path>.journal``.
     report : called with one line per notable event of the open (set-aside lines,
         rebuilds, damaged files kept aside); default: printed to stderr.
+    verify : compare a clean file with the journal's checksummed records
+        (:func:`sweep.verify.differences`); a file whose values differ is damaged
+        (bit rot) and rebuilt from the journal, kept aside first.
 
     Raises
     ------
@@ -174,8 +195,19 @@ class Store:
     def __init__(self, path: str | Path, campaign: Any = None, *, extend: bool = False,
                  run_info: dict[str, Any] | None = None, lock: Any = None,
                  journal: Journal | None = None,
-                 report: Callable[[str], None] | None = None) -> None:
-        self.path = Path(path)
+                 report: Callable[[str], None] | None = None, verify: bool = False) -> None:
+        self._verify = verify
+        if len(os.fsencode(Path(path).name)) > _MAX_NAME:
+            raise StoreError(f"{str(path)[:200]}...: the store's file name is too long (at"
+                             f" most {_MAX_NAME} bytes: the journal and temporary files"
+                             " beside it add to it)")
+        if os.path.islink(path) and not os.path.exists(path):
+            raise StoreError(f"{path}: a symbolic link to nothing; remove it or use"
+                             " another --store")
+        # the file reached, not the name given: a symlink and its target are one store
+        # (one lock, one journal); hard links are caught by the flock on the file itself
+        self.path = Path(os.path.realpath(path))
+        self._inode_fd: int | None = None
         self.journal = journal or Journal(journal_path(self.path), rejected_path(self.path))
         self.journal_path = self.journal.path
         self._lock = lock or Lock(lock_path(self.path))
@@ -190,7 +222,16 @@ class Store:
         self._staged: list[Record] = []
         self._lines: list[bytes] = []
         self.scan = JournalScan()
+        self._grid: frozenset[str] | None = None
         parent = self.path.parent
+        try:
+            parent.stat()
+        except FileNotFoundError:
+            pass
+        except OSError as exc:  # a name too long, a loop of symlinks...
+            shown = str(path) if len(str(path)) <= 200 else f"{str(path)[:200]}..."
+            raise StoreError(f"{shown}: cannot use this path: {exc.strerror or exc}"
+                             ) from None
         if not parent.is_dir():
             raise StoreError(f"{self.path}: directory {parent} does not exist")
         if not os.access(parent, os.W_OK | os.X_OK):
@@ -219,10 +260,13 @@ class Store:
         if journal.exists():
             journal.open_for_append()  # the second guard against two writers
         self._remove_stale_temps()
+        if self.path.is_file():
+            self._hold_file(self.path)
         self.model_version = (_json(campaign_json)["model_version"]
                               if (campaign_json := self._campaign_json(campaign))
                               else floewave.MODEL_VERSION)
-        scan = journal.scan(self.model_version, STATUSES)
+        self._grid = _grid_hashes(campaign)
+        scan = journal.scan(self.model_version, STATUSES, self._grid)
         state, info = self._inspect(scan)
         if campaign is None and state != "ok":
             raise StoreError(f"{self.path}: no usable store here")
@@ -240,6 +284,8 @@ class Store:
         if scan.bad:
             self._set_aside(scan.bad)
             scan = self.scan
+        if self._verify and state == "ok" and self.scan.records:
+            state, info = self._verified(state, info)
         if state == "damaged" and not scan.records:
             raise StoreError(f"{self.path}: damaged ({info['why']}) and its journal holds no"
                              " record to rebuild it from; the file was left as it is")
@@ -364,12 +410,36 @@ class Store:
             return "unclean", info
         return "ok", info
 
+    def _verified(self, state: str, info: dict[str, Any]) -> tuple[str, dict[str, Any]]:
+        """``--verify``: the clean file against the journal. Values that differ make it
+        damaged (rebuilt from the journal), unless it holds points the journal lacks
+        (a rebuild would drop them: they are journaled first, the next --verify
+        rebuilds)."""
+        from .verify import differences
+
+        try:
+            found, _, missing = differences(self.path, self.journal)
+        except _H5_ERRORS as exc:
+            return "damaged", {"why": f"cannot be compared with its journal:"
+                                      f" {type(exc).__name__}: {exc}"}
+        if not found:
+            self._note(f"{self.path}: verified: every stored value is its journal's")
+            return state, info
+        if missing:
+            self._note(f"{self.path}: {len(found)} value(s) differ from the journal (e.g."
+                       f" {found[0]}) but {len(missing)} stored point(s) are not in it:"
+                       " not rebuilt now (they are journaled first; run --verify again)")
+            return state, info
+        return "damaged", {"why": f"{len(found)} value(s) differ from the journal's"
+                                  f" checksummed records, e.g. {found[0]}"}
+
     def _set_aside(self, bad: list[tuple[int, int, str]]) -> None:
         try:
             self.journal.set_aside(bad)
         except OSError as exc:
             raise _oserror(self.journal.path, exc, "setting journal lines aside") from None
-        self.scan = self.journal.scan(self.model_version, STATUSES)  # offsets moved
+        # offsets moved
+        self.scan = self.journal.scan(self.model_version, STATUSES, self._grid)
         reasons: dict[str, int] = {}
         for _, _, reason in bad:
             reasons[reason] = reasons.get(reason, 0) + 1
@@ -389,6 +459,7 @@ class Store:
             w = H5Writer.create(tmp, campaign)
             w.prepare()
             quarantined = self._write_records(w, {off for _, off, _ in scan.latest.values()})
+            self._copy_runs(w.file)
             w.trim()
             w.file.attrs["rebuilt_from_journal"] = utc_now()
             w.durable()
@@ -403,6 +474,7 @@ class Store:
                 except OSError:
                     os.replace(self.path, aside)
                 self.damaged_kept = str(aside)
+            self._hold_file(tmp)  # the new file is held before it has the store's name
             os.replace(tmp, self.path)
             fsync_dir(self.path)
         except BaseException as exc:
@@ -424,6 +496,25 @@ class Store:
                        f" from the journal ({n} points)")
         elif n:
             self._note(f"{self.path}: missing; rebuilt from the journal ({n} points)")
+
+    def _copy_runs(self, new: Any) -> None:
+        """Keep the ``/runs`` history of the file being rebuilt, when it can be read
+        (an unclean file; a damaged one may not be); a run still "running" there died."""
+        import h5py
+
+        if not self.path.is_file():
+            return
+        try:
+            with h5py.File(self.path, "r", locking=False) as old:
+                if "runs" not in old:
+                    return
+                for name in old["runs"]:
+                    old.copy(old["runs"][name], new["runs"], name=name)
+                    g = new["runs"][name]
+                    if text(g.attrs.get("outcome", "")) == "running":
+                        g.attrs["outcome"] = "died (its writer did not close the store)"
+        except _H5_ERRORS:
+            pass  # the history is lost with the damaged file (kept aside)
 
     def _write_records(self, w: H5Writer, offsets: set[int]) -> int:
         """Write the journal records at ``offsets``; set aside those that cannot be
@@ -454,6 +545,7 @@ class Store:
             tmp = self.path.with_name(f".{self.path.name}.rebuild-{os.getpid()}.tmp")
             H5Writer.create(tmp, campaign).close()
             fsync_path(tmp)
+            self._hold_file(tmp)
             os.replace(tmp, self.path)
             fsync_dir(self.path)
         _check_space(self.path, 0, "opening the store")
@@ -497,7 +589,7 @@ class Store:
             raise _oserror(self.journal.path, exc, "writing the journal") from None
         self._note(f"{self.journal.path}: {len(missing)} stored point(s) were not in the"
                    " journal (removed or older than it); journaled again from the store")
-        self.scan = self.journal.scan(self.model_version, STATUSES)
+        self.scan = self.journal.scan(self.model_version, STATUSES, self._grid)
 
     def _migrate(self, f: Any) -> None:
         version = int(f.attrs.get("schema_version", 0))
@@ -513,7 +605,10 @@ class Store:
     def _start_run(self, info: dict[str, Any]) -> int:
         assert self.w is not None
         runs = self.w.file.require_group("runs")
-        index = len(runs)
+        # after the last run the file or the journal knows of (a rebuild from the
+        # journal alone, its old file unreadable, must not start again at 0)
+        index = max(len(runs), max((int(n) for n in runs if n.isdigit()), default=-1) + 1,
+                    self.scan.max_run + 1)
         g = runs.create_group(str(index))
         g.attrs["started"] = utc_now()
         g.attrs["outcome"] = "running"
@@ -641,10 +736,64 @@ class Store:
             self.w.close()
             self.w = None
 
+    def _hold_file(self, path: Path) -> None:
+        """Write-lock the store file itself (its inode) for as long as this writer has
+        it: a second writer reaching the same file under another name (a hard link) is
+        refused. The lock file and journal are named after the path, which a hard link
+        does not share (a symlink is resolved before: ``os.path.realpath``).
+
+        An open-file-description lock (``F_OFD_SETLK``, Linux), not ``flock``: HDF5
+        readers that use their file locking take a shared ``flock`` of the file, and
+        must still be able to read it during a run; and unlike a POSIX ``lockf`` it is
+        not dropped when h5py closes another descriptor of the file in this process.
+        Where it is not available (not Linux, ``ENOLCK``...) hard links are not caught.
+        """
+        import errno
+        import fcntl
+        import struct
+
+        from .lock import KILLED_WRITER_WAIT
+
+        cmd = getattr(fcntl, "F_OFD_SETLK", None)
+        if cmd is None:
+            return
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CLOEXEC | os.O_NOFOLLOW)
+        except OSError:
+            return  # _inspect says why the path cannot be used
+        arg = struct.pack("hhqqi4x", fcntl.F_WRLCK, os.SEEK_SET, 0, 0, 0)
+        deadline = time.monotonic() + KILLED_WRITER_WAIT
+        while True:
+            try:
+                fcntl.fcntl(fd, cmd, arg)
+                break
+            except OSError as exc:
+                if exc.errno in (errno.EAGAIN, errno.EACCES) and time.monotonic() < deadline:
+                    time.sleep(0.02)  # a writer killed a moment ago may still be exiting
+                    continue
+                os.close(fd)
+                if exc.errno in (errno.EAGAIN, errno.EACCES):
+                    raise StoreLockedError(
+                        f"{self.path}: the file is being written by another live campaign"
+                        " under another name (a hard link to it?); wait for it to finish"
+                        " or stop it first") from None
+                return  # no such lock on this filesystem
+        old, self._inode_fd = self._inode_fd, fd
+        if old is not None:
+            with contextlib.suppress(OSError):
+                os.close(old)
+
+    def _release_file(self) -> None:
+        if self._inode_fd is not None:
+            with contextlib.suppress(OSError):
+                os.close(self._inode_fd)
+            self._inode_fd = None
+
     def _abandon(self) -> None:
         """Close everything without marking the file clean (an error on open)."""
         self._close_writer()
         self.journal.close()
+        self._release_file()
         self._lock.release()
 
     def close(self, outcome: str = "complete") -> None:
@@ -669,6 +818,7 @@ class Store:
                         pass  # left unclean: rebuilt from the journal next time
                 self._close_writer()
             self.journal.close()
+            self._release_file()
             self._lock.release()
 
     def __enter__(self) -> Store:

@@ -19,7 +19,8 @@ from floewave import ModelConfig
 
 __all__ = ["fake_point", "raising_point", "nan_point", "trivial_point", "sleepy_point",
            "power_point", "faulty_point", "crashing_point", "stuck_point",
-           "sleepy_trivial_point", "POWER_M"]
+           "sleepy_trivial_point", "exiting_point", "c_exit_point", "misfit_point",
+           "stdout_closing_point", "stubborn_point", "POWER_M"]
 
 
 #: ``[base]`` of the small real campaigns of the kill/resume tests (torture, Slurm): 4 or
@@ -219,3 +220,66 @@ def sleepy_trivial_point(cfg: ModelConfig) -> dict[str, Any]:
     """:func:`trivial_point` after 2 ms (a steady stream of commits: reader tests)."""
     time.sleep(0.002)
     return trivial_point(cfg)
+
+
+def exiting_point(cfg: ModelConfig) -> dict[str, Any]:
+    """:func:`fake_point`, but the process ends with status 0 (``os._exit(0)``) for
+    eps = 0.4: no handler runs, as for a C ``_exit(0)``."""
+    import os
+
+    if cfg.eps == 0.4:
+        os._exit(0)
+    return fake_point(cfg)
+
+
+def c_exit_point(cfg: ModelConfig) -> dict[str, Any]:
+    """:func:`fake_point`, but the C library's ``exit(0)`` ends the process for
+    eps = 0.4 (a model library's ``exit(0)`` or Fortran ``STOP``: C atexit handlers run,
+    Python's do not)."""
+    if cfg.eps == 0.4:
+        import ctypes
+
+        ctypes.CDLL(None).exit(0)
+    return fake_point(cfg)
+
+
+def misfit_point(cfg: ModelConfig) -> dict[str, Any]:
+    """:func:`fake_point` with output the schema cannot hold, by eps: 0.1 a profile 'a'
+    of 3 values, 0.2 a 'gap_mean' of 10**6, 0.3 a complex 'F_w_mean', 0.4
+    alpha_all = inf, 0.5 iterations = -inf."""
+    out = fake_point(cfg)
+    if cfg.eps == 0.1:
+        out["a"] = out["a"][:3]
+    elif cfg.eps == 0.2:
+        out["gap_mean"] = np.zeros(10 ** 6)
+    elif cfg.eps == 0.3:
+        out["F_w_mean"] = out["F_w_mean"] * (1 + 1j)
+    elif cfg.eps == 0.4:
+        out["alpha_all"] = np.inf
+    elif cfg.eps == 0.5:
+        out["iterations"] = -np.inf
+    return out
+
+
+def stdout_closing_point(cfg: ModelConfig) -> dict[str, Any]:
+    """:func:`fake_point`, but eps = 0.4 closes ``sys.stdout`` and descriptor 1 first (a
+    model library that closes its output)."""
+    if cfg.eps == 0.4:
+        import os
+        import sys
+
+        sys.stdout.close()
+        os.close(1)
+    return fake_point(cfg)
+
+
+def stubborn_point(cfg: ModelConfig) -> dict[str, Any]:
+    """:func:`fake_point`, but eps = 0.4 swallows everything, its timeout included
+    (``except BaseException`` in a loop), and never returns."""
+    if cfg.eps == 0.4:
+        while True:
+            try:
+                time.sleep(3600)
+            except BaseException:  # noqa: BLE001, S110 - the point under test does this
+                pass
+    return fake_point(cfg)

@@ -34,7 +34,7 @@ from .store import utc_now
 from .warmup import warm_up
 
 __all__ = ["DEFAULT_COMPUTE", "MODEL_STATUSES", "resolve_compute", "compute_point",
-           "worker_loop"]
+           "compute_in_child", "worker_loop"]
 
 DEFAULT_COMPUTE = "floewave:run_point"
 MODEL_STATUSES = floewave.results.STATUSES
@@ -108,6 +108,8 @@ def resolve_compute(spec: str) -> Callable[[ModelConfig], Any]:
         fn = importlib.import_module(module)
         for part in name.split("."):
             fn = getattr(fn, part)
+    except SweepError:  # a stop signal during the import (Interrupted) is not bad input
+        raise
     except Exception as exc:  # noqa: BLE001 - ImportError, AttributeError, its own errors
         raise ConfigError(f"--compute {spec!r}: cannot import it: {type(exc).__name__}:"
                           f" {exc}") from None
@@ -138,6 +140,11 @@ def compute_point(task: dict[str, Any], fn: Callable[[ModelConfig], Any],
         else:
             result = fn(cfg)
         data = result.to_dict() if hasattr(result, "to_dict") else dict(result)
+        complex_ = [k for k in (*PROFILE_VARS, *REPLICA_VARS, "residual_history")
+                    if k in data and np.iscomplexobj(data[k])]
+        if complex_:  # np.asarray(..., float64) would drop the imaginary part
+            raise TypeError("complex values in " + ", ".join(complex_) + " (the schema"
+                            " holds real numbers)")
         profiles = {k: np.asarray(data[k], dtype=np.float64)
                     for k in (*PROFILE_VARS, *REPLICA_VARS) if k in data}
         out["profiles"] = profiles
@@ -176,6 +183,98 @@ def compute_point(task: dict[str, Any], fn: Callable[[ModelConfig], Any],
                           f" pid {os.getpid()})\n{traceback.format_exc()}")
     out.update(host=host(), rank=rank, pid=os.getpid(), start_time=start_wall,
                end_time=utc_now(), wall_time=time.perf_counter() - t0)
+    return out
+
+
+#: In-process, a point with a ``point_timeout`` runs in a child process killed this long
+#: after its limit if it has not returned (its soft timeout ignored, as by a point that
+#: catches ``BaseException`` in a loop): max(_CHILD_MARGIN, 5 % of the limit) [s].
+_CHILD_MARGIN = float(os.environ.get("SWEEP_CHILD_MARGIN", "1.0"))
+
+
+def compute_in_child(task: dict[str, Any], fn: Callable[[ModelConfig], Any],
+                     rank: int = 0) -> dict[str, Any]:
+    """:func:`compute_point` in a forked child process (in-process runs with a
+    ``point_timeout``): the child is killed a margin after the limit if it has not
+    returned, so a point that ignores its timeout is ``timeout`` in this run; a child
+    that dies (``os._exit``, a crash) makes the point ``crashed`` in this run. The
+    campaign's process is never at the point's mercy. Stop signals are the parent's: the
+    child ignores them; a :class:`GraceExpired` in the parent kills the child."""
+    import pickle
+    import select
+    import sys
+
+    limit = float(task.get("timeout") or 0.0)
+    hard = limit + max(_CHILD_MARGIN, 0.05 * limit)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    r, w = os.pipe()
+    start_wall, t0 = utc_now(), time.perf_counter()
+    pid = os.fork()
+    if pid == 0:  # the child: compute, send, leave without any of the parent's exit work
+        code = 0
+        try:
+            os.close(r)
+            for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1):
+                signal.signal(sig, signal.SIG_IGN)
+            with contextlib.suppress(Exception):
+                import ctypes
+
+                ctypes.CDLL(None).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+            data = pickle.dumps(compute_point(task, fn, rank), pickle.HIGHEST_PROTOCOL)
+            view = memoryview(data)
+            while view:
+                view = view[os.write(w, view):]
+        except BaseException:  # noqa: BLE001 - the parent says what happened
+            code = 1
+        finally:
+            with contextlib.suppress(Exception):
+                sys.stdout.flush()
+                sys.stderr.flush()
+            os._exit(code)
+    os.close(w)
+    chunks: list[bytes] = []
+    killed = False
+    try:
+        deadline = time.monotonic() + hard
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                os.kill(pid, signal.SIGKILL)
+                killed = True
+                break
+            ready, _, _ = select.select([r], [], [], min(left, 1.0))
+            if ready:
+                chunk = os.read(r, 1 << 20)
+                if not chunk:
+                    break
+                chunks.append(chunk)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.kill(pid, signal.SIGKILL)
+        raise
+    finally:
+        os.close(r)
+        _, status = os.waitpid(pid, 0)
+    out: dict[str, Any] = {"hash": task["hash"], "scalars": {}, "profiles": {},
+                           "residual_history": np.zeros(0)}
+    where = f"rank {rank}, host {host()}, pid {pid}"
+    if chunks and not killed:
+        try:
+            return pickle.loads(b"".join(chunks))
+        except Exception:  # noqa: BLE001 - a torn result: the child died writing it
+            pass
+    if killed:
+        out.update(status="timeout", message=f"ran longer than point_timeout = {limit:g} s"
+                   f" and did not stop: its process was killed after {hard:g} s ({where})")
+    else:
+        how = (f"by signal {signal.Signals(os.WTERMSIG(status)).name}"
+               if os.WIFSIGNALED(status) else
+               f"with status {os.waitstatus_to_exitcode(status)}")
+        out.update(status="crashed", message=f"its process ended {how} while computing it,"
+                   f" without a result (a crash, or exit() in the model) ({where})")
+    out.update(host=host(), rank=rank, pid=pid, start_time=start_wall, end_time=utc_now(),
+               wall_time=time.perf_counter() - t0)
     return out
 
 

@@ -32,8 +32,8 @@ from .schema import (
     profile_path,
 )
 
-__all__ = ["H5Writer", "Unstorable", "normalise_record", "HDF5_SIGNATURE", "fsync_path",
-           "fsync_dir"]
+__all__ = ["H5Writer", "Unstorable", "normalise_record", "check_profiles", "HDF5_SIGNATURE",
+           "fsync_path", "fsync_dir"]
 
 HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 _STR = h5py.string_dtype("utf-8")
@@ -43,6 +43,9 @@ _NP_DTYPES = {"float": np.float64, "int": np.int64, "str": object}
 _TABLE_CHUNK = 1024
 _BY_NAME = {c.name: c for c in COLUMNS}
 _I64 = (-(2 ** 63), 2 ** 63 - 1)
+#: Statuses stored without profiles (every other status has each of PROFILE_VARS, of
+#: length n_floes: what `sweep validate` checks).
+_NO_PROFILES = ("failed", "invalid", "crashed", "timeout")
 
 
 class Unstorable(ValueError):
@@ -68,8 +71,10 @@ def _convert(kind: str, name: str, value: Any) -> Any:
     try:
         if kind == "float":
             return float(value)
-        if isinstance(value, float) and not math.isfinite(value):
-            return -1
+        if isinstance(value, float) and math.isnan(value):
+            return -1  # missing
+        if isinstance(value, float) and math.isinf(value):
+            raise Unstorable(f"{name} = {value!r} is not a finite integer")
         v = int(value)
     except (TypeError, ValueError, OverflowError) as exc:
         raise Unstorable(f"{name} = {str(value)[:60]!r}: {exc}") from None
@@ -100,6 +105,9 @@ def normalise_record(record: dict[str, Any]) -> dict[str, Any]:
         row[name] = col.fill if value is None else _convert(col.kind, name, value)
     profiles = {}
     for name, value in (record.get("profiles") or {}).items():
+        if np.iscomplexobj(value):
+            raise Unstorable(f"profile {name}: complex values (the schema holds real"
+                             " numbers)")
         try:
             arr = np.asarray(value, dtype=np.float64)
         except (TypeError, ValueError, OverflowError) as exc:
@@ -118,11 +126,30 @@ def normalise_record(record: dict[str, Any]) -> dict[str, Any]:
         if arr.ndim > 1:
             raise Unstorable(f"profile {name}: {arr.ndim}-D, expected 1-D")
         profiles[str(name)] = arr.reshape(-1)
+
+    if np.iscomplexobj(record.get("residual_history", ())):
+        raise Unstorable("residual_history: complex values")
     try:
         hist = np.asarray(record.get("residual_history", ()), dtype=np.float64).reshape(-1)
     except (TypeError, ValueError, OverflowError) as exc:
         raise Unstorable(f"residual_history: {exc}") from None
     return {"row": row, "profiles": profiles, "residual_history": hist}
+
+
+def check_profiles(row: dict[str, Any], profiles: dict[str, np.ndarray]) -> None:
+    """Refuse (:class:`Unstorable`) a point whose status has profiles (all but failed,
+    invalid, crashed, timeout) without each of PROFILE_VARS of length ``n_floes``: what
+    ``sweep validate`` checks of a stored point."""
+    if row.get("status") in _NO_PROFILES:
+        return
+    n = row.get("n_floes")
+    for name in PROFILE_VARS:
+        if name not in profiles:
+            raise Unstorable(f"profile {name}: missing (a {row.get('status')} point has"
+                             " every profile)")
+        if not (isinstance(n, int) and n >= 1) or profiles[name].shape != (n,):
+            raise Unstorable(f"profile {name}: {profiles[name].size} values, expected"
+                             f" n_floes = {n}")
 
 
 def _cell(col: Any, row: dict[str, Any]) -> Any:

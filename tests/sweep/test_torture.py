@@ -170,6 +170,11 @@ def compare(ref: Path, store: Path) -> dict[str, Any]:
                 continue
             if name in fa:
                 for var in (*PROFILE_VARS, *REPLICA_VARS, HISTORY_VAR[0]):
+                    if var not in fa[name] and var not in fb[name]:
+                        continue  # optional (the per-replica profiles of schema 3)
+                    if (var in fa[name]) != (var in fb[name]):
+                        problems.append(f"{h[:12]} profile {var} in only one store")
+                        continue
                     x, y = fa[name][var][()], fb[name][var][()]
                     if x.shape != y.shape or not np.array_equal(x, y, equal_nan=True):
                         problems.append(f"{h[:12]} profile {var} differs")
