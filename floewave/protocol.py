@@ -44,9 +44,11 @@ from ._march import march_coefficients
 from .config import ModelConfig
 from .ensemble import Records, coefficients, estimate_point, mean_coefficients, stderr, zone_of
 from .errors import NumericalError
+from .transient import drag_time, transient_windows
 from .window import FIELDS, Window
 
-__all__ = ["confined_profile", "mser_truncation", "iterate_stationary"]
+__all__ = ["confined_profile", "mser_truncation", "iterate_stationary", "drag_time",
+           "transient_windows"]
 
 
 def confined_profile(cfg: ModelConfig, x: np.ndarray, alpha_c: float) -> np.ndarray:
@@ -88,30 +90,6 @@ def halves_z(Y: np.ndarray, floor: float) -> float:
     D = Y[:h].mean(axis=0) - Y[n - h:].mean(axis=0)
     se = float(D.std(ddof=1) / np.sqrt(R)) if R > 1 else 0.0
     return float(D.mean() / max(se, floor))
-
-
-def drag_time(cfg: ModelConfig, k: float) -> float:
-    """tau_d = (1 + C_m) m / (rho_w C_sd L_y L_x u_w0) [s]: the time in which skin drag
-    (eq. 15, linearised about the orbital velocity u_w0 = a0 omega / tanh kh) relaxes a
-    floe's drift. The slowest transients seen are of this order (C_sd 0.005: tau_d about
-    80 s, a far-end amplitude still swinging by 0.05 a0 over the first 75 periods);
-    inf without drag."""
-    u_w0 = cfg.a0 * cfg.omega / np.tanh(k * cfg.h)
-    rate = cfg.rho_w * cfg.C_sd * cfg.L_y * cfg.L_x * u_w0
-    return float((1.0 + cfg.C_m) * cfg.mass / rate) if rate > 0 else float("inf")
-
-
-def transient_windows(cfg: ModelConfig, k: float) -> int:
-    """The fewest windows discarded as transient: ``transient_min``, or
-    ``transient_drag_times`` tau_d (:func:`drag_time`) when longer, at most half of
-    ``max_iterations`` (a function of the configuration alone)."""
-    tau = drag_time(cfg, k) * cfg.transient_drag_times
-    n = cfg.transient_min
-    if np.isfinite(tau):
-        n = max(n, int(np.ceil(tau / (cfg.nT * cfg.T))))
-    else:
-        n = cfg.max_iterations
-    return int(min(n, cfg.max_iterations // 2))
 
 
 class _Windows:

@@ -249,7 +249,7 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
-    from .config import DEFAULT_EXPECTED_ITERATIONS, load_campaign
+    from .config import DEFAULT_EXPECTED_ITERATIONS, EXTRA_WINDOWS, load_campaign
     from .plan import plan
 
     campaign = load_campaign(args.config)  # a SweepError is reported by main
@@ -258,7 +258,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
     invalid, cost, how = projected.invalid_points, projected.floe_steps, projected.calibration
     hours, mean_rate = projected.core_hours, projected.floe_steps_per_s
     assumed = campaign.run.expected_iterations or (
-        f"min(max_iterations, {DEFAULT_EXPECTED_ITERATIONS})")
+        f"stationary protocol: each point's transient + n_average + {EXTRA_WINDOWS}; else"
+        f" min(max_iterations, {DEFAULT_EXPECTED_ITERATIONS})")
     out = {"config": str(args.config), "points": len(points), "invalid_points": invalid,
            "swept": {k: list(v) for k, v in campaign.sweep.items()},
            "floe_steps": cost, "floe_steps_per_s": mean_rate, "core_hours": hours,

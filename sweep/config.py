@@ -24,8 +24,9 @@ from pathlib import Path
 from typing import Any
 
 import floewave
-from floewave import ModelConfig
+from floewave import ModelConfig, solve_dispersion
 from floewave._help import did_you_mean
+from floewave.transient import transient_windows
 
 from .errors import ConfigError
 from .identity import canonical_json, point_hash, sha256_hex
@@ -33,13 +34,18 @@ from .identity import canonical_json, point_hash, sha256_hex
 __all__ = ["Campaign", "Point", "RunOptions", "load_campaign", "parse_campaign",
            "DEFAULT_EXPECTED_ITERATIONS"]
 
-#: Iterations (windows) assumed per point for cost estimates when ``[run]
-#: expected_iterations`` is not given. Measured with model version 6's stationary protocol
-#: (2026-12-02): mean 14.8 on ``benchmarks/plan_check.py --n 32 --seed 7``'s sample (every
-#: point at or near the minimum of transient_min + n_average = 14) and 17.1 over the 64
-#: production runs of ``benchmarks/honesty.py --reference --random 24`` (2 of them ran to
-#: max_iterations = 100: a heavy tail that makes small samples scatter).
-DEFAULT_EXPECTED_ITERATIONS = 16
+#: Iterations assumed per point for cost estimates when ``[run] expected_iterations`` is not
+#: given and the point's own minimum is not known (the ``noise_floor`` protocol; a point
+#: whose dispersion relation has no root). Model version 5's protocol: mean 21.8 on 128
+#: random paper-grid points.
+DEFAULT_EXPECTED_ITERATIONS = 22
+#: Windows a ``stationary`` point runs beyond its minimum (the transient of
+#: ``floewave.protocol.transient_windows`` plus ``n_average``), for cost estimates. Measured
+#: with model version 6 (2026-12-02): mean 9.5 on ``benchmarks/plan_check.py --n 32 --seed
+#: 7``'s sample and 5.5 over the 64 runs of ``benchmarks/honesty.py --reference --random
+#: 24`` (most points stop at the minimum; a few run 8-30 windows more, 2 of 96 to the cap).
+EXTRA_WINDOWS = 7
+
 #: Most floes accepted in a sheet (L_sheet / L_x); the paper's largest is a few hundred.
 MAX_FLOES = 1_000_000
 #: Longest time [s] accepted for a ``[run]`` duration (a year).
@@ -138,9 +144,28 @@ class Campaign:
         return sha256_hex(canonical_json(self.definition()))
 
     def expected_iterations(self, cfg: ModelConfig) -> int:
-        """Iterations assumed for ``cfg`` in cost estimates."""
-        n = self.run.expected_iterations or DEFAULT_EXPECTED_ITERATIONS
-        return min(cfg.max_iterations, n)
+        """Iterations assumed for ``cfg`` in cost estimates: ``[run] expected_iterations``
+        if given; for the ``stationary`` protocol the point's own minimum (its transient,
+        which grows as 1/C_sd, plus ``n_average``) plus :data:`EXTRA_WINDOWS`; else
+        :data:`DEFAULT_EXPECTED_ITERATIONS`. At most ``max_iterations``."""
+        n = self.run.expected_iterations
+        if not n and cfg.protocol == "stationary" and not cfg.confined:
+            k = self._wavenumber(cfg)
+            if k is not None:
+                n = transient_windows(cfg, k) + cfg.n_average + EXTRA_WINDOWS
+        return min(cfg.max_iterations, n or DEFAULT_EXPECTED_ITERATIONS)
+
+    def _wavenumber(self, cfg: ModelConfig) -> float | None:
+        """k of eq. 6 for ``cfg`` (None without a root), solved once per distinct wave and
+        ice (the grid has few)."""
+        key = (cfg.dispersion, cfg.T, cfg.h, cfg.h_i, cfg.rho_i, cfg.rho_w, cfg.E, cfg.nu)
+        cache = self.__dict__.setdefault("_k_cache", {})
+        if key not in cache:
+            try:
+                cache[key] = solve_dispersion(cfg)[0]
+            except ValueError:
+                cache[key] = None
+        return cache[key]
 
     def points(self) -> list[Point]:
         """Expand the grid (product in SWEPT_FIELDS order), with hashes and costs."""

@@ -5,10 +5,11 @@ from pathlib import Path
 import pytest
 
 import floewave
-from floewave import ModelConfig
+from floewave import ModelConfig, solve_dispersion
+from floewave.transient import transient_windows
 from sweep import ConfigError, load_campaign, parse_campaign
 from sweep.cli import main
-from sweep.config import DEFAULT_EXPECTED_ITERATIONS
+from sweep.config import DEFAULT_EXPECTED_ITERATIONS, EXTRA_WINDOWS
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 MINIMAL = "[sweep]\neps = [0.2, 0.6]\n"
@@ -67,8 +68,20 @@ def test_grid_order_and_coercion():
                                       {"L_x": 0.5, "T": 1.0}, {"L_x": 0.5, "T": 2.0}]
     assert all(isinstance(p.config.T, float) for p in pts)
     assert pts[0].config.n0 == 2
-    assert pts[0].cost == pts[0].config.floe_steps_of(DEFAULT_EXPECTED_ITERATIONS)
-    assert pts[0].cost < pts[0].config.floe_steps_per_iteration() * DEFAULT_EXPECTED_ITERATIONS
+    # the stationary protocol's cost: the point's own minimum (transient + n_average) plus
+    # the measured extra windows
+    cfg = pts[0].config
+    k, _ = solve_dispersion(cfg)
+    expected = transient_windows(cfg, k) + cfg.n_average + EXTRA_WINDOWS
+    assert c.expected_iterations(cfg) == expected
+    assert pts[0].cost == cfg.floe_steps_of(expected)
+    assert pts[0].cost < cfg.floe_steps_per_iteration() * expected
+    # a low-drag point's transient is longer: it costs more
+    slow = cfg.replace(C_sd=0.005)
+    assert c.expected_iterations(slow) > expected
+    # the noise_floor protocol, or a [run] value, as before
+    assert c.expected_iterations(cfg.replace(protocol="noise_floor")) == \
+        DEFAULT_EXPECTED_ITERATIONS
 
 
 def test_invalid_points_inside_a_valid_grid_are_kept():
