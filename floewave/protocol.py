@@ -58,17 +58,20 @@ def confined_profile(cfg: ModelConfig, x: np.ndarray, alpha_c: float) -> np.ndar
 
 def mser_truncation(y: np.ndarray, n_min: int) -> int:
     """MSER truncation point d of the series ``y`` (White 1997): argmin over d in
-    [0, n - n_min] of sum_{j >= d} (y_j - mean(y[d:]))^2 / (n - d)^2 (the first minimum).
-    A constant series gives 0."""
+    [0, n - n_min] of sum_{j >= d} (y_j - mean(y[d:]))^2 / (n - d)^2, the first minimum
+    within rounding (values within 1e-12 of the series' variance are ties: a constant tail
+    would otherwise be truncated wherever rounding puts its smallest value). A constant
+    series gives 0."""
     y = np.asarray(y, dtype=float)
     n = len(y)
     last = max(n - max(n_min, 1), 0)
+    tol = 1e-12 * (float(np.var(y)) + 1e-300)
     best, d_best = np.inf, 0
     for d in range(last + 1):
         tail = y[d:]
         m = tail.mean()
         v = float(((tail - m) ** 2).sum()) / (n - d) ** 2
-        if v < best:
+        if v < best - tol:
             best, d_best = v, d
     return d_best
 
@@ -90,6 +93,11 @@ def halves_z(Y: np.ndarray, floor: float) -> float:
     D = Y[:h].mean(axis=0) - Y[n - h:].mean(axis=0)
     se = float(D.std(ddof=1) / np.sqrt(R)) if R > 1 else 0.0
     return float(D.mean() / max(se, floor))
+
+
+def _rounded(y: np.ndarray, resolution: float) -> np.ndarray:
+    """``y`` rounded to multiples of ``resolution`` (unchanged for 0)."""
+    return np.round(y / resolution) * resolution if resolution > 0 else y
 
 
 class _Windows:
@@ -125,8 +133,8 @@ class _Windows:
         """(d, stationary): the windows before d are a transient. ``stationarity =
         "fixed"``: d = ``transient_min``. ``"mser"``: before ``n_average`` windows only
         the last counts (d = n - 1, not stationary); then the latest MSER truncation of
-        the series, at least ``d_min`` (:func:`transient_windows`), stationary when
-        d <= n / 2 and the halves agree."""
+        the series, valid when at most n / 2, raised to at least ``d_min``
+        (:func:`transient_windows`); stationary when valid and the halves after it agree."""
         n = len(self)
         if cfg.stationarity == "fixed":
             d = min(cfg.transient_min, n - 1)
@@ -134,11 +142,15 @@ class _Windows:
         if n < cfg.n_average:
             return n - 1, False
         Y = np.array(self.series)                                   # (n, 3, R)
-        d = max(mser_truncation(Y[:, s].mean(axis=1), cfg.n_average)
+        # MSER on the replica means, rounded to the resolution of a reported amplitude
+        # (SE_FLOOR a0): a non-chaotic point's creep by 1e-10 a0 is not a transient (MSER
+        # would truncate it at the end of the run for ever)
+        res = (SE_FLOOR * cfg.a0, SE_FLOOR * cfg.a0, 0.0)
+        d = max(mser_truncation(_rounded(Y[:, s].mean(axis=1), res[s]), cfg.n_average)
                 for s in range(Y.shape[1]))
-        d = max(d, min(d_min, n - 1))
-        if d > n // 2:
+        if d > n // 2:                  # MSER's own validity rule, on its own truncation
             return d, False
+        d = max(d, min(d_min, n - 1))   # the physical lower bound needs no such rule
         floors = (1e-3 * cfg.a0, 1e-3 * cfg.a0, 1e-2)
         return d, all(abs(halves_z(Y[d:, s], floors[s])) <= GEWEKE_Z
                       for s in range(Y.shape[1]))

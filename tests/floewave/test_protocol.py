@@ -76,6 +76,26 @@ def test_mser_finds_a_known_transient():
     flat = 1.0 + 0.05 * rng.standard_normal(30)
     assert mser_truncation(flat, 5) <= 8
     assert mser_truncation(np.ones(12), 5) == 0
+    # a step to a constant tail: truncated at the step
+    step = np.concatenate([np.full(20, 0.0), np.full(60, 0.0096153846153846)])
+    assert mser_truncation(step, 8) == 20
+    # a deterministic creep (non-chaotic point): MSER truncates at the end, whatever n
+    creep = 0.97 + 1e-10 * 0.9 ** np.arange(60)
+    assert mser_truncation(creep, 8) == 52
+
+
+def test_a_non_chaotic_point_stops_after_its_minimum():
+    """3 m floes, T 1.4 s, C_sd 0.01: the replicas agree to 1e-11 a0 and the amplitudes creep
+    by 1e-10 a0; rounded to the resolution of a reported amplitude the series is stationary
+    at once (unrounded, MSER kept truncating at the end: 100 windows, not_converged)."""
+    from floewave import solve_dispersion
+    from floewave.transient import transient_windows
+
+    cfg = ModelConfig(L_x=3.0, T=1.4, a0=0.02, C_sd=0.01, eps=0.8, d_f=0.01, dispersion="ow")
+    r = run_point(cfg)
+    k, _ = solve_dispersion(cfg)
+    assert r.status == "converged_noisy"
+    assert r.iterations == transient_windows(cfg, k) + cfg.n_average
 
 
 def test_halves_test_sees_a_drift_the_replicas_share():
