@@ -30,7 +30,7 @@ d_f = 0.005 m, ``ml``) come first. Needs matplotlib (the ``plot`` extra).
 from __future__ import annotations
 
 import re
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -42,7 +42,7 @@ from .errors import ConfigError
 from .schema import column
 from .stats import RESULT_STATUSES, SWEPT, alpha_omega, collision_stats, derived
 
-__all__ = ["make_figures", "KINDS", "PAPER_SETUP"]
+__all__ = ["make_figures", "KINDS", "PAPER_SETUP", "WHY", "NothingToDrawError"]
 
 KINDS = ("fig2", "fig3", "fig5", "fig6", "summary")
 #: The paper's reference setup: groups closest to it are drawn first.
@@ -437,15 +437,58 @@ def _collision_stats_figure(df: pd.DataFrame, out: Path) -> list[Path]:
 RATE_LABEL = {"alpha_inner": "α_inner (x ≥ W_c)", "alpha_all": "α_all (all floes)"}
 
 _DRAW = {"fig2": fig2, "fig3": fig3, "fig5": fig5, "fig6": fig6, "summary": summary}
+#: The figures of each kind, by file-name prefix.
+PARTS = {"fig2": ("fig2",), "fig3": ("fig3",), "fig5": ("fig5",),
+         "fig6": ("fig6_df", "fig6_a0"),
+         "summary": ("collision_zone", "collision_stats", "alpha_omega")}
+#: Why a figure is not drawn: what its grid needs.
+WHY = {
+    "fig2": "needs points that differ only in eps (L_x, T, a0, C_sd, d_f fixed)",
+    "fig3": "needs points that differ only in eps (L_x, T, a0, C_sd, d_f, dispersion fixed)",
+    "fig5": "needs points that differ only in L_x (T, a0, C_sd, eps, d_f fixed)",
+    "fig6_df": "needs points that differ only in d_f (and T) (L_x, a0, C_sd, eps, dispersion"
+               " fixed)",
+    "fig6_a0": "needs points that differ only in a0 (and T) (L_x, d_f, C_sd, eps, dispersion"
+               " fixed)",
+    "collision_zone": "needs points that differ only in eps (L_x, T, a0, C_sd, d_f,"
+                      " dispersion fixed)",
+    "collision_stats": "needs more than one eps",
+    "alpha_omega": "needs >= 3 wave periods T with the other parameters fixed and a finite"
+                   " alpha_inner or alpha_all",
+}
+
+
+class NothingToDrawError(ConfigError):
+    """No figure of the asked kinds can be drawn from the store's grid (exit status 2, as
+    any input that cannot give what was asked); ``reasons`` maps each figure to why."""
+
+    def __init__(self, message: str, reasons: dict[str, str]) -> None:
+        super().__init__(message)
+        self.reasons = dict(reasons)
+
+
+def _stderr(message: str) -> None:
+    import sys
+
+    print(f"sweep: {message}", file=sys.stderr)
 
 
 def make_figures(path: str | Path, outdir: str | Path, max_figures: int = 20,
-                 kinds: Iterable[str] = KINDS) -> list[Path]:
+                 kinds: Iterable[str] = KINDS,
+                 log: Callable[[str], None] | None = _stderr) -> list[Path]:
     """Write the figures for the store ``path`` into ``outdir``; return the files written.
 
-    At most ``max_figures`` figures per kind (per varying parameter for ``fig6``). Raises
-    :class:`ConfigError` if matplotlib is missing, a kind is unknown or the store has no
-    results; nothing is written then.
+    At most ``max_figures`` figures per kind (per varying parameter for ``fig6``). Each
+    figure of ``kinds`` that the grid does not allow is named with the reason (:data:`WHY`)
+    through ``log`` (default: a ``sweep: ... not drawn: ...`` line on stderr).
+
+    Raises
+    ------
+    ConfigError
+        matplotlib is missing, a kind is unknown or the store has no results; nothing is
+        written then.
+    NothingToDrawError
+        (a ConfigError) none of the figures of ``kinds`` can be drawn from the grid.
     """
     kinds = list(kinds)
     unknown = [k for k in kinds if k not in KINDS]
@@ -466,6 +509,17 @@ def make_figures(path: str | Path, outdir: str | Path, max_figures: int = 20,
     out.mkdir(parents=True, exist_ok=True)
     profiles = _Profiles(path)
     written: list[Path] = []
+    reasons: dict[str, str] = {}
     for kind in kinds:
-        written += _DRAW[kind](df, profiles, out, max_figures)
+        drawn = _DRAW[kind](df, profiles, out, max_figures)
+        for part in PARTS[kind]:
+            if not any(f.name.startswith(part) for f in drawn):
+                reasons[part] = WHY[part]
+        written += drawn
+    if log is not None:
+        for part, why in reasons.items():
+            log(f"{part} not drawn: {why}")
+    if not written:
+        raise NothingToDrawError(f"{path}: no figure of {', '.join(kinds)} can be drawn from"
+                                 " this grid (see the reasons above)", reasons)
     return written
