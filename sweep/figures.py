@@ -188,14 +188,14 @@ def _amplitude(ax, row: pd.Series, prof: dict[str, np.ndarray], colour, style: s
     """a/a0 versus x (with SE band); with ``zone``: the W_c dot and compact-ice line.
 
     A ``not_converged`` point (``max_iterations`` reached: the mean so far) is drawn with
-    crosses and its label says so.
+    crosses (explained by the figure's legend entry :data:`NOT_CONVERGED`; the curve's own
+    label stays that of its parameter value, so that one legend serves several panels).
     """
     a0 = float(row["a0"])
     x, a, se = prof["x"], prof["a"], prof["a_stderr"]
     marks: dict[str, Any] = {}
     if str(row.get("status", "")) == "not_converged":
         marks = {"marker": "x", "ms": 4, "markevery": max(1, len(x) // 10)}
-        label = f"{label} (not converged)" if label else label
     ax.plot(x, a / a0, style, color=colour, lw=1.3, label=label, **marks)
     if band and np.isfinite(se).any():
         ax.fill_between(x, (a - se) / a0, (a + se) / a0, color=colour, alpha=0.25, lw=0)
@@ -266,7 +266,7 @@ def fig2(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> list[P
             ax.set_xlim(0, x_end)
         axes[0][0].set_ylabel("relative wave amplitude a / a₀ [–]")
         handles, labels = _legend_of(axes[0], _status_handles(sub))
-        fig.legend(handles, labels, fontsize=8, loc="outside right upper")
+        fig.legend(handles, labels, fontsize=8, loc="outside lower center", ncol=4)
         fig.suptitle(_title(keys, key) + "  (band: ±1 standard error)", fontsize=9)
         _save(fig, out / _file("fig2", keys, key), written)
     return written
@@ -296,7 +296,6 @@ def fig3(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> list[P
             marks: dict[str, Any] = {}
             if str(row["status"]) == "not_converged":
                 marks = {"marker": "x", "ms": 4, "markevery": max(1, len(x) // 10)}
-                label += " (not converged)"
             for ax, (name, _) in zip(axes.flat, panels, strict=True):
                 if name == "gap_mean":
                     xp, gap = x[:-1] + 0.5 * L_x, prof["gap_mean"][:-1]

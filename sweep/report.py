@@ -158,13 +158,17 @@ def _what_ran(path: Path, attrs: dict[str, Any], runs: list[dict[str, Any]],
     wall = float(df["wall_time"].sum()) if len(df) else 0.0
     starts = [r["started"] for r in runs if r.get("started")]
     ends = [r["ended"] for r in runs if r.get("ended")]
-    span = (f"first start {_when(min(starts)) if starts else '—'}, last end "
+    allocated = sum((datetime.fromisoformat(r["ended"]) - datetime.fromisoformat(r["started"]))
+                    .total_seconds() * int(r.get("mpi_size", 1))
+                    for r in runs if r.get("started") and r.get("ended"))
+    span = (f"First start {_when(min(starts)) if starts else '—'}, last end "
             f"{_when(max(ends)) if ends else '—'}")
     return (f"<h2>What ran</h2><p>Store <code>{_e(path)}</code> (schema "
             f"{_e(attrs.get('schema_version', '?'))}, created {_e(_when(attrs.get('created')))}"
             f"); {total} grid points, {len(df)} stored. {span}. Compute: "
             f"<b>{wall / 3600:.3g} core-hours</b> ({wall:.4g} s, the sum of the stored "
-            "points' wall times).</p><h3>Grid</h3>" + grid
+            f"points' wall times); allocated {allocated / 3600:.3g} core-hours (each run's"
+            " duration times its ranks, the master's included).</p><h3>Grid</h3>" + grid
             + "<h3>Runs on this store</h3>" + runs_html
             + "<details><summary>campaign file</summary><pre>"
             + _e(attrs.get("campaign_toml", "")) + "</pre></details>")
