@@ -151,14 +151,21 @@ def _ring(ax, x: Any, y: Any, colour: Any = "k") -> None:
 
 
 def _legend_of(axes: Iterable, extra: Sequence = ()) -> tuple[list, list[str]]:
-    """Handles and labels of every panel (each label once, first panel first) plus
-    ``extra`` handles."""
+    """Handles and labels of every panel (each label once, first panel first; a curve's
+    entry without the status crosses, which :data:`NOT_CONVERGED` explains) plus ``extra``
+    handles."""
+    from matplotlib.lines import Line2D
+
     handles, labels = [], []
     for ax in axes:
         for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
-            if lab not in labels:
-                handles.append(h)
-                labels.append(lab)
+            if lab in labels:
+                continue
+            if isinstance(h, Line2D) and h.get_marker() == "x":  # a curve's status marks:
+                h = Line2D([], [], color=h.get_color(), ls=h.get_linestyle(),  # not its own
+                           lw=h.get_linewidth(), label=lab)
+            handles.append(h)
+            labels.append(lab)
     for h in extra:
         if h.get_label() not in labels:
             handles.append(h)

@@ -261,6 +261,10 @@ def test_fig2_legend_comes_from_every_panel(mixed_figures):
     assert {"ε = 0.2", "ε = 0.8", "eq. 25 (confined ice)",
             "start of the compact zone (x = W_c)"} <= set(texts)
     assert len(texts) == len(set(texts)) == 6      # one entry per ε, not one per panel
+    legend = fig.legends[0]
+    eps_entries = [h for h, t in zip(legend.legend_handles, texts, strict=True)
+                   if t.startswith("ε")]
+    assert [h.get_marker() for h in eps_entries] == ["None", "None"]   # crosses: own entry
 
 
 def test_fig3_gap_axis_is_logarithmic_with_the_W_c_threshold(mixed_figures):
@@ -274,6 +278,40 @@ def test_fig3_gap_axis_is_logarithmic_with_the_W_c_threshold(mixed_figures):
     assert any(t.startswith("gap_threshold = 0.0001 m") for t in texts)
     dots = sorted(ln.get_xdata()[0] for ln in gap_ax.get_lines() if ln.get_marker() == "o")
     assert dots == pytest.approx([1.0, 4.0])          # W_c = 10 eps L_x (power_point)
+
+
+@pytest.mark.parametrize("kind", ["fig5", "fig6"])
+def test_fig5_and_fig6_mark_and_explain_not_converged_curves(kind, fake_store, tmp_path,
+                                                             monkeypatch):
+    """FAKE's eps = 0.8 points are not converged (power_point): their curves carry crosses,
+    the legend explains them once, and no other entry shows crosses."""
+    from pathlib import Path
+
+    from matplotlib.figure import Figure
+
+    from sweep.figures import NOT_CONVERGED
+
+    seen = {}
+    original = Figure.savefig
+
+    def savefig(self, fname, *args, **kwargs):
+        seen[Path(fname).name] = self
+        return original(self, fname, *args, **kwargs)
+
+    monkeypatch.setattr(Figure, "savefig", savefig)
+    assert main(["figures", str(fake_store), "--out", str(tmp_path), "--only", kind,
+                 "--max", "6"]) == 0
+    marked = {n: sum(len(_crossed(ax)) for ax in f.axes) for n, f in seen.items()}
+    assert 0 < sum(m > 0 for m in marked.values()) < len(marked), marked
+    assert all((m > 0) == ("eps=0.8" in n) for n, m in marked.items()), marked
+    # the legend is built from every panel: the crosses of any panel are explained, once
+    assert all((NOT_CONVERGED in _legend_texts(f)) == ("eps=0.8" in n) for n, f in seen.items())
+    for fig in seen.values():
+        for legend in [*fig.legends, *(ax.get_legend() for ax in fig.axes if ax.get_legend())]:
+            crossed = [t.get_text() for h, t in zip(legend.legend_handles, legend.get_texts(),
+                                                    strict=True)
+                       if getattr(h, "get_marker", lambda: None)() == "x"]
+            assert crossed in ([], [NOT_CONVERGED]), crossed
 
 
 def test_collision_zone_curves_are_distinguishable_and_status_marked(mixed_figures):
