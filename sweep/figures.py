@@ -530,6 +530,8 @@ def _collision_stats_figure(df: pd.DataFrame, out: Path) -> list[Path]:
     import matplotlib.pyplot as plt
 
     st = collision_stats(df, by=["L_x", "dispersion", "eps"])
+    if not (st["W_c_rel_mean"].notna().any() or st["inner_over_c_median"].notna().any()):
+        return []       # no compact zone anywhere: nothing to draw (WHY says so)
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11.5, 4.0), constrained_layout=True)
     curves = sorted({(r.L_x, r.dispersion) for r in st.itertuples()},
                     key=lambda c: (c[0], DISP_ORDER.index(c[1]) if c[1] in DISP_ORDER else 9))
@@ -581,7 +583,7 @@ WHY = {
                " fixed)",
     "collision_zone": "needs points that differ only in eps (L_x, T, a0, C_sd, d_f,"
                       " dispersion fixed)",
-    "collision_stats": "needs more than one eps",
+    "collision_stats": "needs more than one eps and points with a compact zone (a W_c)",
     "alpha_omega": "needs >= 3 wave periods T with the other parameters fixed and a finite"
                    " alpha_inner or alpha_all",
 }

@@ -363,6 +363,17 @@ def test_nothing_drawable_says_why_and_exits_2(power_store, tmp_path, capsys):
     assert list((tmp_path / "o").iterdir()) == []
 
 
+def test_collision_stats_without_any_compact_zone_is_not_drawn_and_says_why(power_store,
+                                                                            tmp_path, capsys):
+    """power_point has no compact zone where 10 eps L_x >= L_sheet: here nowhere."""
+    store = power_store("[base]\nL_sheet = 3.0\n[sweep]\nL_x = [0.5]\neps = [0.6, 0.8]\n",
+                        "wide.toml")
+    assert main(["figures", str(store), "--out", str(tmp_path), "--only", "summary"]) == 0
+    assert "collision_stats not drawn: needs more than one eps and points with a compact" \
+           " zone" in capsys.readouterr().err
+    assert [f.name for f in tmp_path.iterdir()] == ["collision_zone.png"]
+
+
 def test_a_figure_not_drawn_is_named_on_stderr(fake_store, tmp_path, capsys):
     assert main(["figures", str(fake_store), "--out", str(tmp_path), "--only", "fig5",
                  "--max", "1"]) == 0
