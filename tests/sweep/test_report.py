@@ -161,3 +161,17 @@ def test_the_browser_check_catches_a_broken_image(tmp_path):
                    f'src="data:image/png;base64,AAAA"><script>{SCRIPT}</script></body></html>')
     dom = _browse(exe, tmp_path, bad, "--dump-dom").stdout
     assert "<title>error: not decoded: broken</title>" in dom
+
+
+def test_a_store_without_results_still_reports(tmp_path):
+    """Every point failed: the page lists them and says why there are no figures."""
+    store = tmp_path / "failed.h5"
+    run_campaign(parse_campaign("[base]\nL_sheet = 6.0\n[sweep]\neps = [0.4]\n"
+                                "L_x = [0.5, 1.0]\n", "f.toml"), str(store),
+                 compute="sweep.testing:raising_point", progress_bar=False)
+    out = tmp_path / "r.html"
+    assert main(["report", str(store), "--out", str(out)]) == 0
+    html = out.read_text()
+    assert len(_rows(html, "failed")) == 2
+    assert "no stored results to plot" in html and "<img" not in html
+    assert "No point with a result." in html
