@@ -69,8 +69,9 @@ figcaption{font-size:.86em;color:#444}pre{background:#f6f6f6;padding:.5em;overfl
 #: Sortable tables (click a header) and the self-check: every <img> must have decoded;
 #: the title becomes "ok N" (N images) or "error: ..." (the browser test reads it).
 SCRIPT = """
-document.querySelectorAll('table.sortable th').forEach(function(th, col){
+document.querySelectorAll('table.sortable th').forEach(function(th){
   th.addEventListener('click', function(){
+    var col = th.cellIndex;
     var body = th.closest('table').tBodies[0];
     var rows = Array.prototype.slice.call(body.rows);
     var up = th.dataset.dir !== 'up'; th.dataset.dir = up ? 'up' : 'down';
@@ -252,11 +253,11 @@ def _collision(df: pd.DataFrame) -> str:
                        _pm(r["inner_over_c_mean"], r["inner_over_c_mean_stderr"]),
                        _num(r["inner_over_c_median"])])
         classes.append("warn" if r["n_not_converged"] else "")
-    return ("<h2>Collision-zone statistics</h2><p>Per group of the other swept parameters "
-            "pooled (<code>sweep.collision_stats</code>). ± std: spread over the pooled "
-            "points; ± SE: standard error of the mean from the points' ensemble standard "
-            "errors (— for single-trajectory points). Rows with not-converged points are "
-            "shaded.</p>"
+    return ("<h2>Collision-zone statistics</h2><p>One row per L_x, dispersion and ε, pooled"
+            " over the other swept parameters (<code>sweep.collision_stats</code>). ± std:"
+            " spread over the pooled points; ± SE: standard error of the mean from the"
+            " points' ensemble standard errors (— for single-trajectory points). Rows with"
+            " not-converged points are shaded.</p>"
             + _table([*by, "points", "not converged", "with W_c", "share without compact "
                       "zone", "W_c [m] ± std", "W_c [m] ± SE", "W_c / L_sheet ± std",
                       "α_inner/α_c ± SE", "α_inner/α_c median"], rows, classes=classes))

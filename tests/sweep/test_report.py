@@ -175,3 +175,22 @@ def test_a_store_without_results_still_reports(tmp_path):
     assert len(_rows(html, "failed")) == 2
     assert "no stored results to plot" in html and "<img" not in html
     assert "No point with a result." in html
+
+
+def test_a_header_click_sorts_its_table_in_chromium(page, tmp_path):
+    """The inline sort: the problem points' eps column, ascending then descending."""
+    exe = _chromium()
+    probe = """<script>window.addEventListener('load', function(){
+      var t = document.querySelectorAll('table.sortable')[3], th = t.tHead.rows[0].cells[4];
+      var col = function(){ return [].map.call(t.tBodies[0].rows,
+                                               function(r){ return r.cells[4].textContent; }); };
+      th.click(); var up = col(); th.click(); var down = col();
+      setTimeout(function(){ document.title = up.join(',') + ' / ' + down.join(','); }, 0);
+    });</script></body>"""
+    sortable = tmp_path / "sort.html"
+    sortable.write_text(page.read_text().replace("</body>", probe))
+    dom = _browse(exe, tmp_path, sortable, "--dump-dom").stdout
+    title = re.search(r"<title>([^<]*)</title>", dom).group(1)
+    up, down = (part.split(",") for part in title.split(" / "))
+    assert sorted(up, key=float) == up and up[::-1] == down and len(up) == 6, title
+    assert up[0] != up[-1]
