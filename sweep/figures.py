@@ -464,8 +464,9 @@ def summary(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> lis
         ax.set_xlabel("angular frequency ω [rad s⁻¹]")
         ax.set_ylabel(f"{RATE_LABEL[rate]} (dots; fit: line) and α_c [m⁻²]")
         ax.grid(alpha=0.3, which="both")
-        handles, labels = _legend_of([ax], _status_handles(df, ring=True))
-        ax.legend(handles, labels, fontsize=6)
+        handles, labels = ax.get_legend_handles_labels()   # one entry per fit, not deduped
+        handles += _status_handles(df, ring=True)
+        ax.legend(handles=handles, fontsize=6)
         _save(fig, out / "alpha_omega.png", written)
     return written
 
