@@ -164,7 +164,7 @@ def _what_ran(path: Path, attrs: dict[str, Any], runs: list[dict[str, Any]],
                     for r in runs if r.get("started") and r.get("ended"))
     span = (f"First start {_when(min(starts)) if starts else '—'}, last end "
             f"{_when(max(ends)) if ends else '—'}")
-    return (f"<h2>What ran</h2><p>Store <code>{_e(path)}</code> (schema "
+    return (f"<h2 id=\"what-ran\">What ran</h2><p>Store <code>{_e(path)}</code> (schema "
             f"{_e(attrs.get('schema_version', '?'))}, created {_e(_when(attrs.get('created')))}"
             f"); {total} grid points, {len(df)} stored. {span}. Compute: "
             f"<b>{wall / 3600:.3g} core-hours</b> ({wall:.4g} s, the sum of the stored "
@@ -175,13 +175,18 @@ def _what_ran(path: Path, attrs: dict[str, Any], runs: list[dict[str, Any]],
             + _e(attrs.get("campaign_toml", "")) + "</pre></details>")
 
 
-def _status(df: pd.DataFrame, dims: Sequence[str], total: int) -> str:
-    counts = df["status"].astype(str).value_counts()
+def _status(df: pd.DataFrame, dims: Sequence[str], total: int, journaled: int | None) -> str:
+    found = df["status"].astype(str).value_counts()
+    order = [s for s in ("converged", "converged_noisy", *PROBLEM_STATUSES) if s in found]
+    counts = found[order + [s for s in found.index if s not in order]]
     cls = {"converged": "ok", "converged_noisy": "ok", "not_converged": "warn"}
     rows = [[_td(s), _num(n)] for s, n in counts.items()]
     rows.append([_td("not yet computed"), _num(max(total - len(df), 0))])
     classes = [cls.get(str(s), "bad") for s in counts.index] + [""]
-    out = "<h2>Status</h2>" + _table(["status", "points"], rows, classes=classes)
+    out = '<h2 id="status">Status</h2>' + _table(["status", "points"], rows, classes=classes)
+    if journaled is not None and journaled > len(df):
+        out += (f"<p>The journal holds {journaled} points, {journaled - len(df)} more than the "
+                "file: a live run mid-commit, or a killed one (its next run writes them).</p>")
     bad = df[df["status"].astype(str).isin(PROBLEM_STATUSES)]
     if bad.empty:
         return out + "<p>Every stored point converged.</p>"
@@ -192,11 +197,12 @@ def _status(df: pd.DataFrame, dims: Sequence[str], total: int) -> str:
             reason = (f"max_iterations reached after {int(r['iterations'])} iterations, "
                       f"residual {float(r['residual']):.3g} (the mean so far is stored)")
         else:
-            reason = str(r.get("message", "")).strip().splitlines()
-            reason = reason[-1] if reason else "(no message)"
+            lines = str(r.get("message", "")).strip().splitlines()
+            reason = lines[-1] if lines else "(no message)"
+        full = str(r.get("message", "")).strip() or reason
         rows.append([_td(str(r["hash"])[:12]), _td(status)]
                     + [_num(r[d]) if d != "dispersion" else _td(r[d]) for d in dims]
-                    + [_td(reason)])
+                    + [f'<td title="{_e(full)}">{_e(reason)}</td>'])
         classes.append(cls.get(status, "bad"))
     return (out + f"<h3>Points that did not converge or have no result ({len(bad)})</h3>"
             + _table(["hash", "status", *dims, "reason"], rows, classes=classes))
@@ -224,7 +230,8 @@ def _figures(path: Path, max_figures: int) -> str:
             notes = notes or [str(exc)]
         imgs = "".join(_img(f) for f in files)
     why = "".join(f"<li>{_e(n)}</li>" for n in notes)
-    return ("<h2>Figures</h2>" + (f"<p>Not drawn:</p><ul>{why}</ul>" if why else "")
+    return ('<h2 id="figures">Figures</h2>'
+            + (f"<p>Not drawn:</p><ul>{why}</ul>" if why else "")
             + (imgs or "<p>No figure can be drawn from this store.</p>"))
 
 
@@ -242,7 +249,7 @@ def _collision(df: pd.DataFrame) -> str:
     by = [k for k in ("L_x", "dispersion", "eps") if k in df.columns]
     st = collision_stats(df, by=by)
     if st.empty:
-        return "<h2>Collision-zone statistics</h2><p>No point with a result.</p>"
+        return '<h2 id="collision">Collision-zone statistics</h2><p>No point with a result.</p>'
     rows, classes = [], []
     for _, r in st.iterrows():
         rows.append([_num(r[k]) if k != "dispersion" else _td(r[k]) for k in by]
@@ -253,7 +260,8 @@ def _collision(df: pd.DataFrame) -> str:
                        _pm(r["inner_over_c_mean"], r["inner_over_c_mean_stderr"]),
                        _num(r["inner_over_c_median"])])
         classes.append("warn" if r["n_not_converged"] else "")
-    return ("<h2>Collision-zone statistics</h2><p>One row per L_x, dispersion and ε, pooled"
+    return ('<h2 id="collision">Collision-zone statistics</h2><p>One row per L_x,'
+            " dispersion and ε, pooled"
             " over the other swept parameters (<code>sweep.collision_stats</code>). ± std:"
             " spread over the pooled points; ± SE: standard error of the mean from the"
             " points' ensemble standard errors (— for single-trajectory points). Rows with"
@@ -275,7 +283,8 @@ def _paper_check(stores: Path) -> str:
     classes = [verdict_cls.get(c.verdict, "warn") for c in report.checks]
     counts = ", ".join(f"{n} {v}" for v, n in report.counts().items())
     problems = "".join(f"<li>{_e(k)}: {_e(v)}</li>" for k, v in report.problems.items())
-    return (f"<h2>Paper check</h2><p>Stores in <code>{_e(stores)}</code>: {_e(counts)}.</p>"
+    return ('<h2 id="paper-check">Paper check</h2>'
+            f"<p>Stores in <code>{_e(stores)}</code>: {_e(counts)}.</p>"
             + (f"<ul>{problems}</ul>" if problems else "")
             + _table(["#", "claim (paper)", "campaign: points", "quantity", "value ± SE",
                       "rule: evidence", "verdict"], rows, classes=classes))
@@ -292,7 +301,7 @@ def build_report(store: str | Path, *, paper_stores: str | Path | None = None,
     paper_stores : directory of the paper campaigns' stores; adds the paper-check table.
     max_figures : at most this many figures per kind (groups closest to the paper first).
     """
-    from .analysis import load, store_attrs, store_runs
+    from .analysis import journal_points, load, store_attrs, store_runs
 
     path = Path(store)
     if not path.exists():
@@ -304,13 +313,18 @@ def build_report(store: str | Path, *, paper_stores: str | Path | None = None,
     total = int(np.prod([len(v) for v in campaign.get("sweep", {}).values()])) if dims else 1
     now = datetime.now(UTC).isoformat(timespec="seconds")
     parts = [_what_ran(path, attrs, store_runs(path), df, campaign),
-             _status(df, dims, total), _figures(path, max_figures), _collision(df)]
+             _status(df, dims, total, journal_points(path)), _figures(path, max_figures),
+             _collision(df)]
+    sections = [("what-ran", "What ran"), ("status", "Status"), ("figures", "Figures"),
+                ("collision", "Collision-zone statistics")]
     if paper_stores is not None:
         parts.append(_paper_check(Path(paper_stores)))
+        sections.append(("paper-check", "Paper check"))
+    toc = " · ".join(f'<a href="#{i}">{t}</a>' for i, t in sections)
     return ("<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"
             f"<title>report {_e(path.name)}</title><style>{STYLE}</style></head><body>"
             f"<h1>Campaign report: {_e(path.name)}</h1><p>Written {_e(_when(now))} by "
-            "<code>sweep report</code>.</p>" + "".join(parts)
+            f"<code>sweep report</code>. {toc}</p>" + "".join(parts)
             + f"<script>{SCRIPT}</script></body></html>\n")
 
 

@@ -47,7 +47,8 @@ def page(store, tmp_path_factory):
 
 
 def _rows(html, status):
-    return re.findall(rf"<tr[^>]*><td>[0-9a-f]{{12}}</td><td>{status}</td>(.*?)</tr>", html)
+    return re.findall(rf"<tr[^>]*><td>[0-9a-f]{{12}}</td><td>{status}</td>(.*?)</tr>", html,
+                      re.S)
 
 
 def test_status_counts_and_every_problem_point_with_its_values(page):
@@ -100,7 +101,8 @@ def test_paper_check_table_and_missing_store(tmp_path, store, capsys):
     empty.mkdir()
     assert main(["report", str(store), "--out", str(out), "--paper-check", str(empty)]) == 0
     html = out.read_text()
-    assert "<h2>Paper check</h2>" in html and "inconclusive" in html
+    assert ">Paper check</h2>" in html and 'href="#paper-check"' in html
+    assert "inconclusive" in html
     assert "no store" in html                       # each missing paper store is named
     assert main(["report", str(tmp_path / "nope.h5"), "--out", str(out)]) == 3
     assert "no such store" in capsys.readouterr().err
@@ -194,3 +196,10 @@ def test_a_header_click_sorts_its_table_in_chromium(page, tmp_path):
     up, down = (part.split(",") for part in title.split(" / "))
     assert sorted(up, key=float) == up and up[::-1] == down and len(up) == 6, title
     assert up[0] != up[-1]
+
+
+def test_problem_points_carry_their_whole_message_and_counts_come_in_order(page):
+    html = page.read_text()
+    assert re.search(r'<td title="[^"]*RuntimeError: deliberate failure[^"]*">', html)
+    statuses = re.findall(r'<tr class="\w+"><td>(\w+)</td><td class="n"', html)
+    assert statuses[:3] == ["converged", "not_converged", "failed"]
