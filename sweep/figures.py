@@ -110,7 +110,8 @@ class _Profiles:
         if h not in self.cache:
             ds = load_profile(self.path, h)
             self.cache[h] = {k: ds[k].values for k in ("x", "a", "a_stderr", "gap_mean",
-                                                        "F_w_mean", "F_c_mean", "F_d_mean")}
+                                                        "F_w_mean", "F_c_mean", "F_d_mean",
+                                                        "W_c_replicas") if k in ds}
         return self.cache[h]
 
 
@@ -294,6 +295,7 @@ def fig3(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> list[P
                                  constrained_layout=True)
         L_x = float(sub["L_x"].iloc[0])
         x_end = 0.0
+        replica_ticks = False
         for _, row in sub.sort_values("eps").iterrows():
             prof = profiles(row["hash"])
             colour = colours[row["eps"]]
@@ -311,6 +313,15 @@ def fig3(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> list[P
                     if np.isfinite(W_c) and W_c < x[-1]:
                         ax.plot([W_c], [np.interp(W_c, xp, gap)], "o", color=colour, ms=6,
                                 mec="k", mew=0.6, zorder=5)
+                    # an ensemble's W_c is the mean of its replicas' W_c, each where that
+                    # replica's own gaps drop below the threshold; the curve is the mean of
+                    # the replicas' gaps, which the non-compact ones lift above it
+                    own = np.asarray(prof.get("W_c_replicas", []), float)
+                    own = own[np.isfinite(own)]
+                    if len(own) > 1:
+                        ax.plot(own, np.full(len(own), _gap_threshold(row)), "|", color=colour,
+                                ms=12, mew=1.6, zorder=5)
+                        replica_ticks = True
                 else:
                     ax.plot(x, prof[name], "-", color=colour, lw=1.2, **marks)
         d_f = float(sub["d_f"].iloc[0])
@@ -327,12 +338,23 @@ def fig3(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> list[P
             ax.set_xlim(0, x_end)
         for ax in axes[1]:
             ax.set_xlabel("distance from the ice edge x [m]")
-        handles, labels = _legend_of([axes[0][0]], _status_handles(sub))
-        fig.legend(handles, labels, fontsize=7, ncol=3, loc="outside lower center")
+        extra = _status_handles(sub)
+        if replica_ticks:
+            from matplotlib.lines import Line2D
+
+            extra.append(Line2D([], [], ls="none", marker="|", ms=10, mew=1.6, color="k",
+                                label=REPLICA_W_C))
+        handles, labels = _legend_of([axes[0][0]], extra)
+        fig.legend(handles, labels, fontsize=7, ncol=2, loc="outside lower center")
         fig.suptitle(_title(keys, key) + "  (dots: x = W_c; gaps <= 0 not shown on the log"
                      " axis)", fontsize=9)
         _save(fig, out / _file("fig3", keys, key), written)
     return written
+
+
+#: Fig. 3's legend entry of the ticks at the threshold: an ensemble's replicas' own W_c.
+REPLICA_W_C = ("| each replica's W_c (its own gaps drop below gap_threshold); the dot: their"
+               " mean, on the replicas' mean gap")
 
 
 def _gap_threshold(row: pd.Series) -> float:

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from sweep import parse_campaign, run_campaign
+from sweep import load, parse_campaign, run_campaign
 from sweep.cli import main
 
 pytest.importorskip("matplotlib")
@@ -120,8 +120,11 @@ def test_figures_from_a_real_store(tmp_path, capsys):
     assert sum(n.startswith("fig3_") for n in names) == 2
     assert sum(n.startswith("fig5_") for n in names) == 2
     assert "collision_zone.png" in names and "alpha_omega.png" not in names
-    assert "collision_stats.png" in names
-    assert len(names) == 8
+    # collision_stats needs a compact zone somewhere (this short sheet may have none)
+    has_zone = bool(load(store)["W_c"].notna().any())
+    assert ("collision_stats.png" in names) == has_zone
+    assert len(names) == 7 + has_zone
+    assert ("collision_stats not drawn" in capsys.readouterr().err) == (not has_zone)
 
 
 def test_figures_of_a_missing_store_is_an_error(tmp_path, capsys):
@@ -197,6 +200,12 @@ def ep_unconverged_point(cfg):
 
     out = power_point(cfg)
     out["status"] = "not_converged" if cfg.dispersion == "ep" else "converged"
+    # two replicas whose own W_c straddle the mean (Fig. 3 draws them at the threshold)
+    out["replicas"] = 2
+    out["W_c_replicas"] = np.array([0.8, 1.2]) * out["W_c"]
+    out["compact_end_replicas"] = np.full(2, out["compact_end"])
+    for name in ("x_mean", "gap_mean", "S_sd"):
+        out[f"{name}_replicas"] = np.vstack([out[name], out[name]])
     return out
 
 
@@ -278,6 +287,14 @@ def test_fig3_gap_axis_is_logarithmic_with_the_W_c_threshold(mixed_figures):
     assert any(t.startswith("gap_threshold = 0.0001 m") for t in texts)
     dots = sorted(ln.get_xdata()[0] for ln in gap_ax.get_lines() if ln.get_marker() == "o")
     assert dots == pytest.approx([1.0, 4.0])          # W_c = 10 eps L_x (power_point)
+    # each replica's own W_c, at the threshold it crossed there
+    ticks = [ln for ln in gap_ax.get_lines() if ln.get_marker() == "|"]
+    assert sorted(x for ln in ticks for x in ln.get_xdata()) == pytest.approx(
+        [0.8, 1.2, 3.2, 4.8])
+    assert all(set(ln.get_ydata()) == {1e-4} for ln in ticks)
+    from sweep.figures import REPLICA_W_C
+
+    assert REPLICA_W_C in texts
 
 
 @pytest.mark.parametrize("kind", ["fig5", "fig6"])
