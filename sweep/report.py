@@ -136,9 +136,7 @@ def _when(text: Any) -> str:
 
 # ---------------------------------------------------------------------- sections
 def _what_ran(path: Path, attrs: dict[str, Any], runs: list[dict[str, Any]],
-              df: pd.DataFrame, campaign: dict[str, Any]) -> str:
-    sweep = campaign.get("sweep", {})
-    total = int(np.prod([len(v) for v in sweep.values()])) if sweep else 1
+              df: pd.DataFrame, sweep: dict[str, list], total: int) -> str:
     grid = _table(["parameter", "values", "n"],
                   [[_td(k), _td(", ".join(str(v) for v in vals)), _num(len(vals))]
                    for k, vals in sweep.items()])
@@ -312,7 +310,7 @@ def build_report(store: str | Path, *, paper_stores: str | Path | None = None,
     df = load(path)
     total = int(np.prod([len(v) for v in campaign.get("sweep", {}).values()])) if dims else 1
     now = datetime.now(UTC).isoformat(timespec="seconds")
-    parts = [_what_ran(path, attrs, store_runs(path), df, campaign),
+    parts = [_what_ran(path, attrs, store_runs(path), df, campaign.get("sweep", {}), total),
              _status(df, dims, total, journal_points(path)), _figures(path, max_figures),
              _collision(df)]
     sections = [("what-ran", "What ran"), ("status", "Status"), ("figures", "Figures"),
