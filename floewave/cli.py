@@ -2,7 +2,10 @@
 
 ``floewave run --set L_x=1.5 --set T=1.4 ... [--json out.json] [--plot out.png]`` runs one
 point and prints a summary; ``floewave run --help`` lists every field with its default and
-units (read from :class:`floewave.ModelConfig`, so the list follows the code).
+units (read from :class:`floewave.ModelConfig`, so the list follows the code). Before the
+point it says on stderr that the kernels are being compiled (or loaded from numba's cache)
+and compiles them on a shrunken copy of the point (:func:`warm_up`), so that the wall time
+and floe-steps/s it reports are the point's alone.
 
 ``floewave figures --out DIR`` writes the analytic figures (DIR/fig1_dispersion.png, the
 paper's Fig. 1; :mod:`floewave.figures`) and prints the paths and fitted tail exponents.
@@ -88,9 +91,44 @@ def _jsonable(v: Any) -> Any:
     return v
 
 
-def summary(cfg: ModelConfig, r) -> str:
-    """A few lines: iterations, status, W_c, alpha fits, wall time, floe-steps/s."""
+#: Said on stderr before the kernels of the first point are compiled (or loaded from numba's
+#: cache). Measured here (2 shared cores, 2026-12-02): 9.8-11.5 s with an empty cache
+#: (``NUMBA_CACHE_DIR`` fresh), 0.24 s from the cache; a user reported 35 s on a laptop.
+COMPILING = ("floewave: compiling the numba kernels, or loading them from the cache (the first"
+             " run on a machine compiles: about 10-40 s; later runs: about 1 s)...")
+
+
+def warm_up_config(cfg: ModelConfig) -> ModelConfig:
+    """A shrunken copy of ``cfg`` with the same kernels: four floes, one spin-up and one
+    averaging period, one iteration, one replica (as ``sweep``'s warm-up)."""
+    return cfg.replace(L_sheet=4 * cfg.L_x, n0=1, n0_warm=0, nT=1, max_iterations=1,
+                       replicas=1)
+
+
+def warm_up(cfg: ModelConfig) -> float:
+    """Compile (or load from numba's cache) the kernels of ``cfg`` by running
+    :func:`warm_up_config`, so that the point's wall time and floe-steps/s exclude the
+    compilation; return the seconds it took. A failure of the shrunken point is left to
+    the point itself to report."""
+    import time
+
+    from .model import run_point
+
+    t0 = time.perf_counter()
+    try:
+        run_point(warm_up_config(cfg))
+    except (FloewaveError, ValueError):
+        pass
+    return time.perf_counter() - t0
+
+
+def summary(cfg: ModelConfig, r, compile_time: float | None = None) -> str:
+    """A few lines: iterations, status, W_c, alpha fits, wall time, floe-steps/s (of the
+    point alone: the kernels' compilation, ``compile_time`` [s], came before it)."""
     rate = r.floe_steps / r.wall_time if r.wall_time > 0 else float("nan")
+    compiled = ("" if compile_time is None else
+                f" (kernels compiled or loaded before the point in {compile_time:.1f} s,"
+                " not included)")
     return "\n".join([
         f"point: L_x={cfg.L_x} T={cfg.T} a0={cfg.a0} C_sd={cfg.C_sd} eps={cfg.eps} "
         f"d_f={cfg.d_f} dispersion={cfg.dispersion}  (N_f={r.n_floes}, {r.kernel_mode})",
@@ -105,7 +143,7 @@ def summary(cfg: ModelConfig, r) -> str:
         f" alpha_inner = {r.alpha_inner:.4g}, alpha_c (eq. 24) = {r.alpha_c:.4g};"
         f" alpha_exp = {r.alpha_exp:.4g} 1/m",
         f"wall time {r.wall_time:.2f} s, {r.floe_steps:.3g} floe-steps,"
-        f" {rate / 1e6:.1f} M floe-steps/s",
+        f" {rate / 1e6:.1f} M floe-steps/s{compiled}",
     ])
 
 
@@ -215,6 +253,10 @@ def main(argv: list[str] | None = None) -> int:
     def progress(it: int, res: float, phase: str) -> None:
         print(f"  iteration {it:3d}  residual {res:.4g}  ({phase})", file=sys.stderr)
 
+    print(COMPILING, file=sys.stderr, flush=True)
+    compile_time = warm_up(cfg)
+    print(f"floewave: kernels ready in {compile_time:.1f} s; running the point",
+          file=sys.stderr, flush=True)
     try:
         r = run_point(cfg, progress=progress)
     except InvalidPointError as exc:
@@ -223,7 +265,7 @@ def main(argv: list[str] | None = None) -> int:
     except FloewaveError as exc:
         print(f"floewave: point failed: {exc}", file=sys.stderr)
         return EXIT_FAILED
-    print(summary(cfg, r))
+    print(summary(cfg, r, compile_time))
     trace = None
     if args.trace is not None:
         from .trace import trace_point

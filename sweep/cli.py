@@ -1,4 +1,5 @@
-"""The ``sweep`` command: plan, run, status, export, validate, merge, figures, paper-check.
+"""The ``sweep`` command: plan, run, status, export, validate, merge, figures, paper-check,
+report.
 
 Exit statuses are those of :mod:`sweep.errors` (0 ok, 1 internal error, 2 bad input,
 3 store problem, 4 MPI launch problem, 5 worker failure, 6 interrupted but resumable).
@@ -155,6 +156,15 @@ def build_parser() -> argparse.ArgumentParser:
     pc.add_argument("--compute", default=None, metavar="MODULE:FUNC",
                     help="compute function for --run (tests; default floewave:run_point)")
     pc.add_argument("--json", action="store_true", help="machine-readable output")
+
+    rp = sub.add_parser("report", help="one self-contained HTML page of a campaign: what ran,"
+                        " status, failures, figures, collision-zone statistics")
+    rp.add_argument("store", type=Path)
+    rp.add_argument("--out", type=Path, required=True, help="HTML file to write")
+    rp.add_argument("--paper-check", type=Path, default=None, metavar="DIR",
+                    help="add the paper-check table of the stores in DIR")
+    rp.add_argument("--max", type=int, default=3, metavar="N", help="at most N figures per"
+                    " kind (default 3)")
 
     m = sub.add_parser("merge", help="combine shard stores of one campaign (dedup by hash)")
     m.add_argument("output", type=Path, help="merged store (created or extended)")
@@ -467,9 +477,15 @@ def cmd_paper_check(args: argparse.Namespace) -> int:
     return EXIT_STORE if report.problems else EXIT_OK
 
 
+def cmd_report(args: argparse.Namespace) -> int:
+    from .report import command
+
+    return command(args)
+
+
 _COMMANDS = {"run": cmd_run, "plan": cmd_plan, "status": cmd_status, "export": cmd_export,
              "validate": cmd_validate, "merge": cmd_merge, "figures": cmd_figures,
-             "paper-check": cmd_paper_check}
+             "paper-check": cmd_paper_check, "report": cmd_report}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -10,7 +10,8 @@ everything else fixed, so a store of any campaign gives whatever figures its gri
           below ``gap_threshold`` (x = W_c) and the compact-ice solution started from that dot
           (dashed black: 1/a = 1/a(W_c) + alpha_c (x - W_c)). Groups: (L_x, T, a0, C_sd, d_f).
           Ensembles: the a(x) band is ±1 standard error, the bar on the dot ±1 SE(W_c).
-``fig3``  mean gap (dashed: the initial d_f; dots at W_c), mean |F_w|, |F_c|, |F_d| versus x for
+``fig3``  mean gap (log axis; dashed: the initial d_f; dotted: ``gap_threshold``, 1e-4 m, below
+          which a pair is compact; dots at W_c), mean |F_w|, |F_c|, |F_d| versus x for
           each eps. Groups: (L_x, T, a0, C_sd, d_f, dispersion).
 ``fig5``  a/a0 for each floe size L_x (colours), ``ep`` solid, ``ml`` dashed, ``ow`` dotted.
           Groups: (T, a0, C_sd, eps, d_f).
@@ -23,6 +24,14 @@ everything else fixed, so a store of any campaign gives whatever figures its gri
           omega with the fitted exponents m, :func:`sweep.alpha_omega`; groups with >= 3
           periods).
 
+Status is marked in every figure and explained in its legend: a ``not_converged`` curve
+(``max_iterations`` reached; the mean so far) carries crosses, a ``not_converged`` point (or a
+pooled group holding one) an open square. Curves differ in colour and marker by the swept
+parameters that differ between them (:func:`_styles`). A figure the grid does not allow is
+named with the reason (:data:`WHY`); when none of the asked kinds can be drawn,
+:func:`make_figures` raises :class:`NothingToDrawError` and ``sweep figures`` exits with
+status 2.
+
 The number of figures per kind is capped (``--max``); groups closest to the paper's
 reference setup (L_x = 0.5 m, T = 1.2 s, a0 = 0.0125 m, C_sd = 0.05, eps = 0.6,
 d_f = 0.005 m, ``ml``) come first. Needs matplotlib (the ``plot`` extra).
@@ -30,7 +39,7 @@ d_f = 0.005 m, ``ml``) come first. Needs matplotlib (the ``plot`` extra).
 from __future__ import annotations
 
 import re
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -42,7 +51,7 @@ from .errors import ConfigError
 from .schema import column
 from .stats import RESULT_STATUSES, SWEPT, alpha_omega, collision_stats, derived
 
-__all__ = ["make_figures", "KINDS", "PAPER_SETUP"]
+__all__ = ["make_figures", "KINDS", "PAPER_SETUP", "WHY", "NothingToDrawError"]
 
 KINDS = ("fig2", "fig3", "fig5", "fig6", "summary")
 #: The paper's reference setup: groups closest to it are drawn first.
@@ -101,7 +110,8 @@ class _Profiles:
         if h not in self.cache:
             ds = load_profile(self.path, h)
             self.cache[h] = {k: ds[k].values for k in ("x", "a", "a_stderr", "gap_mean",
-                                                        "F_w_mean", "F_c_mean", "F_d_mean")}
+                                                        "F_w_mean", "F_c_mean", "F_d_mean",
+                                                        "W_c_replicas") if k in ds}
         return self.cache[h]
 
 
@@ -112,19 +122,88 @@ def _colours(n: int) -> list:
     return [cmap(i if n <= 10 else i / max(n - 1, 1)) for i in range(n)]
 
 
+MARKERS = ("o", "s", "^", "D", "v", "P", "*", "X", "<", ">")
+#: The legend entry of the crosses on a not-converged curve.
+NOT_CONVERGED = "× not converged (max_iterations reached; the mean so far)"
+#: The legend entry of the open square around a not-converged point (or a pooled group
+#: holding one).
+NOT_CONVERGED_RING = "□ not converged (max_iterations reached), or a group holding one"
+
+
+def _not_converged(df: pd.DataFrame) -> pd.Series:
+    return df["status"].astype(str) == "not_converged"
+
+
+def _status_handles(df: pd.DataFrame, ring: bool = False) -> list:
+    """The legend entries explaining the status marks, for the points of ``df``."""
+    from matplotlib.lines import Line2D
+
+    if not _not_converged(df).any():
+        return []
+    if ring:
+        return [Line2D([], [], ls="none", marker="s", ms=9, mfc="none", mec="k",
+                       label=NOT_CONVERGED_RING)]
+    return [Line2D([], [], ls="none", marker="x", color="k", ms=5, label=NOT_CONVERGED)]
+
+
+def _ring(ax, x: Any, y: Any, colour: Any = "k") -> None:
+    """An open square around each (x, y): a not-converged point."""
+    ax.plot(x, y, ls="none", marker="s", ms=9, mfc="none", mec=colour, mew=1.2, zorder=6)
+
+
+def _legend_of(axes: Iterable, extra: Sequence = ()) -> tuple[list, list[str]]:
+    """Handles and labels of every panel (each label once, first panel first; a curve's
+    entry without the status crosses, which :data:`NOT_CONVERGED` explains) plus ``extra``
+    handles."""
+    from matplotlib.lines import Line2D
+
+    handles, labels = [], []
+    for ax in axes:
+        for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
+            if lab in labels:
+                continue
+            if isinstance(h, Line2D) and h.get_marker() == "x":  # a curve's status marks:
+                h = Line2D([], [], color=h.get_color(), ls=h.get_linestyle(),  # not its own
+                           lw=h.get_linewidth(), label=lab)
+            handles.append(h)
+            labels.append(lab)
+    for h in extra:
+        if h.get_label() not in labels:
+            handles.append(h)
+            labels.append(h.get_label())
+    return handles, labels
+
+
+def _styles(keys: Sequence[str], groups: Sequence[tuple]) -> list[tuple[Any, str]]:
+    """(colour, marker) per group: colour by the values of the first key that differs
+    between the groups, marker by the combination of the other differing keys (by the same
+    key when only one differs), so that no two groups look alike."""
+    vary = [i for i in range(len(keys)) if len({g[i] for g in groups}) > 1]
+    if not vary:
+        return [(_colours(1)[0], MARKERS[0])] * len(groups)
+    first = sorted({g[vary[0]] for g in groups}, key=str)
+    if len(vary) == 1:
+        vary = vary * 2
+    rest = sorted({tuple(g[i] for i in vary[1:]) for g in groups}, key=str)
+    colours = _colours(len(first))
+    return [(colours[first.index(g[vary[0]])],
+             MARKERS[rest.index(tuple(g[i] for i in vary[1:])) % len(MARKERS)])
+            for g in groups]
+
+
 def _amplitude(ax, row: pd.Series, prof: dict[str, np.ndarray], colour, style: str = "-",
                label: str | None = None, band: bool = True, zone: bool = False) -> None:
     """a/a0 versus x (with SE band); with ``zone``: the W_c dot and compact-ice line.
 
     A ``not_converged`` point (``max_iterations`` reached: the mean so far) is drawn with
-    crosses and its label says so.
+    crosses (explained by the figure's legend entry :data:`NOT_CONVERGED`; the curve's own
+    label stays that of its parameter value, so that one legend serves several panels).
     """
     a0 = float(row["a0"])
     x, a, se = prof["x"], prof["a"], prof["a_stderr"]
     marks: dict[str, Any] = {}
     if str(row.get("status", "")) == "not_converged":
         marks = {"marker": "x", "ms": 4, "markevery": max(1, len(x) // 10)}
-        label = f"{label} (not converged)" if label else label
     ax.plot(x, a / a0, style, color=colour, lw=1.3, label=label, **marks)
     if band and np.isfinite(se).any():
         ax.fill_between(x, (a - se) / a0, (a + se) / a0, color=colour, alpha=0.25, lw=0)
@@ -194,8 +273,8 @@ def fig2(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> list[P
             ax.grid(alpha=0.3)
             ax.set_xlim(0, x_end)
         axes[0][0].set_ylabel("relative wave amplitude a / a₀ [–]")
-        handles, labels = axes[0][0].get_legend_handles_labels()
-        fig.legend(handles, labels, fontsize=8, loc="outside right upper")
+        handles, labels = _legend_of(axes[0], _status_handles(sub))
+        fig.legend(handles, labels, fontsize=8, loc="outside lower center", ncol=4)
         fig.suptitle(_title(keys, key) + "  (band: ±1 standard error)", fontsize=9)
         _save(fig, out / _file("fig2", keys, key), written)
     return written
@@ -212,27 +291,46 @@ def fig3(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> list[P
     for key, sub in _groups(df, keys, "eps")[:limit]:
         eps_values = sorted(sub["eps"].unique())
         colours = dict(zip(eps_values, _colours(len(eps_values)), strict=True))
-        fig, axes = plt.subplots(2, 2, figsize=(10.0, 6.6), sharex=True,
+        fig, axes = plt.subplots(2, 2, figsize=(10.0, 7.2), sharex=True,
                                  constrained_layout=True)
         L_x = float(sub["L_x"].iloc[0])
         x_end = 0.0
+        replica_ticks = False
         for _, row in sub.sort_values("eps").iterrows():
             prof = profiles(row["hash"])
             colour = colours[row["eps"]]
             x = prof["x"]
             x_end = max(x_end, float(x[-1]))
+            label = f"ε = {row['eps']:g}"
+            marks: dict[str, Any] = {}
+            if str(row["status"]) == "not_converged":
+                marks = {"marker": "x", "ms": 4, "markevery": max(1, len(x) // 10)}
             for ax, (name, _) in zip(axes.flat, panels, strict=True):
                 if name == "gap_mean":
                     xp, gap = x[:-1] + 0.5 * L_x, prof["gap_mean"][:-1]
-                    ax.plot(xp, gap, "-", color=colour, lw=1.2, label=f"ε = {row['eps']:g}")
+                    ax.plot(xp, gap, "-", color=colour, lw=1.2, label=label, **marks)
                     W_c = float(row["W_c"])
                     if np.isfinite(W_c) and W_c < x[-1]:
                         ax.plot([W_c], [np.interp(W_c, xp, gap)], "o", color=colour, ms=6,
                                 mec="k", mew=0.6, zorder=5)
+                    # an ensemble's W_c is the mean of its replicas' W_c, each where that
+                    # replica's own gaps drop below the threshold; the curve is the mean of
+                    # the replicas' gaps, which the non-compact ones lift above it
+                    own = np.asarray(prof.get("W_c_replicas", []), float)
+                    own = own[np.isfinite(own)]
+                    if len(own) > 1:
+                        ax.plot(own, np.full(len(own), _gap_threshold(row)), "|", color=colour,
+                                ms=12, mew=1.6, zorder=5)
+                        replica_ticks = True
                 else:
-                    ax.plot(x, prof[name], "-", color=colour, lw=1.2)
+                    ax.plot(x, prof[name], "-", color=colour, lw=1.2, **marks)
         d_f = float(sub["d_f"].iloc[0])
         axes[0][0].axhline(d_f, color="k", ls="--", lw=1, label=f"domain-average d_f = {d_f:g} m")
+        threshold = _gap_threshold(sub.iloc[0])
+        axes[0][0].set_yscale("log", nonpositive="mask")
+        axes[0][0].axhline(threshold, color="k", ls=":", lw=1.2,
+                           label=f"gap_threshold = {threshold:g} m (a pair is compact below"
+                                 " it)")
         for i, (ax, (_, label)) in enumerate(zip(axes.flat, panels, strict=True)):
             ax.set_ylabel(label)
             ax.set_title(f"({chr(97 + i)})", loc="left")
@@ -240,10 +338,33 @@ def fig3(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> list[P
             ax.set_xlim(0, x_end)
         for ax in axes[1]:
             ax.set_xlabel("distance from the ice edge x [m]")
-        axes[0][0].legend(fontsize=8)
-        fig.suptitle(_title(keys, key) + "  (dots: x = W_c)", fontsize=9)
+        extra = _status_handles(sub)
+        if replica_ticks:
+            from matplotlib.lines import Line2D
+
+            extra.append(Line2D([], [], ls="none", marker="|", ms=10, mew=1.6, color="k",
+                                label=REPLICA_W_C))
+        handles, labels = _legend_of([axes[0][0]], extra)
+        fig.legend(handles, labels, fontsize=7, ncol=2, loc="outside lower center")
+        fig.suptitle(_title(keys, key) + "  (dots: x = W_c; gaps <= 0 not shown on the log"
+                     " axis)", fontsize=9)
         _save(fig, out / _file("fig3", keys, key), written)
     return written
+
+
+#: Fig. 3's legend entry of the ticks at the threshold: an ensemble's replicas' own W_c.
+REPLICA_W_C = ("| each replica's W_c (its own gaps drop below gap_threshold); the dot: their"
+               " mean, on the replicas' mean gap")
+
+
+def _gap_threshold(row: pd.Series) -> float:
+    """The point's ``gap_threshold`` [m] (from its config; the paper's 1e-4 m if absent)."""
+    import json
+
+    try:
+        return float(json.loads(str(row["config_json"])).get("gap_threshold", 1e-4))
+    except (KeyError, ValueError, TypeError):
+        return 1e-4
 
 
 def fig5(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> list[Path]:
@@ -266,6 +387,7 @@ def fig5(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> list[P
                    for s in sizes]
         handles += [Line2D([], [], color="k", ls=DISP_STYLE[d], label=d.upper())
                     for d in DISP_ORDER if d in set(sub["dispersion"])]
+        handles += _status_handles(sub)
         ax.legend(handles=handles, fontsize=8)
         ax.set_xlim(0, x_end)
         ax.set_xlabel("distance from the ice edge x [m]")
@@ -301,7 +423,8 @@ def _fig6(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int,
             ax.set_xlabel("distance from the ice edge x [m]")
             ax.grid(alpha=0.3)
         axes[0][0].set_ylabel("relative wave amplitude a / a₀ [–]")
-        axes[0][-1].legend(fontsize=8)
+        handles, labels = _legend_of(axes[0], _status_handles(sub))
+        axes[0][-1].legend(handles, labels, fontsize=8)
         fig.suptitle(_title(keys, key) + "  (band: ±1 standard error)", fontsize=9)
         _save(fig, out / _file(f"fig6_{varying.replace('_', '')}", keys, key), written)
     return written
@@ -321,38 +444,7 @@ def summary(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> lis
     keys = ("L_x", "T", "a0", "C_sd", "d_f", "dispersion")
     groups = _groups(df, keys, "eps")
     if groups:
-        fig, ax = plt.subplots(figsize=(7.0, 4.2), constrained_layout=True)
-        shown = groups[:12]
-        vary = [i for i, k in enumerate(keys) if len({kv[0][i] for kv in shown}) > 1]
-        same = [i for i in range(len(keys)) if i not in vary]
-        sheet = derived(df)["L_sheet"].max()
-        ax_top = float(sheet) if np.isfinite(sheet) else float(np.nanmax(df["W_c"]))
-        marked_none = False
-        for key, sub in shown:
-            sub = sub.sort_values("eps")
-            label = _title([keys[i] for i in vary], [key[i] for i in vary]) or None
-            line, = ax.plot(sub["eps"], sub["W_c"], "o-", ms=4, lw=1, label=label)
-            se = sub["W_c_stderr"] if "W_c_stderr" in sub.columns else None
-            if se is not None and se.notna().any():   # bars only where there is an SE
-                ok = se.notna() & sub["W_c"].notna()
-                ax.errorbar(sub.loc[ok, "eps"], sub.loc[ok, "W_c"], yerr=se[ok],
-                            fmt="none", ecolor=line.get_color(), capsize=3, lw=1)
-            none = sub["W_c"].isna()
-            if none.any():      # no compact zone: marked at the top, not a width
-                ax.plot(sub.loc[none, "eps"], np.full(int(none.sum()), ax_top), "x",
-                        color=line.get_color(), ms=6)
-                marked_none = True
-        ax.set_title(_title([keys[i] for i in same], [shown[0][0][i] for i in same]),
-                     fontsize=8)
-        ax.set_xlabel("restitution coefficient ε [–]")
-        ax.set_ylabel("collision-zone width W_c [m]")
-        if marked_none:
-            ax.plot([], [], "kx", label=f"no compact zone (drawn at {ax_top:g} m)")
-            vary = vary or [-1]
-        ax.grid(alpha=0.3)
-        if vary:
-            ax.legend(fontsize=7)
-        _save(fig, out / "collision_zone.png", written)
+        written += _collision_zone_figure(df, keys, groups[:12], out)
     if df["eps"].nunique() > 1:
         written += _collision_stats_figure(df, out)
     rate = "alpha_inner"
@@ -376,6 +468,9 @@ def summary(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> lis
             label = ", ".join(_fmt(k, fit[k]) for k in by if df[k].nunique() > 1) or "all"
             ax.loglog(om, pts[rate], "o", color=colour,
                       label=f"{label}: m = {fit['m']:.2f} ± {fit['m_stderr']:.2f}")
+            nc = _not_converged(pts).to_numpy()
+            if nc.any():
+                _ring(ax, om[nc], pts[rate].to_numpy(float)[nc], colour)
             ok = (om >= fit["omega_min"]) & (om <= fit["omega_max"])
             ax.loglog(om[ok], fit["c"] * om[ok] ** fit["m"], "-", color=colour, lw=1)
             ax.loglog(om, pts["alpha_c"], "x--", color=colour, lw=0.8, ms=4,
@@ -391,8 +486,63 @@ def summary(df: pd.DataFrame, profiles: _Profiles, out: Path, limit: int) -> lis
         ax.set_xlabel("angular frequency ω [rad s⁻¹]")
         ax.set_ylabel(f"{RATE_LABEL[rate]} (dots; fit: line) and α_c [m⁻²]")
         ax.grid(alpha=0.3, which="both")
-        ax.legend(fontsize=6)
+        handles, labels = ax.get_legend_handles_labels()   # one entry per fit, not deduped
+        handles += _status_handles(df, ring=True)
+        ax.legend(handles=handles, fontsize=6)
         _save(fig, out / "alpha_omega.png", written)
+    return written
+
+
+def _collision_zone_figure(df: pd.DataFrame, keys: Sequence[str],
+                           shown: Sequence[tuple[tuple, pd.DataFrame]], out: Path) -> list[Path]:
+    """``collision_zone.png``: W_c versus eps, one curve per group (colour and marker by the
+    parameters that differ between the groups, :func:`_styles`), offset in eps so that equal
+    values stay visible; no compact zone: a cross at the top; not converged: a square."""
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8.4, 4.6), constrained_layout=True)
+    vary = [i for i, k in enumerate(keys) if len({kv[0][i] for kv in shown}) > 1]
+    same = [i for i in range(len(keys)) if i not in vary]
+    sheet = derived(df)["L_sheet"].max()
+    ax_top = float(sheet) if np.isfinite(sheet) else float(np.nanmax(df["W_c"]))
+    eps_all = np.sort(df["eps"].unique())
+    step = float(np.min(np.diff(eps_all))) if len(eps_all) > 1 else 0.1
+    dodge = 0.25 * step / max(len(shown) - 1, 1)
+    marked_none = False
+    for i, ((key, sub), (colour, marker)) in enumerate(
+            zip(shown, _styles(keys, [kv[0] for kv in shown]), strict=True)):
+        sub = sub.sort_values("eps")
+        x = sub["eps"].to_numpy(float) + (i - 0.5 * (len(shown) - 1)) * dodge
+        label = _title([keys[j] for j in vary], [key[j] for j in vary]) or "all points"
+        ax.plot(x, sub["W_c"], ls="-", marker=marker, color=colour, ms=5, lw=1, label=label)
+        se = sub["W_c_stderr"] if "W_c_stderr" in sub.columns else None
+        if se is not None and se.notna().any():   # bars only where there is an SE
+            ok = (se.notna() & sub["W_c"].notna()).to_numpy()
+            ax.errorbar(x[ok], sub["W_c"][ok], yerr=se[ok], fmt="none", ecolor=colour,
+                        capsize=3, lw=1)
+        none = sub["W_c"].isna().to_numpy()
+        if none.any():      # no compact zone: marked at the top, not a width
+            ax.plot(x[none], np.full(int(none.sum()), ax_top), "x", color=colour, ms=7)
+            marked_none = True
+        nc = _not_converged(sub).to_numpy()
+        if nc.any():
+            _ring(ax, x[nc], np.where(none[nc], ax_top, sub["W_c"].to_numpy(float)[nc]), colour)
+    ax.set_title(_title([keys[j] for j in same], [shown[0][0][j] for j in same])
+                 + (f"\n(curves offset in ε by up to ±{0.5 * dodge * (len(shown) - 1):.2g}"
+                    " for visibility)" if len(shown) > 1 else ""), fontsize=8)
+    ax.set_xlabel("restitution coefficient ε [–]")
+    ax.set_ylabel("collision-zone width W_c [m]")
+    extra = _status_handles(pd.concat([sub for _, sub in shown]), ring=True)
+    if marked_none:
+        from matplotlib.lines import Line2D
+
+        extra.append(Line2D([], [], ls="none", marker="x", color="k",
+                            label=f"no compact zone (drawn at {ax_top:g} m)"))
+    ax.grid(alpha=0.3)
+    handles, labels = _legend_of([ax], extra)
+    fig.legend(handles, labels, fontsize=7, loc="outside right upper")
+    written: list[Path] = []
+    _save(fig, out / "collision_zone.png", written)
     return written
 
 
@@ -403,20 +553,24 @@ def _collision_stats_figure(df: pd.DataFrame, out: Path) -> list[Path]:
     import matplotlib.pyplot as plt
 
     st = collision_stats(df, by=["L_x", "dispersion", "eps"])
+    if not (st["W_c_rel_mean"].notna().any() or st["inner_over_c_median"].notna().any()):
+        return []       # no compact zone anywhere: nothing to draw (WHY says so)
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11.5, 4.0), constrained_layout=True)
     curves = sorted({(r.L_x, r.dispersion) for r in st.itertuples()},
                     key=lambda c: (c[0], DISP_ORDER.index(c[1]) if c[1] in DISP_ORDER else 9))
-    sizes = sorted({c[0] for c in curves})
-    colours = dict(zip(sizes, _colours(len(sizes)), strict=True))
-    for L_x, disp in curves:
+    for (L_x, disp), (colour, marker) in zip(curves, _styles(("L_x", "dispersion"), curves),
+                                             strict=True):
         sub = st[(st["L_x"] == L_x) & (st["dispersion"] == disp)].sort_values("eps")
         label = f"L_x = {L_x:g} m, {str(disp).upper()}"
         ax1.errorbar(sub["eps"], sub["W_c_rel_mean"], yerr=sub["W_c_rel_std"].fillna(0.0),
-                     fmt="o",
-                     ls=DISP_STYLE.get(disp, "-"), color=colours[L_x], ms=4, lw=1.2,
-                     capsize=2, label=label)
-        ax2.plot(sub["eps"], sub["inner_over_c_median"], "o", ls=DISP_STYLE.get(disp, "-"),
-                 color=colours[L_x], ms=4, lw=1.2, label=label)
+                     marker=marker, ls=DISP_STYLE.get(disp, "-"), color=colour, ms=5,
+                     lw=1.2, capsize=2, label=label)
+        ax2.plot(sub["eps"], sub["inner_over_c_median"], marker=marker,
+                 ls=DISP_STYLE.get(disp, "-"), color=colour, ms=5, lw=1.2, label=label)
+        nc = (sub["n_not_converged"] > 0).to_numpy()
+        if nc.any():
+            _ring(ax1, sub["eps"][nc], sub["W_c_rel_mean"][nc], colour)
+            _ring(ax2, sub["eps"][nc], sub["inner_over_c_median"][nc], colour)
     n = int(st["n_points"].sum())
     ax1.set_ylabel("collision-zone width / sheet length W_c / L_sheet [–]")
     ax1.set_title(f"(a) mean ± std over the other parameters ({n} points)", loc="left",
@@ -427,7 +581,7 @@ def _collision_stats_figure(df: pd.DataFrame, out: Path) -> list[Path]:
     for ax in (ax1, ax2):
         ax.set_xlabel("restitution coefficient ε [–]")
         ax.grid(alpha=0.3)
-    handles, labels = ax1.get_legend_handles_labels()
+    handles, labels = _legend_of([ax1], _status_handles(df, ring=True))
     fig.legend(handles, labels, fontsize=7, loc="outside right upper")
     written: list[Path] = []
     _save(fig, out / "collision_stats.png", written)
@@ -437,15 +591,58 @@ def _collision_stats_figure(df: pd.DataFrame, out: Path) -> list[Path]:
 RATE_LABEL = {"alpha_inner": "α_inner (x ≥ W_c)", "alpha_all": "α_all (all floes)"}
 
 _DRAW = {"fig2": fig2, "fig3": fig3, "fig5": fig5, "fig6": fig6, "summary": summary}
+#: The figures of each kind, by file-name prefix.
+PARTS = {"fig2": ("fig2",), "fig3": ("fig3",), "fig5": ("fig5",),
+         "fig6": ("fig6_df", "fig6_a0"),
+         "summary": ("collision_zone", "collision_stats", "alpha_omega")}
+#: Why a figure is not drawn: what its grid needs.
+WHY = {
+    "fig2": "needs points that differ only in eps (L_x, T, a0, C_sd, d_f fixed)",
+    "fig3": "needs points that differ only in eps (L_x, T, a0, C_sd, d_f, dispersion fixed)",
+    "fig5": "needs points that differ only in L_x (T, a0, C_sd, eps, d_f fixed)",
+    "fig6_df": "needs points that differ only in d_f (and T) (L_x, a0, C_sd, eps, dispersion"
+               " fixed)",
+    "fig6_a0": "needs points that differ only in a0 (and T) (L_x, d_f, C_sd, eps, dispersion"
+               " fixed)",
+    "collision_zone": "needs points that differ only in eps (L_x, T, a0, C_sd, d_f,"
+                      " dispersion fixed)",
+    "collision_stats": "needs more than one eps and points with a compact zone (a W_c)",
+    "alpha_omega": "needs >= 3 wave periods T with the other parameters fixed and a finite"
+                   " alpha_inner or alpha_all",
+}
+
+
+class NothingToDrawError(ConfigError):
+    """No figure of the asked kinds can be drawn from the store's grid (exit status 2, as
+    any input that cannot give what was asked); ``reasons`` maps each figure to why."""
+
+    def __init__(self, message: str, reasons: dict[str, str]) -> None:
+        super().__init__(message)
+        self.reasons = dict(reasons)
+
+
+def _stderr(message: str) -> None:
+    import sys
+
+    print(f"sweep: {message}", file=sys.stderr)
 
 
 def make_figures(path: str | Path, outdir: str | Path, max_figures: int = 20,
-                 kinds: Iterable[str] = KINDS) -> list[Path]:
+                 kinds: Iterable[str] = KINDS,
+                 log: Callable[[str], None] | None = _stderr) -> list[Path]:
     """Write the figures for the store ``path`` into ``outdir``; return the files written.
 
-    At most ``max_figures`` figures per kind (per varying parameter for ``fig6``). Raises
-    :class:`ConfigError` if matplotlib is missing, a kind is unknown or the store has no
-    results; nothing is written then.
+    At most ``max_figures`` figures per kind (per varying parameter for ``fig6``). Each
+    figure of ``kinds`` that the grid does not allow is named with the reason (:data:`WHY`)
+    through ``log`` (default: a ``sweep: ... not drawn: ...`` line on stderr).
+
+    Raises
+    ------
+    ConfigError
+        matplotlib is missing, a kind is unknown or the store has no results; nothing is
+        written then.
+    NothingToDrawError
+        (a ConfigError) none of the figures of ``kinds`` can be drawn from the grid.
     """
     kinds = list(kinds)
     unknown = [k for k in kinds if k not in KINDS]
@@ -466,6 +663,17 @@ def make_figures(path: str | Path, outdir: str | Path, max_figures: int = 20,
     out.mkdir(parents=True, exist_ok=True)
     profiles = _Profiles(path)
     written: list[Path] = []
+    reasons: dict[str, str] = {}
     for kind in kinds:
-        written += _DRAW[kind](df, profiles, out, max_figures)
+        drawn = _DRAW[kind](df, profiles, out, max_figures)
+        for part in PARTS[kind]:
+            if not any(f.name.startswith(part) for f in drawn):
+                reasons[part] = WHY[part]
+        written += drawn
+    if log is not None:
+        for part, why in reasons.items():
+            log(f"{part} not drawn: {why}")
+    if not written:
+        raise NothingToDrawError(f"{path}: no figure of {', '.join(kinds)} can be drawn from"
+                                 " this grid (see the reasons above)", reasons)
     return written

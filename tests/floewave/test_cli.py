@@ -91,3 +91,46 @@ def test_unknown_field_suggests_the_near_one(run, tmp_path):
     assert p.returncode == 2
     assert "unknown field 'epsilon' (did you mean 'eps'?)" in p.stderr
     assert "L_x, T, a0" in p.stderr
+
+
+def test_run_says_it_compiles_first_and_its_rate_excludes_the_compilation(run, tmp_path,
+                                                                          monkeypatch):
+    """Issue 25: a word before the (silent) compilation, and a floe-steps/s of the point
+    alone. The warm-up is made to take 1.5 s here: none of it may reach the point's wall
+    time or rate."""
+    import re
+    import time
+
+    import floewave.cli as cli
+
+    real = cli.warm_up
+
+    def slow_warm_up(cfg):
+        time.sleep(1.5)
+        return real(cfg) + 1.5
+
+    monkeypatch.setattr(cli, "warm_up", slow_warm_up)
+    p = run(FAST + ["--json", "out.json"], tmp_path)
+    assert p.returncode == 0, p.stderr
+    lines = p.stderr.splitlines()
+    assert lines[0].startswith("floewave: compiling the numba kernels")
+    assert re.match(r"floewave: kernels ready in \d+\.\d s", lines[1])
+    assert "iteration" in lines[2]                   # the point's progress comes after
+    result = json.loads((tmp_path / "out.json").read_text())["result"]
+    assert result["wall_time"] < 1.5
+    rate = float(re.search(r"([0-9.]+) M floe-steps/s", p.stdout).group(1))
+    assert rate == pytest.approx(result["floe_steps"] / result["wall_time"] / 1e6, abs=0.051)
+    assert "not included" in p.stdout
+
+
+@pytest.mark.parametrize("sets", [{}, {"confined": True}, {"drag_integration": "exact"},
+                                  {"replicas": 4, "L_sheet": 30.0}])
+def test_the_warm_up_point_uses_the_points_kernels(sets):
+    from floewave import ModelConfig
+    from floewave.cli import warm_up_config
+    from floewave.model import kernel_mode
+
+    cfg = ModelConfig(**sets)
+    small = warm_up_config(cfg)
+    assert kernel_mode(small) == kernel_mode(cfg)
+    assert small.n_floes <= 4 and small.max_iterations == 1 and small.replicas == 1

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from sweep import parse_campaign, run_campaign
+from sweep import load, parse_campaign, run_campaign
 from sweep.cli import main
 
 pytest.importorskip("matplotlib")
@@ -120,8 +120,11 @@ def test_figures_from_a_real_store(tmp_path, capsys):
     assert sum(n.startswith("fig3_") for n in names) == 2
     assert sum(n.startswith("fig5_") for n in names) == 2
     assert "collision_zone.png" in names and "alpha_omega.png" not in names
-    assert "collision_stats.png" in names
-    assert len(names) == 8
+    # collision_stats needs a compact zone somewhere (this short sheet may have none)
+    has_zone = bool(load(store)["W_c"].notna().any())
+    assert ("collision_stats.png" in names) == has_zone
+    assert len(names) == 7 + has_zone
+    assert ("collision_stats not drawn" in capsys.readouterr().err) == (not has_zone)
 
 
 def test_figures_of_a_missing_store_is_an_error(tmp_path, capsys):
@@ -173,5 +176,229 @@ def test_not_converged_curves_are_marked():
                    label=f"eps {status}")
     ok, bad = ax.get_lines()
     assert ok.get_marker() in ("None", "", None) and ok.get_label() == "eps converged"
-    assert bad.get_marker() == "x" and bad.get_label().endswith("(not converged)")
+    assert bad.get_marker() == "x" and bad.get_label() == "eps not_converged"
     plt.close(fig)
+
+
+# ---------------------------------------------------------------------- what each figure draws
+MIXED = """\
+[base]
+L_sheet = 6.0
+[sweep]
+L_x = [0.5]
+T = [1.0, 1.5, 2.0]
+eps = [0.2, 0.8]
+d_f = [0.005, 0.02]
+dispersion = ["ml", "ep"]
+"""
+
+
+def ep_unconverged_point(cfg):
+    """``power_point``, not converged for ``ep`` (panel (b) of Fig. 2) and converged for
+    ``ml`` (panel (a))."""
+    from sweep.testing import power_point
+
+    out = power_point(cfg)
+    out["status"] = "not_converged" if cfg.dispersion == "ep" else "converged"
+    # two replicas whose own W_c straddle the mean (Fig. 3 draws them at the threshold)
+    out["replicas"] = 2
+    out["W_c_replicas"] = np.array([0.8, 1.2]) * out["W_c"]
+    out["compact_end_replicas"] = np.full(2, out["compact_end"])
+    for name in ("x_mean", "gap_mean", "S_sd"):
+        out[f"{name}_replicas"] = np.vstack([out[name], out[name]])
+    return out
+
+
+@pytest.fixture(scope="module")
+def mixed_figures(tmp_path_factory):
+    """Every figure of the MIXED store, as matplotlib Figures by file name."""
+    from pathlib import Path
+
+    from matplotlib.figure import Figure
+
+    from sweep import load
+
+    store = tmp_path_factory.mktemp("mixed") / "m.h5"
+    run_campaign(parse_campaign(MIXED, "m.toml"), str(store),
+                 compute="tests.sweep.test_figures:ep_unconverged_point", progress_bar=False)
+    seen = {}
+    original = Figure.savefig
+
+    def savefig(self, fname, *args, **kwargs):
+        seen[Path(fname).name] = self
+        return original(self, fname, *args, **kwargs)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(Figure, "savefig", savefig)
+        assert main(["figures", str(store), "--out", str(store.parent / "f"),
+                     "--max", "1"]) == 0
+    return seen, load(store)
+
+
+def _one(figures, prefix):
+    names = [n for n in figures if n.startswith(prefix)]
+    assert len(names) == 1, names
+    return figures[names[0]]
+
+
+def _legend_texts(fig):
+    legends = list(fig.legends) + [ax.get_legend() for ax in fig.axes if ax.get_legend()]
+    return [t.get_text() for leg in legends for t in leg.get_texts()]
+
+
+def _crossed(ax):
+    return [ln for ln in ax.get_lines() if ln.get_marker() == "x" and len(ln.get_xdata()) > 1]
+
+
+def _rings(fig):
+    return [(x, y) for ax in fig.axes for ln in ax.get_lines()
+            if ln.get_marker() == "s" and ln.get_markerfacecolor() == "none"
+            for x, y in zip(ln.get_xdata(), ln.get_ydata(), strict=True)]
+
+
+def test_fig2_legend_comes_from_every_panel(mixed_figures):
+    """Issue 25: panel (a) (ML) has no not-converged curve, panel (b) (EP) has two; their
+    crosses are explained in the legend all the same."""
+    from sweep.figures import NOT_CONVERGED
+
+    fig = _one(mixed_figures[0], "fig2_")
+    ml, ep = fig.axes
+    assert ml.get_title(loc="left") == "(a) ML" and not _crossed(ml)
+    assert len(_crossed(ep)) == 2
+    texts = _legend_texts(fig)
+    assert NOT_CONVERGED in texts
+    assert {"ε = 0.2", "ε = 0.8", "eq. 25 (confined ice)",
+            "start of the compact zone (x = W_c)"} <= set(texts)
+    assert len(texts) == len(set(texts)) == 6      # one entry per ε, not one per panel
+    legend = fig.legends[0]
+    eps_entries = [h for h, t in zip(legend.legend_handles, texts, strict=True)
+                   if t.startswith("ε")]
+    assert [h.get_marker() for h in eps_entries] == ["None", "None"]   # crosses: own entry
+
+
+def test_fig3_gap_axis_is_logarithmic_with_the_W_c_threshold(mixed_figures):
+    fig = _one(mixed_figures[0], "fig3_")
+    gap_ax = fig.axes[0]
+    assert gap_ax.get_yscale() == "log"
+    threshold = [ln for ln in gap_ax.get_lines()
+                 if ln.get_linestyle() == ":" and set(ln.get_ydata()) == {1e-4}]
+    assert len(threshold) == 1
+    texts = _legend_texts(fig)
+    assert any(t.startswith("gap_threshold = 0.0001 m") for t in texts)
+    dots = sorted(ln.get_xdata()[0] for ln in gap_ax.get_lines() if ln.get_marker() == "o")
+    assert dots == pytest.approx([1.0, 4.0])          # W_c = 10 eps L_x (power_point)
+    # each replica's own W_c, at the threshold it crossed there
+    ticks = [ln for ln in gap_ax.get_lines() if ln.get_marker() == "|"]
+    assert sorted(x for ln in ticks for x in ln.get_xdata()) == pytest.approx(
+        [0.8, 1.2, 3.2, 4.8])
+    assert all(set(ln.get_ydata()) == {1e-4} for ln in ticks)
+    from sweep.figures import REPLICA_W_C
+
+    assert REPLICA_W_C in texts
+
+
+@pytest.mark.parametrize("kind", ["fig5", "fig6"])
+def test_fig5_and_fig6_mark_and_explain_not_converged_curves(kind, fake_store, tmp_path,
+                                                             monkeypatch):
+    """FAKE's eps = 0.8 points are not converged (power_point): their curves carry crosses,
+    the legend explains them once, and no other entry shows crosses."""
+    from pathlib import Path
+
+    from matplotlib.figure import Figure
+
+    from sweep.figures import NOT_CONVERGED
+
+    seen = {}
+    original = Figure.savefig
+
+    def savefig(self, fname, *args, **kwargs):
+        seen[Path(fname).name] = self
+        return original(self, fname, *args, **kwargs)
+
+    monkeypatch.setattr(Figure, "savefig", savefig)
+    assert main(["figures", str(fake_store), "--out", str(tmp_path), "--only", kind,
+                 "--max", "6"]) == 0
+    marked = {n: sum(len(_crossed(ax)) for ax in f.axes) for n, f in seen.items()}
+    assert 0 < sum(m > 0 for m in marked.values()) < len(marked), marked
+    assert all((m > 0) == ("eps=0.8" in n) for n, m in marked.items()), marked
+    # the legend is built from every panel: the crosses of any panel are explained, once
+    assert all((NOT_CONVERGED in _legend_texts(f)) == ("eps=0.8" in n) for n, f in seen.items())
+    for fig in seen.values():
+        for legend in [*fig.legends, *(ax.get_legend() for ax in fig.axes if ax.get_legend())]:
+            crossed = [t.get_text() for h, t in zip(legend.legend_handles, legend.get_texts(),
+                                                    strict=True)
+                       if getattr(h, "get_marker", lambda: None)() == "x"]
+            assert crossed in ([], [NOT_CONVERGED]), crossed
+
+
+def test_collision_zone_curves_are_distinguishable_and_status_marked(mixed_figures):
+    from sweep.figures import NOT_CONVERGED_RING
+
+    figures, df = mixed_figures
+    fig = figures["collision_zone.png"]
+    ax = fig.axes[0]
+    curves = [ln for ln in ax.get_lines() if not ln.get_label().startswith("_")]
+    styles = {(tuple(np.round(np.asarray(ln.get_color(), float), 6)), ln.get_marker())
+              for ln in curves}
+    assert len(curves) == 12 and len(styles) == 12        # T x d_f x dispersion groups
+    # every not-converged point (all of EP) has a square: 6 groups x 2 eps
+    assert len(_rings(fig)) == int((df["status"] == "not_converged").sum()) == 12
+    assert NOT_CONVERGED_RING in _legend_texts(fig)
+    # equal W_c values stay visible: no two curves share an eps position
+    xs = [tuple(ln.get_xdata()) for ln in curves]
+    assert len(set(xs)) == len(xs)
+
+
+def test_collision_stats_markers_and_rings(mixed_figures):
+    from sweep.figures import NOT_CONVERGED_RING
+
+    fig = mixed_figures[0]["collision_stats.png"]
+    ax1 = fig.axes[0]
+    curves = [c for c in ax1.containers]                  # one errorbar per curve
+    markers = {c.lines[0].get_marker() for c in curves}
+    assert len(curves) == 2 and len(markers) == 2         # ML and EP at one L_x
+    assert len(_rings(fig)) == 4                          # EP at two eps, in both panels
+    assert NOT_CONVERGED_RING in _legend_texts(fig)
+    assert {"L_x = 0.5 m, ML", "L_x = 0.5 m, EP"} <= set(_legend_texts(fig))
+
+
+def test_alpha_omega_marks_not_converged_points(mixed_figures):
+    from sweep.figures import NOT_CONVERGED_RING
+
+    fig = mixed_figures[0]["alpha_omega.png"]
+    assert _rings(fig)
+    texts = _legend_texts(fig)
+    assert NOT_CONVERGED_RING in texts
+    # every fit keeps its own alpha_c entry, even where two read the same
+    fits = [t for t in texts if ": m = " in t and not t.strip().startswith("α_c")]
+    assert len(fits) >= 2 and sum(t.strip().startswith("α_c") for t in texts) == len(fits)
+
+
+def test_nothing_drawable_says_why_and_exits_2(power_store, tmp_path, capsys):
+    store = power_store("[base]\nL_sheet = 6.0\n[sweep]\nL_x = [0.5]\n", "one.toml")
+    assert main(["figures", str(store), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "fig2 not drawn: needs points that differ only in eps" in err
+    assert "alpha_omega not drawn: needs >= 3 wave periods" in err
+    assert "no figure of fig2, fig3, fig5, fig6, summary can be drawn" in err
+    assert list((tmp_path / "o").iterdir()) == []
+
+
+def test_collision_stats_without_any_compact_zone_is_not_drawn_and_says_why(power_store,
+                                                                            tmp_path, capsys):
+    """power_point has no compact zone where 10 eps L_x >= L_sheet: here nowhere."""
+    store = power_store("[base]\nL_sheet = 3.0\n[sweep]\nL_x = [0.5]\neps = [0.6, 0.8]\n",
+                        "wide.toml")
+    assert main(["figures", str(store), "--out", str(tmp_path), "--only", "summary"]) == 0
+    assert "collision_stats not drawn: needs more than one eps and points with a compact" \
+           " zone" in capsys.readouterr().err
+    assert [f.name for f in tmp_path.iterdir()] == ["collision_zone.png"]
+
+
+def test_a_figure_not_drawn_is_named_on_stderr(fake_store, tmp_path, capsys):
+    assert main(["figures", str(fake_store), "--out", str(tmp_path), "--only", "fig5",
+                 "--max", "1"]) == 0
+    assert "not drawn" not in capsys.readouterr().err
+    one_T = tmp_path / "x"
+    assert main(["figures", str(fake_store), "--out", str(one_T), "--only", "summary"]) == 0
+    assert "not drawn" not in capsys.readouterr().err
