@@ -40,11 +40,11 @@ __all__ = ["Campaign", "Point", "RunOptions", "load_campaign", "parse_campaign",
 #: random paper-grid points.
 DEFAULT_EXPECTED_ITERATIONS = 22
 #: Windows a ``stationary`` point runs beyond its minimum (the transient of
-#: ``floewave.protocol.transient_windows`` plus ``n_average``), for cost estimates. Measured
-#: with model version 6 (2026-12-02): mean 9.5 on ``benchmarks/plan_check.py --n 32 --seed
-#: 7``'s sample and 5.5 over the 64 runs of ``benchmarks/honesty.py --reference --random
-#: 24`` (most points stop at the minimum; a few run 8-30 windows more, 2 of 96 to the cap).
-EXTRA_WINDOWS = 7
+#: ``floewave.transient.transient_windows`` plus ``n_average``), for cost estimates.
+#: Measured with model version 6 (2026-12-02): mean 2.6 on ``benchmarks/plan_check.py --n 32
+#: --seed 7``'s sample and 2.4 over the 64 runs of ``benchmarks/honesty.py --reference
+#: --random 24`` (most points stop at the minimum; a few run 4-18 windows more).
+EXTRA_WINDOWS = 3
 
 #: Most floes accepted in a sheet (L_sheet / L_x); the paper's largest is a few hundred.
 MAX_FLOES = 1_000_000
