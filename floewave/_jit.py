@@ -63,7 +63,7 @@ import warnings  # noqa: E402
 from numba.core import caching as _caching  # noqa: E402
 
 #: the files whose jitted functions call each other (and these flags)
-KERNEL_SOURCES = ("_jit.py", "_exact.py", "_kernels.py")
+KERNEL_SOURCES = ("_jit.py", "_exact.py", "_kernels.py", "_march.py")
 _HERE = os.path.dirname(os.path.abspath(__file__))
 
 

@@ -17,8 +17,9 @@ profile. Used as the iteration's update (a Newton-like step for the fixed point)
 estimator (the march of the mean coefficient, not the mean of marched profiles:
 :mod:`floewave.protocol`).
 
-Self-contained on purpose (calls no kernel file), so numba's own per-file cache key is
-complete for it.
+It calls no other kernel file, but takes its flags from ``floewave._jit.JIT``: it is one of
+``floewave._jit.KERNEL_SOURCES``, so a change of the flags (which numba's own key does not
+hold) recompiles it too.
 """
 from __future__ import annotations
 
@@ -42,6 +43,10 @@ def _root(q: float, b: float) -> float:
     a = math.sqrt(b)
     if q <= 0.0:
         return a
+    # both sqrt(b) and cbrt(b / q) bound the root from above (a^2 <= b, q a^3 <= b):
+    # starting at the smaller keeps Newton's monotone descent and needs few steps where
+    # the cubic term dominates (from sqrt(b) alone each step shrank a by only 1.5x)
+    a = min(a, (b / q) ** (1.0 / 3.0))
     for _ in range(100):
         f = a * a + q * a * a * a - b
         step = f / (2.0 * a + 3.0 * q * a * a)

@@ -46,7 +46,7 @@ COUPLINGS = ("mean", "independent")
 PROTOCOLS = ("stationary", "noise_floor")
 #: the fewest time steps a binary contact may take (:meth:`ModelConfig.contact_steps`). The
 #: realised restitution is within 0.01 of dt 1e-4's when a contact takes >= 50 steps and
-#: 0.05-0.18 off at 9-11 (``benchmarks/dt_convergence.py``, 2026-12-02); the stiffest-limit
+#: 0.03-0.07 off at 9-11 (``benchmarks/dt_convergence.py``, 2026-12-02); the stiffest-limit
 #: estimate is a lower bound, about 0.4x the steps of a contact at 0.05 m/s
 MIN_CONTACT_STEPS = 20
 STATIONARITY = ("mser", "fixed")

@@ -31,7 +31,9 @@ at Fig. 2's ``ep`` eps 0.8 point), so it averaged a transient. This protocol:
 The estimate (:func:`floewave.ensemble.estimate_point` with coefficients) is the march of
 the mean coefficient, never a mean of marched, clipped profiles. With ``coupling =
 "independent"`` (the default) every replica marches its own a(x), so the replicas are
-independent runs and the jackknife over them includes the iteration noise of a(x).
+independent runs (but for the shared truncation point d, which decides which windows
+feed every replica's update) and the jackknife over them includes the iteration noise of
+a(x).
 """
 from __future__ import annotations
 
@@ -140,7 +142,7 @@ class _Windows:
             d = min(cfg.transient_min, n - 1)
             return d, n > cfg.transient_min
         if n < cfg.n_average:
-            return n - 1, False
+            return max(n - 1, 0), False
         Y = np.array(self.series)                                   # (n, 3, R)
         # MSER on the replica means, rounded to the resolution of a reported amplitude
         # (SE_FLOOR a0): a non-chaotic point's creep by 1e-10 a0 is not a transient (MSER
@@ -148,9 +150,10 @@ class _Windows:
         res = (SE_FLOOR * cfg.a0, SE_FLOOR * cfg.a0, 0.0)
         d = max(mser_truncation(_rounded(Y[:, s].mean(axis=1), res[s]), cfg.n_average)
                 for s in range(Y.shape[1]))
-        if d > n // 2:                  # MSER's own validity rule, on its own truncation
-            return d, False
+        valid = d <= n // 2             # MSER's own validity rule, on its own truncation
         d = max(d, min(d_min, n - 1))   # the physical lower bound needs no such rule
+        if not valid or n - d < cfg.n_average:
+            return d, False
         floors = (1e-3 * cfg.a0, 1e-3 * cfg.a0, 1e-2)
         return d, all(abs(halves_z(Y[d:, s], floors[s])) <= GEWEKE_Z
                       for s in range(Y.shape[1]))
@@ -242,8 +245,8 @@ def iterate_stationary(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g: 
                 d = d_use
                 break
     if status == "not_converged":
-        if not stationary:
-            d = len(wins) // 2
+        if not stationary:            # the last half, never inside the transient's bound
+            d = max(len(wins) // 2, min(d_min, len(wins) - 1))
         est = _with_convergence(cfg, _estimate(cfg, wins, d, c_g, k), a, wins.A[-1])
     assert est is not None
     averaged = history[d:] if d < len(history) else history[-1:]
@@ -260,9 +263,10 @@ SE_FLOOR = 1e-6
 
 def _with_convergence(cfg: ModelConfig, est: dict, a_new: np.ndarray,
                       a_old: np.ndarray) -> dict:
-    """An ensemble's SE(a) with the last update's change |mean_r (a_new - a)| in
-    quadrature (how far from its fixed point the iteration still was; the jackknife alone
-    does not see it) and at least :data:`SE_FLOOR` a0."""
+    """An ensemble's SE(a) with the change of the replica-mean forcing in the last update,
+    |mean_r (a_new - a)|, in quadrature (signed changes of single replicas cancel: it is how
+    far the pooled estimate was still moving, which the jackknife alone does not see) and
+    at least :data:`SE_FLOOR` a0."""
     if cfg.n_chains < 2:
         return est
     conv = np.abs(np.mean(a_new - a_old, axis=0))

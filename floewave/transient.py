@@ -25,8 +25,10 @@ def transient_windows(cfg: ModelConfig, k: float) -> int:
     """The fewest windows discarded as transient: ``transient_min``, or
     ``transient_drag_times`` tau_d (:func:`drag_time`) when longer, at most half of
     ``max_iterations`` (a function of the configuration alone)."""
-    tau = drag_time(cfg, k) * cfg.transient_drag_times
     n = cfg.transient_min
+    if cfg.transient_drag_times == 0.0:
+        return int(min(n, cfg.max_iterations // 2))
+    tau = drag_time(cfg, k) * cfg.transient_drag_times
     if np.isfinite(tau):
         n = max(n, int(np.ceil(tau / (cfg.nT * cfg.T))))
     else:

@@ -501,7 +501,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         child = argv is None and bool(args_) and args_[0] == "run" and guard.guarded()
         guard.unblock()
-        status = _main(argv)
+        try:
+            status = _main(argv)
+        except SystemExit as exc:  # argparse's --help (0) or usage error (2)
+            code = exc.code
+            status = code if isinstance(code, int) else (EXIT_OK if code is None else 2)
     except Interrupted as exc:  # before _main's own handling
         _err(exc)
         status = exc.exit_status

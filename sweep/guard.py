@@ -113,6 +113,8 @@ def _guard(child: int, r: int, mask: set[int]) -> int:
         signal.signal(sig, signal.SIG_IGN)
     reported = b""
     with contextlib.suppress(OSError):
+        # not blocking: a descendant the campaign forked may still hold the write end
+        os.set_blocking(r, False)
         reported = os.read(r, 1)
     os.close(r)
     if os.WIFSIGNALED(status):
