@@ -171,3 +171,20 @@ def test_the_transient_spans_the_drag_relaxation_time():
     assert transient_windows(cfg.replace(C_sd=0.2), k) == cfg.transient_min
     assert transient_windows(cfg.replace(C_sd=0.0), k) == cfg.max_iterations // 2
     assert transient_windows(cfg.replace(transient_drag_times=0.0), k) == cfg.transient_min
+    # 0 drag times is no bound even without drag (inf * 0 must not decide)
+    assert transient_windows(cfg.replace(C_sd=0.0, transient_drag_times=0.0), k) == \
+        cfg.transient_min
+
+
+def test_the_march_root_is_exact_where_the_cubic_term_dominates():
+    """a^2 + q a^3 = b with q sqrt(b) ~ 1e56: Newton from min(sqrt(b), cbrt(b/q)) converges
+    (from sqrt(b) alone it ran out of its 100 steps with a 1e-8 relative residual)."""
+    cfg = ModelConfig(L_x=0.5)
+    fac = cfg.L_x / (cfg.rho_w * 9.81 * 0.9)
+    for c0 in (-1e30, -1e50, -1e60):
+        c = np.full(cfg.n_floes, -100.0)
+        c[0] = c0
+        a1 = march_coefficients(cfg, c, c_g=0.9, k=3.0)[0]
+        q = -fac * c0
+        assert a1 > 0
+        assert abs(a1 * a1 + q * a1**3 - cfg.a0**2) <= 1e-12 * cfg.a0**2

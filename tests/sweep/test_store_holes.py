@@ -540,3 +540,15 @@ def test_a_rebuild_keeps_the_runs_and_their_numbering(tmp_path, campaign):
     run_campaign(campaign, str(path), compute=FAKE)
     assert [r["index"] for r in sweep.analysis.store_runs(path)] == [2]  # the journal's last
     assert set(sweep.load(path)["run"]) == {0, 1}
+
+
+def test_help_under_the_guard_exits_0():
+    """The console path forks the guard for ``run``: argparse's --help (SystemExit 0) is a
+    clean exit, not 'ended with status 0 before the campaign finished' (exit 6)."""
+    import subprocess
+    import sys
+
+    p = subprocess.run([sys.executable, "-m", "sweep", "run", "--help"], capture_output=True,
+                       text=True, timeout=120)
+    assert p.returncode == 0, p.stderr
+    assert "usage" in p.stdout and "before the campaign finished" not in p.stderr
