@@ -21,7 +21,8 @@ standard error falls as 1/sqrt(iterations averaged)).
 
 ``--reference``: two runs of one protocol share its biases, so the between-seed z cannot see
 them. Each point is also run as a long reference (:data:`REFERENCE`: the stationary protocol
-with a fixed transient of 85 periods and 150 periods averaged per replica, no early stop),
+with a fixed transient of 85 periods or :data:`REFERENCE_DRAG_TIMES` drag relaxation times,
+whichever is longer, and 150 periods averaged per replica, no early stop),
 with two seeds; the references are kept in ``benchmarks/data/references.json`` (computed
 once, reused) and each of the two production runs is compared with the mean of the two
 references, z = (x - x_ref) / sqrt(se^2 + se_ref^2). Target: RMS z in [0.8, 1.25] for a(x),
