@@ -355,7 +355,8 @@ def cmd_status(args: argparse.Namespace) -> int:
         for f in rep["failures"]:
             print(f"  {f['hash']} {f['status']:8s} {_swept_text(f['swept'])}: {f['message']}")
     if rep["not_converged"]:
-        print("not converged (max_iterations reached; the mean so far is stored):")
+        print("not converged (max_iterations reached; the estimate so far is stored, with"
+              " its error bars):")
         for f in rep["not_converged"]:
             print(f"  {f['hash']} {_swept_text(f['swept'])}: {f['iterations']} iterations,"
                   f" residual {f['residual']:.3g}")

@@ -193,7 +193,8 @@ def _status(df: pd.DataFrame, dims: Sequence[str], total: int, journaled: int | 
         status = str(r["status"])
         if status == "not_converged":
             reason = (f"max_iterations reached after {int(r['iterations'])} iterations, "
-                      f"residual {float(r['residual']):.3g} (the mean so far is stored)")
+                      f"residual {float(r['residual']):.3g} (its estimate so far is stored,"
+                      " with its error bars)")
         else:
             lines = str(r.get("message", "")).strip().splitlines()
             reason = lines[-1] if lines else "(no message)"
