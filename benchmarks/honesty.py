@@ -161,6 +161,7 @@ def combine(r1: dict, r2: dict) -> dict:
 def reference_table(pts: list, ens: list, cache: dict, refs: dict, replicas: int) -> None:
     """z of every production run against the mean of its point's two references."""
     zs: dict[str, list[np.ndarray]] = {"a": [], **{s: [] for s in SCALARS}}
+    above: dict[str, list[np.ndarray]] = {"a": [], "a_end": []}   # SE above the floor
     print(f"\nagainst the references ({len(REFERENCE_SEEDS)} seeds each, {REFERENCE}):")
     print(f"{'point':44s} {'W_c ref':>13s} {'z_Wc':>11s} {'a_end/a0 ref':>14s} "
           f"{'z_aend':>11s} {'rms z_a':>8s}")
@@ -173,6 +174,16 @@ def reference_table(pts: list, ens: list, cache: dict, refs: dict, replicas: int
         for k in (k1, k2):
             for name in zs:
                 zs[name].append(z_scores(cache[k], ref, name))
+            for name in above:      # the z of values whose own SE is above the floor
+                fl = floored(cache[k], a0)
+                se = np.atleast_1d(np.asarray(fl[name + "_stderr"], float))
+                x = np.atleast_1d(np.asarray(fl[name], float))
+                keep = np.isfinite(x) & (se > 1.01 * SE_FLOOR * a0)
+                sub = {name: x[keep], name + "_stderr": se[keep]}
+                refsub = {name: np.atleast_1d(np.asarray(ref[name], float))[keep],
+                          name + "_stderr": np.atleast_1d(
+                              np.asarray(ref[name + "_stderr"], float))[keep]}
+                above[name].append(z_scores(sub, refsub, name))
             row.append((z_scores(cache[k], ref, "W_c"), z_scores(cache[k], ref, "a_end"),
                         z_scores(cache[k], ref, "a")))
         name = ",".join(f"{k}={v}" for k, v in p.items() if k != "dispersion") + \
@@ -190,6 +201,14 @@ def reference_table(pts: list, ens: list, cache: dict, refs: dict, replicas: int
         rms = math.sqrt(np.mean(z**2)) if z.size else math.nan
         print(f"  {name:12s} RMS z = {rms:5.2f}  n = {z.size:4d}  |z|>4: "
               f"{int((abs(z) > 4).sum())}  max |z| = {np.max(np.abs(z)) if z.size else 0:.2f}")
+    print(f"only values whose SE is above the floor ({SE_FLOOR:g} a0; at the floor a"
+          " non-chaotic point's z is about 0):")
+    for name, parts in above.items():
+        z = np.concatenate(parts) if parts else np.zeros(0)
+        total = sum(p.size for p in zs[name])
+        rms = math.sqrt(np.mean(z**2)) if z.size else math.nan
+        print(f"  {name:12s} RMS z = {rms:5.2f}  n = {z.size:4d} ({total - z.size} at the"
+              " floor left out)")
 
 
 def main(argv: list[str] | None = None) -> int:

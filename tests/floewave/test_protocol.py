@@ -188,3 +188,38 @@ def test_the_march_root_is_exact_where_the_cubic_term_dominates():
         q = -fac * c0
         assert a1 > 0
         assert abs(a1 * a1 + q * a1**3 - cfg.a0**2) <= 1e-12 * cfg.a0**2
+
+
+def test_the_convergence_term_and_the_floor_of_an_ensembles_error_bar():
+    """SE(a)^2 = jackknife^2 + |mean_r (a_new - a)|^2, at least SE_FLOOR a0; one chain
+    keeps its own error bar."""
+    from floewave.protocol import SE_FLOOR, _with_convergence
+
+    cfg = ModelConfig(L_x=3.0)
+    n = cfg.n_floes
+    est = {"a_stderr": np.full(n, 3e-5), "a_end_stderr": 3e-5}
+    a_old = np.full((2, n), 0.01)
+    a_new = a_old + np.array([[4e-5], [4e-5]])          # both replicas moved by +4e-5
+    out = _with_convergence(cfg, dict(est), a_new, a_old)
+    np.testing.assert_allclose(out["a_stderr"], 5e-5, rtol=1e-12)        # 3-4-5
+    assert out["a_end_stderr"] == pytest.approx(5e-5, rel=1e-12)
+    opposite = a_old + np.array([[4e-5], [-4e-5]])       # signed changes cancel
+    np.testing.assert_allclose(_with_convergence(cfg, dict(est), opposite, a_old)["a_stderr"],
+                               3e-5, rtol=1e-12)
+    tiny = {"a_stderr": np.full(n, 1e-15), "a_end_stderr": 1e-15}
+    floor = _with_convergence(cfg, tiny, a_old, a_old)["a_stderr"]
+    assert np.all(floor == SE_FLOOR * cfg.a0)
+    one = ModelConfig(L_x=3.0, replicas=1)
+    assert _with_convergence(one, dict(est), a_new, a_old)["a_stderr"] is est["a_stderr"]
+
+
+def test_mean_coupling_under_the_stationary_protocol_shares_one_profile():
+    cfg = ModelConfig(L_x=3.0, replicas=3, coupling="mean", max_iterations=16)
+    r = run_point(cfg)
+    assert r.status in ("converged_noisy", "not_converged")
+    assert np.all(np.isfinite(r.a)) and np.all(np.diff(r.a) <= 0)
+    # the coupling decides the forcing, so the trajectories: the same replicas marching
+    # their own a(x) dissipate differently
+    ind = run_point(cfg.replace(coupling="independent"))
+    assert r.S_sd_replicas.shape == ind.S_sd_replicas.shape == (3, cfg.n_floes)
+    assert not np.array_equal(r.S_sd_replicas, ind.S_sd_replicas)
