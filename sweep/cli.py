@@ -156,6 +156,10 @@ def build_parser() -> argparse.ArgumentParser:
     pc.add_argument("--compute", default=None, metavar="MODULE:FUNC",
                     help="compute function for --run (tests; default floewave:run_point)")
     pc.add_argument("--json", action="store_true", help="machine-readable output")
+    pc.add_argument("--seeds", type=int, nargs="+", default=None, metavar="S",
+                    help="check independent ensembles: the campaigns with [base] seed = S"
+                    " in DIR/seed<S>/ (run with --run); a verdict stands only where every"
+                    " seed gives it")
 
     rp = sub.add_parser("report", help="one self-contained HTML page of a campaign: what ran,"
                         " status, failures, figures, collision-zone statistics")
@@ -469,13 +473,32 @@ def cmd_paper_check(args: argparse.Namespace) -> int:
     table is printed all the same, those claims inconclusive)."""
     from .papercheck import check_stores, format_table
 
-    report = check_stores(args.stores, run=args.run, configs=args.configs,
-                          compute=args.compute,
-                          log=lambda msg: print(f"sweep: {msg}", file=sys.stderr))
-    print(report.to_json() if args.json else format_table(report.checks))
-    for name, problem in report.problems.items():
+    def log(msg: str) -> None:
+        print(f"sweep: {msg}", file=sys.stderr)
+
+    if args.seeds:
+        from .paperseeds import across_seeds, check_seeds, format_seed_table
+
+        reports = check_seeds(args.stores, args.seeds, run=args.run, configs=args.configs,
+                              compute=args.compute, log=log)
+        if args.json:
+            first = next(iter(reports.values())).checks
+            across = [across_seeds([r.checks[i].verdict for r in reports.values()])
+                      for i in range(len(first))]
+            print(json.dumps({"seeds": {str(s): r.to_dict() for s, r in reports.items()},
+                              "across_seeds": across}, indent=2))
+        else:
+            print(format_seed_table(reports))
+        problems = {f"seed {s}: {name}": p for s, r in reports.items()
+                    for name, p in r.problems.items()}
+    else:
+        report = check_stores(args.stores, run=args.run, configs=args.configs,
+                              compute=args.compute, log=log)
+        print(report.to_json() if args.json else format_table(report.checks))
+        problems = report.problems
+    for name, problem in problems.items():
         _err(f"{name}: {problem}")
-    return EXIT_STORE if report.problems else EXIT_OK
+    return EXIT_STORE if problems else EXIT_OK
 
 
 def cmd_report(args: argparse.Namespace) -> int:

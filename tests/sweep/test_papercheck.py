@@ -339,3 +339,51 @@ def test_a_partial_fig6a_store_is_not_compared_with_itself():
     short = [c for c in checks if "1.2" in c.points]
     assert short and short[0].verdict == INCONCLUSIVE
     assert "fewer than 2 values" in short[0].evidence
+
+
+# ---------------------------------------------------------------------- --seeds
+def test_a_verdict_across_seeds_stands_only_where_every_seed_gives_it():
+    from sweep.paperseeds import SEED_DEPENDENT, across_seeds
+
+    assert across_seeds([HOLDS, HOLDS]) == HOLDS
+    assert across_seeds([FAILS, FAILS, FAILS]) == FAILS
+    assert across_seeds([FAILS, INCONCLUSIVE]) == SEED_DEPENDENT       # #26 in issue 23
+    assert across_seeds([HOLDS, HOLDS, INCONCLUSIVE]) == SEED_DEPENDENT
+
+
+def test_seeded_campaign_files_differ_only_in_their_seed(tmp_path):
+    from sweep.config import load_campaign
+    from sweep.paperseeds import seeded_configs
+
+    out = seeded_configs(pc.default_configs(), 7, tmp_path / "c")
+    for name in pc.PAPER_CAMPAIGNS:
+        old = load_campaign(pc.default_configs() / f"{name}.toml")
+        new = load_campaign(out / f"{name}.toml")
+        assert new.base.seed == 7 and old.base.seed == 0
+        assert new.base.replace(seed=0) == old.base and new.sweep == old.sweep
+    bad = tmp_path / "bad"
+    bad.mkdir()
+    for name in pc.PAPER_CAMPAIGNS:
+        (bad / f"{name}.toml").write_text("[base]\n[sweep]\neps = [0.2]\n")
+    with pytest.raises(ValueError, match="seed = N"):
+        seeded_configs(bad, 1, tmp_path / "c2")
+
+
+def test_cli_seeds_runs_each_seed_into_its_own_stores(tmp_path, capsys):
+    d = tmp_path / "paper"
+    assert main(["paper-check", "--stores", str(d), "--run", "--seeds", "0", "1",
+                 "--compute", "sweep.testing:fake_point"]) == 0
+    table = capsys.readouterr().out
+    for seed in (0, 1):
+        for name in pc.PAPER_CAMPAIGNS:
+            assert (d / f"seed{seed}" / f"{name}.h5").exists()
+    lines = table.splitlines()
+    assert lines[0].startswith("| # | claim") and "seed 0 | seed 1 | across seeds" in lines[0]
+    rows = [ln for ln in lines if ln.startswith("| ") and ln[2].isdigit()]
+    assert len(rows) == 26
+    # fake_point ignores the seed: both seeds give the same verdicts, none seed-dependent
+    assert "0 seed-dependent" in lines[-1]
+    assert main(["paper-check", "--stores", str(d), "--seeds", "0", "1", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert set(out["seeds"]) == {"0", "1"} and len(out["across_seeds"]) == 26
+    assert main(["paper-check", "--stores", str(d), "--seeds", "3", "3"]) == 2
