@@ -35,7 +35,7 @@ from .results import LAYOUTS, Zones, compact_zones, fit_exponential, fit_inverse
 
 __all__ = ["initial_positions", "replica_seed_sequence", "march_rows", "Records",
            "estimate_point", "jackknife_se", "zone_of", "fit_zone", "coefficients",
-           "mean_coefficients", "effective_sample_size", "stderr"]
+           "mean_coefficients", "effective_sample_size", "stderr", "residual"]
 
 
 def replica_seed_sequence(cfg: ModelConfig) -> np.random.SeedSequence:
@@ -101,6 +101,15 @@ def march_rows(cfg: ModelConfig, S_sd: np.ndarray, c_g: float, k: float) -> np.n
             a2 = a2 - 3.0 * math.sqrt(G) * h_ow**2.5 / c_g
         a[..., i] = np.sqrt(np.maximum(a2, 0.0))
     return a
+
+
+def residual(a_old: np.ndarray, a_new: np.ndarray) -> float:
+    """max_i |a_new - a_old| / a_old over floes with a_old > 0 (0 if there are none): the
+    iteration's residual (MODEL.md §4 step 6)."""
+    ok = a_old > 0
+    if not ok.any():
+        return 0.0
+    return float(np.max(np.abs(a_new[ok] - a_old[ok]) / a_old[ok]))
 
 
 def coefficients(S: np.ndarray, A: np.ndarray) -> np.ndarray:

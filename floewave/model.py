@@ -10,12 +10,20 @@ import numpy as np
 from . import _kernels as K
 from .config import ModelConfig
 from .dispersion import alpha_confined
-from .ensemble import Records, estimate_point, initial_positions, march_rows, stderr, zone_of
+from .ensemble import (
+    Records,
+    estimate_point,
+    initial_positions,
+    march_rows,
+    residual,
+    stderr,
+    zone_of,
+)
 from .errors import NumericalError
 from .forces import cell_offsets
 from .protocol import iterate_stationary
 from .results import PointResult
-from .window import Window
+from .window import Window, dissipation, run_window
 
 __all__ = ["FloeChain", "NumericalError", "march_amplitude", "dissipation", "residual",
            "run_point", "Window"]
@@ -116,11 +124,6 @@ class FloeChain:
                                  f" step {self.istep}{where}")
 
 
-def dissipation(cfg: ModelConfig, s3_mean: np.ndarray) -> np.ndarray:
-    """Eq. 19: S_sd,i = -rho_w C_sd <|u_rel|^3>_i  [W m^-2]."""
-    return -cfg.rho_w * cfg.C_sd * s3_mean
-
-
 def march_amplitude(cfg: ModelConfig, S_sd: np.ndarray, c_g: float, k: float) -> np.ndarray:
     """Amplitudes from the ice edge (eqs. 12, 20, optionally 21), clipped at 0
     (:func:`floewave.ensemble.march_rows`, which marches many profiles at once).
@@ -131,14 +134,6 @@ def march_amplitude(cfg: ModelConfig, S_sd: np.ndarray, c_g: float, k: float) ->
              h_ow = c_ow max(k a_{i-1} - s_min, 0)].
     """
     return march_rows(cfg, np.asarray(S_sd, dtype=float), c_g, k)
-
-
-def residual(a_old: np.ndarray, a_new: np.ndarray) -> float:
-    """max_i |a_new - a_old| / a_old over floes with a_old > 0 (0 if there are none)."""
-    ok = a_old > 0
-    if not ok.any():
-        return 0.0
-    return float(np.max(np.abs(a_new[ok] - a_old[ok]) / a_old[ok]))
 
 
 def noise_floor_reached(history: list[float], window: int) -> bool:
@@ -226,7 +221,6 @@ def _iterate_noise_floor(cfg: ModelConfig, chain: FloeChain, x0s: np.ndarray, k:
     ``history``, ``noise``."""
     R = cfg.n_chains
     n = cfg.n_floes
-    n_t = cfg.n_t
     a = np.full((R, n), cfg.a0)          # per replica (rows equal under coupling "mean")
     history: list[float] = []
     samples: list[tuple] = []        # per averaging iteration: (S, a_new, windows, zones)
@@ -238,20 +232,7 @@ def _iterate_noise_floor(cfg: ModelConfig, chain: FloeChain, x0s: np.ndarray, k:
     a_new = a
     a_prev = a
     for it in range(1, cfg.max_iterations + 1):
-        stats = np.zeros((K.N_STATS, R, n))
-        if cfg.confined:
-            for r in range(R):
-                K.confined_window(x0s[r], a[r], cfg.nT * n_t, chain.P, chain.cxi,
-                                  chain.sxi, stats[:, r, :])
-        else:
-            if not cfg.warm_start:
-                chain.reset()
-            n0 = cfg.n0 if (it == 1 or not cfg.warm_start) else cfg.n0_warm
-            chain.run(a, n0 * n_t)
-            chain.run(a, cfg.nT * n_t, stats)
-            chain.check()
-        windows = [Window(cfg, stats[:, r, :], cfg.nT * n_t, x0s[r]) for r in range(R)]
-        S = np.array([dissipation(cfg, w.s3_mean) for w in windows])
+        windows, S = run_window(cfg, chain, x0s, a, it == 1)
         if cfg.coupling == "mean":
             a_new = np.broadcast_to(march_amplitude(cfg, S.mean(axis=0), c_g, k), (R, n))
         else:

@@ -41,13 +41,20 @@ from collections.abc import Callable
 
 import numpy as np
 
-from . import _kernels as K
 from ._march import march_coefficients
 from .config import ModelConfig
-from .ensemble import Records, coefficients, estimate_point, mean_coefficients, stderr, zone_of
+from .ensemble import (
+    Records,
+    coefficients,
+    estimate_point,
+    mean_coefficients,
+    residual,
+    stderr,
+    zone_of,
+)
 from .errors import NumericalError
 from .transient import drag_time, transient_windows
-from .window import FIELDS, Window
+from .window import FIELDS, run_window
 
 __all__ = ["confined_profile", "mser_truncation", "iterate_stationary", "drag_time",
            "transient_windows"]
@@ -193,8 +200,6 @@ def iterate_stationary(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g: 
     ``history`` (the update's residual per window), ``noise`` (median residual of the
     averaged windows) and ``truncation`` (windows discarded as transient)."""
     R = cfg.n_chains
-    n = cfg.n_floes
-    n_t = cfg.n_t
     a = np.tile(confined_profile(cfg, x0s[0] - x0s[0, 0] + 0.5 * cfg.L_x, alpha_c), (R, 1))
     wins = _Windows()
     d_min = transient_windows(cfg, k)
@@ -203,20 +208,7 @@ def iterate_stationary(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g: 
     d, stationary = 0, False
     est: dict | None = None
     for it in range(1, cfg.max_iterations + 1):
-        stats = np.zeros((K.N_STATS, R, n))
-        if cfg.confined:
-            for r in range(R):
-                K.confined_window(x0s[r], a[r], cfg.nT * n_t, chain.P, chain.cxi, chain.sxi,
-                                  stats[:, r, :])
-        else:
-            if not cfg.warm_start:
-                chain.reset()
-            n0 = cfg.n0 if (it == 1 or not cfg.warm_start) else cfg.n0_warm
-            chain.run(a, n0 * n_t)
-            chain.run(a, cfg.nT * n_t, stats)
-            chain.check()
-        windows = [Window(cfg, stats[:, r, :], cfg.nT * n_t, x0s[r]) for r in range(R)]
-        S = np.array([-cfg.rho_w * cfg.C_sd * w.s3_mean for w in windows])
+        windows, S = run_window(cfg, chain, x0s, a, it == 1)
         zones = [zone_of(cfg, w.x_mean, w.gap_mean) for w in windows]
         wins.add(cfg, S, np.array(a), windows, zones, c_g, k)
         d, stationary = wins.truncation(cfg, d_min)
@@ -226,7 +218,7 @@ def iterate_stationary(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g: 
         a_new = march_coefficients(cfg, C_avg, c_g, k)
         if not np.all(np.isfinite(a_new)):
             raise NumericalError(f"non-finite amplitude at iteration {it}")
-        res = max(_residual(a[r], a_new[r]) for r in range(R))
+        res = max(residual(a[r], a_new[r]) for r in range(R))
         history.append(res)
         if progress is not None:
             progress(it, res, "average" if stationary else "iterate")
@@ -274,13 +266,6 @@ def _with_convergence(cfg: ModelConfig, est: dict, a_new: np.ndarray,
     est["a_stderr"] = np.maximum(se, SE_FLOOR * cfg.a0)
     est["a_end_stderr"] = float(est["a_stderr"][-1])
     return est
-
-
-def _residual(a_old: np.ndarray, a_new: np.ndarray) -> float:
-    ok = a_old > 0
-    if not ok.any():
-        return 0.0
-    return float(np.max(np.abs(a_new[ok] - a_old[ok]) / a_old[ok]))
 
 
 def _estimate(cfg: ModelConfig, wins: _Windows, d: int, c_g: float, k: float) -> dict:

@@ -1,5 +1,5 @@
-"""One averaging window's statistics per floe (MODEL.md §4 step 3, §6), from the kernel's
-accumulators."""
+"""One averaging window of the attenuation iteration (MODEL.md §4 steps 2-3): running it on
+the R chains and its statistics per floe (§6), from the kernel's accumulators."""
 from __future__ import annotations
 
 import numpy as np
@@ -7,7 +7,7 @@ import numpy as np
 from . import _kernels as K
 from .config import ModelConfig
 
-__all__ = ["Window"]
+__all__ = ["Window", "dissipation", "run_window"]
 
 
 class Window:
@@ -37,3 +37,32 @@ class Window:
 
 #: the Window fields that are per-floe profiles
 FIELDS = Window.FIELDS
+
+
+def dissipation(cfg: ModelConfig, s3_mean: np.ndarray) -> np.ndarray:
+    """Eq. 19: S_sd,i = -rho_w C_sd <|u_rel|^3>_i  [W m^-2]."""
+    return -cfg.rho_w * cfg.C_sd * s3_mean
+
+
+def run_window(cfg: ModelConfig, chain, x0s: np.ndarray, a: np.ndarray,
+               first: bool) -> tuple[list[Window], np.ndarray]:
+    """One iteration's DEM run with amplitudes ``a`` (R, N_f): the spin-up (``n0`` periods
+    on the ``first`` window or without ``warm_start``, else ``n0_warm``) and ``nT`` periods
+    accumulating; fixed floes (``confined``) run the confined kernel instead. Returns the R
+    replicas' :class:`Window` and their dissipation S (R, N_f) (eq. 19)."""
+    n_t = cfg.n_t
+    R, n = a.shape
+    stats = np.zeros((K.N_STATS, R, n))
+    if cfg.confined:
+        for r in range(R):
+            K.confined_window(x0s[r], a[r], cfg.nT * n_t, chain.P, chain.cxi, chain.sxi,
+                              stats[:, r, :])
+    else:
+        if not cfg.warm_start:
+            chain.reset()
+        n0 = cfg.n0 if (first or not cfg.warm_start) else cfg.n0_warm
+        chain.run(a, n0 * n_t)
+        chain.run(a, cfg.nT * n_t, stats)
+        chain.check()
+    windows = [Window(cfg, stats[:, r, :], cfg.nT * n_t, x0s[r]) for r in range(R)]
+    return windows, np.array([dissipation(cfg, w.s3_mean) for w in windows])
