@@ -41,6 +41,7 @@ import numpy as np  # noqa: E402
 
 import sweep  # noqa: E402
 from sweep.journal import decode, encode, journal_path  # noqa: E402
+from sweep.testing import catches_signal  # noqa: E402
 
 PY = sys.executable
 EPS = ", ".join(repr(round(0.05 + 0.05 * i, 2)) for i in range(18))
@@ -270,13 +271,7 @@ def main() -> int:
         assert rc == 0, log
     use_mpi = MPIEXEC is not None and not args.no_mpi
     if args.only_holes:
-        holes_table = holes(work, rng, big, ref_big, args.holes, use_mpi, problems)
-        print()
-        print(holes_table.table())
-        print(f"\nelapsed {time.monotonic() - t0:.0f} s; work directory {work}")
-        for p in problems[:40]:
-            print("PROBLEM:", p)
-        return 1 if problems else 0
+        return _report_holes(args, work, rng, big, ref_big, use_mpi, problems, t0, True)
     # a store whose rebuild takes long enough to be hit: 1,800 points
     rebuild, ref_rebuild = work / "rebuild.toml", work / "ref_rebuild.h5"
     many = ", ".join(repr(round(0.001 + 0.00165 * i, 5)) for i in range(600))
@@ -456,7 +451,14 @@ def main() -> int:
 
     print()
     print(tally.table())
-    if args.holes:
+    return _report_holes(args, work, rng, big, ref_big, use_mpi, problems, t0)
+
+
+def _report_holes(args, work, rng, big, ref_big, use_mpi, problems, t0,
+                  only: bool = False) -> int:
+    """The holes' table (``--holes`` tries per case; always with ``--only-holes``), the
+    elapsed time and the problems; the exit status (1 if any problem)."""
+    if only or args.holes:
         holes_table = holes(work, rng, big, ref_big, args.holes, use_mpi, problems)
         print()
         print(holes_table.table())
@@ -713,7 +715,7 @@ def holes(work: Path, rng: random.Random, big: Path, ref_big: Path, tries: int,
         fresh_copy(ref_big, store)
         sig = (signal.SIGTERM, signal.SIGINT, signal.SIGUSR1)[i % 3]
         p = run_cmd(["run", str(big), "--store", str(store), *base])
-        while p.poll() is None and not _catches_term(p.pid):
+        while p.poll() is None and not catches_signal(p.pid, signal.SIGTERM):
             time.sleep(0.001)
         time.sleep(rng.uniform(0.0, 0.7))
         p.send_signal(sig)
@@ -725,16 +727,6 @@ def holes(work: Path, rng: random.Random, big: Path, ref_big: Path, tries: int,
         _whole(tally, "stop signals during imports", ref_big, store, rc, log + err, problems,
                wrong=int(bad))
     return tally
-
-
-def _catches_term(pid: int) -> bool:
-    """Whether sweep's SIGTERM handler is installed in process ``pid``."""
-    try:
-        status = Path(f"/proc/{pid}/status").read_text()
-    except OSError:
-        return False
-    mask = int(next(x for x in status.splitlines() if x.startswith("SigCgt:")).split()[1], 16)
-    return bool(mask & (1 << (signal.SIGTERM - 1)))
 
 
 def hostile(work: Path) -> list[tuple[str, list[str], object]]:

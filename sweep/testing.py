@@ -20,7 +20,8 @@ from floewave import ModelConfig
 __all__ = ["fake_point", "raising_point", "nan_point", "trivial_point", "sleepy_point",
            "power_point", "faulty_point", "crashing_point", "stuck_point",
            "sleepy_trivial_point", "exiting_point", "c_exit_point", "misfit_point",
-           "stdout_closing_point", "stubborn_point", "POWER_M"]
+           "stdout_closing_point", "stubborn_point", "POWER_M", "catches_signal",
+           "find_mpiexec"]
 
 
 #: ``[base]`` of the small real campaigns of the kill/resume tests (torture, Slurm): 4 or
@@ -148,6 +149,19 @@ name = "tiny"
 progress_interval = 5.0
 grace_period = 5.0
 """
+
+
+def catches_signal(pid: int, sig: int) -> bool:
+    """Whether process ``pid`` has a handler installed for signal ``sig`` (``SigCgt`` in
+    /proc/<pid>/status; False once the process is gone)."""
+    from pathlib import Path
+
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return False
+    mask = int(next(x for x in status.splitlines() if x.startswith("SigCgt:")).split()[1], 16)
+    return bool(mask & (1 << (sig - 1)))
 
 
 def find_mpiexec() -> str | None:

@@ -17,6 +17,7 @@ from sweep.cli import main
 from sweep.journal import journal_path, rejected_path
 from sweep.store import Store
 from sweep.testing import find_mpiexec
+from tests.sweep.helpers import make_unclean, table
 
 TOML = "[base]\nL_sheet = 6.0\n[sweep]\nL_x = [0.5, 1.5]\neps = [0.2, 0.4, 0.6]\n"
 FAKE = "sweep.testing:fake_point"
@@ -130,17 +131,6 @@ def test_a_worker_that_exits_0_never_makes_the_mpi_job_succeed(tmp_path):
 
 
 # ---------------------------------------------------------------- store helpers
-def table(path):
-    df = sweep.load(path).set_index("hash").sort_index()
-    return df.drop(columns=["seq", "run", "host", "pid", "start_time", "end_time",
-                            "wall_time", "provenance"])
-
-
-def make_unclean(path):
-    with h5py.File(path, "r+", locking=False) as f:
-        f.attrs["writer_open"] = True
-
-
 def records(path):
     return [line for line in journal_path(path).read_bytes().splitlines(keepends=True)
             if line.startswith(b'{"row"')]

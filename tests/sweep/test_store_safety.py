@@ -8,7 +8,6 @@ import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import h5py
 import pytest
@@ -18,20 +17,11 @@ from sweep import parse_campaign, run_campaign
 from sweep.cli import main
 from sweep.journal import Journal, decode, encode, journal_path, rejected_path
 from sweep.store import Store
+from sweep.testing import catches_signal
+from tests.sweep.helpers import make_unclean, table
 
 TOML = "[base]\nL_sheet = 6.0\n[sweep]\nL_x = [0.5, 1.5]\neps = [0.2, 0.4, 0.6, 0.8]\n"
 FAKE = "sweep.testing:fake_point"
-
-
-def table(path):
-    df = sweep.load(path).set_index("hash").sort_index()
-    return df.drop(columns=["seq", "run", "host", "pid", "start_time", "end_time",
-                            "wall_time", "provenance"])
-
-
-def make_unclean(path):
-    with h5py.File(path, "r+", locking=False) as f:
-        f.attrs["writer_open"] = True
 
 
 # ---------------------------------------------------------------- atomic rebuild, stops
@@ -339,16 +329,6 @@ def test_grace_period_bounded():
         parse_campaign(TOML + "[run]\ngrace_period = 1e300\n")
 
 
-def _catches_sigterm(pid):
-    """Whether process ``pid`` has a handler for SIGTERM (``SigCgt`` in /proc)."""
-    try:
-        status = Path(f"/proc/{pid}/status").read_text()
-    except OSError:
-        return False
-    mask = int(next(x for x in status.splitlines() if x.startswith("SigCgt:")).split()[1], 16)
-    return bool(mask & (1 << (signal.SIGTERM - 1)))
-
-
 def test_stop_during_start_up_never_ruins_the_store(tmp_path):
     """SIGTERM at instants of a resume's start-up after its handlers are installed
     (imports, campaign, lock, open): exit 6 with "resumable" (or 0 if it had finished),
@@ -360,7 +340,7 @@ def test_stop_during_start_up_never_ruins_the_store(tmp_path):
         p = subprocess.Popen([sys.executable, "-m", "sweep", "run", str(cfg), "--store",
                               str(path), "--compute", FAKE, "--no-bar"],
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        while p.poll() is None and not _catches_sigterm(p.pid):
+        while p.poll() is None and not catches_signal(p.pid, signal.SIGTERM):
             time.sleep(0.005)
         time.sleep(delay)
         p.send_signal(signal.SIGTERM)
@@ -465,7 +445,7 @@ def test_merge_refuses_itself_and_other_versions_and_stops_with_6(tmp_path):
         out = tmp_path / f"merged{k}.h5"
         p = subprocess.Popen([sys.executable, "-m", "sweep", "merge", str(out), a],
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        while p.poll() is None and not _catches_sigterm(p.pid):
+        while p.poll() is None and not catches_signal(p.pid, signal.SIGTERM):
             time.sleep(0.002)
         time.sleep(0.05 * k)
         p.send_signal(signal.SIGTERM)
