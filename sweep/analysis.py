@@ -46,6 +46,9 @@ def _open(path: str | Path) -> h5py.File:
     try:
         return reader.open_file(path)
     except (OSError, FileNotFoundError) as exc:
+        why = reader.not_a_store(path)
+        if why is not None:  # one line, no HDF5 message (exit status 3)
+            raise StoreError(f"{path}: {why}") from None
         cls = _OpenError if Path(path).is_file() else StoreError
         raise cls(f"{path}: cannot open store: {exc}") from None
 

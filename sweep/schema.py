@@ -297,7 +297,9 @@ def validate(path: str | Path) -> list[str]:
     try:
         f = h5py.File(path, "r", locking=False)
     except OSError as exc:
-        return [f"{path}: not a readable HDF5 file: {exc}"]
+        from .reader import not_a_store
+
+        return [f"{path}: not a readable HDF5 file: {not_a_store(path) or exc}"]
     with f:
         for key in ROOT_ATTRS:
             if key not in f.attrs:
