@@ -331,6 +331,7 @@ def status_report(path: Path, slowest: int = 5) -> dict[str, Any]:
              "ended": str(r.get("ended", "")), "outcome": str(r.get("outcome", "")),
              "mpi_size": int(r.get("mpi_size", 1)), "host": str(r.get("host", "")),
              "stored": int((df["run"] == r["index"]).sum())} for r in store_runs(path)]
+    _mark_dead_runs(path, runs)
     return {"store": str(path), "grid_points": total, "stored": len(df),
             "journaled": journaled,
             "remaining": max(total - len(df), 0), "counts": counts, "failures": failures,
@@ -341,6 +342,21 @@ def status_report(path: Path, slowest: int = 5) -> dict[str, Any]:
                         for r in slow.itertuples()],
             "runs": runs,
             "total_wall_time": float(df["wall_time"].sum()) if len(df) else 0.0}
+
+
+def _mark_dead_runs(path: Path, runs: list[dict[str, Any]]) -> None:
+    """A run recorded as "running" whose writer is gone (killed: SIGKILL, a double
+    Ctrl-C under mpiexec) is shown as such, not as running; only the last run can be
+    live, and only while its writer holds the store's lock."""
+    from .lock import writer_alive
+
+    for i, r in enumerate(runs):
+        if r["outcome"] != "running" or r["ended"]:
+            continue
+        if i == len(runs) - 1 and writer_alive(path):
+            continue
+        r["outcome"] = ("died: its writer was killed; the same command resumes the"
+                        " campaign")
 
 
 def cmd_status(args: argparse.Namespace) -> int:
@@ -374,7 +390,9 @@ def cmd_status(args: argparse.Namespace) -> int:
     if rep["runs"]:
         print("runs:")
         for r in rep["runs"]:
-            print(f"  {r['index']}: {r['started'][:19]} to {r['ended'][:19] or '(running)'},"
+            end = r["ended"][:19] or ("(running)" if r["outcome"] == "running"
+                                      else "(no end recorded)")
+            print(f"  {r['index']}: {r['started'][:19]} to {end},"
                   f" {r['mpi_size']} rank(s) on {r['host']}, {plural(r['stored'], 'point')}"
                   f" stored: {r['outcome']}")
     return EXIT_OK
