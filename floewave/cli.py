@@ -207,7 +207,7 @@ def main_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="cmd", required=True)
     run = sub.add_parser("run", help="run one model point and print a summary",
                          description="Run one model point (the attenuation iteration of"
-                         " MODEL.md §4) with the defaults below changed by --set, and print"
+                         " docs/model.md §4) with the defaults below changed by --set, and print"
                          " a summary.",
                          epilog=fields_help() + "\n\n" + EXIT_HELP,
                          formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -224,7 +224,7 @@ def main_parser() -> argparse.ArgumentParser:
                     help="trace the floes nearest to these distances from the ice edge [m],"
                          " e.g. 3,12,30 (the paper's)")
     tr.add_argument("--trace-every", type=int, default=10, metavar="STEPS",
-                    help="time steps between samples (default 10 = 1 ms at dt = 1e-4 s)")
+                    help="time steps between samples (default 10: 10 ms at dt = 1e-3 s)")
     tr.add_argument("--trace-periods", type=int, default=None, metavar="N",
                     help="recorded wave periods (default: nT)")
     tr.add_argument("--trace-plot", type=Path, metavar="PNG",

@@ -1,4 +1,4 @@
-"""The paper's qualitative claims (Herman et al. 2019, §4; MODEL.md §8), checked on stores.
+"""The paper's qualitative claims (Herman et al. 2019, §4; docs/model.md §8), checked on stores.
 
 ``sweep paper-check`` reads the stores of the shipped paper campaigns (``configs/fig2``,
 ``fig5``, ``fig6a``, ``fig6b``, ``periods``; by default ``paper/<name>.h5``, where
@@ -80,10 +80,10 @@ Z_CRIT = 2.0
 #: Standard errors assumed where a store gives none (see the module docstring):
 #:
 #: - ``a_rel``: a/a0 of a single trajectory, 0.01 (1 % of a0): the default
-#:   ``target_stderr``; rounding-level reruns differed by 0.1-0.7 % of a0 (README).
+#:   ``target_stderr``; rounding-level reruns differed by 0.1-0.7 % of a0 (docs/convergence.md).
 #:   Used only where the profile's ``a_stderr`` is missing or NaN.
 #: - ``W_c`` [m]: 4 m. Measured: the Fig. 2 points rerun with the floe spacing changed by
-#:   one ulp (``benchmarks/rounding_spread.py``, README "Reproducibility") gave 7 pairs of
+#:   one ulp (``benchmarks/rounding_spread.py``, docs/reproducibility.md) gave 7 pairs of
 #:   W_c differing by 0.5-2.5 m and once 15 m; sigma = RMS difference / sqrt(2) = 4.1 m.
 #: - ``inner_over_c``: 0.1 (10 %) on alpha_inner / alpha_c — *assumed, not measured*
 #:   (single-trajectory stores carry no spread of alpha_inner).
@@ -735,7 +735,7 @@ def check_stores(stores: str | Path = "paper", *, run: bool = False,
         stores.mkdir(parents=True, exist_ok=True)
     elif not stores.is_dir():
         raise ConfigError(f"--stores {stores}: no such directory (run the campaigns into it"
-                          " with --run, or see README 'Checking the paper's claims')")
+                          " with --run, or see docs/paper-check.md)")
     paths = {name: stores / f"{name}.h5" for name in PAPER_CAMPAIGNS}
     if run:
         from .config import load_campaign
@@ -784,7 +784,7 @@ def _cell(text: str) -> str:
 
 
 def format_table(checks: Sequence[Check]) -> str:
-    """The checks as one Markdown table (pasteable into the README), with a count line."""
+    """The checks as one Markdown table (pasteable into docs/paper-check.md), with a count line."""
     lines = ["| # | claim (paper) | campaign: points | quantity | value ± SE | rule: evidence"
              " | verdict |", "|---|---|---|---|---|---|---|"]
     for i, c in enumerate(checks, 1):
