@@ -41,8 +41,16 @@ def _cell(text: str) -> str:
 
 
 def render() -> str:
-    from sweep.schema import (COLUMNS, DERIVED, DERIVED_FROM, HISTORY_VAR, PROFILE_VARS,
-                              REPLICA_VARS, SCHEMA_VERSION, STATUSES)
+    from sweep.schema import (
+        COLUMNS,
+        DERIVED,
+        DERIVED_FROM,
+        HISTORY_VAR,
+        PROFILE_VARS,
+        REPLICA_VARS,
+        SCHEMA_VERSION,
+        STATUSES,
+    )
 
     cols = {c.name: c for c in (*COLUMNS, *DERIVED)}
     derived = {c.name for c in DERIVED}

@@ -19,8 +19,7 @@ import floewave
 
 from . import reader
 from .errors import PointNotFoundError, StoreError
-from .schema import (COLUMNS, DERIVED, DERIVED_FROM, HISTORY_VAR, PROFILE_VARS,
-                     REPLICA_VARS, column)
+from .schema import COLUMNS, DERIVED, DERIVED_FROM, HISTORY_VAR, PROFILE_VARS, REPLICA_VARS, column
 
 __all__ = ["load", "load_xarray", "load_profile", "load_profiles", "store_attrs", "store_runs",
            "resolve_hash", "journal_points", "STATUS_ORDER", "PROFILE_LEADING_DIMS"]
