@@ -88,6 +88,11 @@ class ModelConfig:
     dx : drag/dissipation quadrature spacing along the floe bottom [m]; L_x/dx integer
     drag_integration : ``"quadrature"`` (the paper's dx grid, default) or ``"exact"``
         (closed-form floe-bottom integrals, the limit dx -> 0; floewave._exact)
+    drag_every : evaluate the ice-water drag and dissipation sums (eqs. 15, 19) every this
+        many time steps, at the centre of the steps they are held for (multiple time
+        stepping: the floe-bottom sums cost most of a step, the contacts need every step;
+        second order in the hold); n_t must be a multiple of it; 1 evaluates them every
+        step as the paper does; default 5 by measurement (docs/convergence.md)
     integrator : ``"predictor"`` (velocity Verlet, velocity-dependent forces at the
         predicted end-of-step velocity u + dt*a: second order) or ``"half_step"``
         (forces at the half-step velocity as LIGGGHTS does: first order in the damping)
@@ -184,6 +189,7 @@ class ModelConfig:
     dt: float = 1.0e-3
     dx: float = 0.01
     drag_integration: str = "quadrature"
+    drag_every: int = 5
     integrator: str = "predictor"
     protocol: str = "stationary"
     n0: int = 5
@@ -236,6 +242,7 @@ class ModelConfig:
         _require(self, "nu", 0 <= self.nu < 0.5, "must be in [0, 0.5)")
         _require(self, "relax", 0 < self.relax <= 1, "must be in (0, 1]")
         _require(self, "n0", self.n0 >= 0, "must be >= 0")
+        _require(self, "drag_every", 1 <= self.drag_every <= 100, "must be in [1, 100]")
         _require(self, "nT", self.nT >= 1, "must be >= 1")
         _require(self, "max_iterations", self.max_iterations >= 1, "must be >= 1")
         _require(self, "noise_window", self.noise_window >= 0, "must be >= 0")
@@ -343,13 +350,18 @@ class ModelConfig:
         """Raise :class:`InvalidPointError` if this point cannot be simulated; else return
         the wavenumber k and group velocity c_g it solved for (eqs. 6, 7).
 
-        Checks: T/dt and L_x/dx integral, a binary contact resolved in at least
+        Checks: T/dt and L_x/dx integral, n_t a multiple of ``drag_every``, a binary contact resolved in at least
         :data:`MIN_CONTACT_STEPS` steps (:meth:`contact_steps`; not for ``confined``), at least
         two floes, and (via the dispersion
         solver) that eq. 6 has an admissible root (``ml`` below its cutoff).
         """
         _require_integral("T", self.T, self.dt, "dt")
         _require_integral("L_x", self.L_x, self.dx, "dx")
+        if self.n_t % self.drag_every:
+            raise InvalidPointError(
+                f"T / dt = {self.n_t} time steps per period is not a multiple of drag_every ="
+                f" {self.drag_every} (the drag is evaluated every drag_every steps)",
+                field="drag_every")
         steps = self.contact_steps()
         if not self.confined and steps < MIN_CONTACT_STEPS:
             raise InvalidPointError(

@@ -100,8 +100,11 @@ class FloeChain:
             keep = (np.all(a == self._acc_a, axis=-1) if self._acc_ready
                     else np.zeros(a.shape[:-1], dtype=bool))
             saved = self.acc.copy()
+            # the drag sums held between evaluations (``drag_every`` > 1), likewise
+            held = self._held_drag().copy()
             self._loop(self._spin, a, 0, np.zeros((K.N_STATS, 0)), True)
             self.acc[keep] = saved[keep]
+            self._held_drag()[keep] = held[keep]
             self._acc_a = a.copy()
             self._acc_ready = True
         if stats is None:
@@ -111,6 +114,10 @@ class FloeChain:
             if not np.shares_memory(flat, stats):
                 raise ValueError("stats must be a contiguous (N_STATS, ...) array")
             self._loop(self._average, a, nsteps, flat, False)
+
+    def _held_drag(self) -> np.ndarray:
+        """The drag sums the time loop holds between evaluations, (R, N_f) view."""
+        return self.work[K.W_SC + K.SC_S2, :self.x0.size].reshape(self.x0.shape)
 
     def check(self) -> None:
         """Raise :class:`NumericalError` on a non-finite state or floes out of order."""

@@ -21,10 +21,11 @@ CALIBRATION_SECONDS = 0.5
 
 
 def kernel_shape(cfg: Any) -> tuple:
-    """What the kernel speed depends on: floe count, drag cells and mode, confinement, and
-    the number of chains run in one kernel (replicas)."""
+    """What the kernel speed depends on: floe count, drag cells and mode, confinement, the
+    number of chains run in one kernel (replicas) and the steps between drag evaluations."""
     n_x = cfg.n_x if cfg.drag_integration == "quadrature" else 0
-    return (cfg.n_floes, n_x, cfg.drag_integration, cfg.confined, cfg.n_chains)
+    return (cfg.n_floes, n_x, cfg.drag_integration, cfg.confined, cfg.n_chains,
+            cfg.drag_every)
 
 
 def calibrate(points: Iterable[Any]) -> tuple[dict[tuple, float], str]:
