@@ -35,7 +35,7 @@ def main(paths: list[str]) -> int:
     interruptions, transitions, runs, layouts = [], [], [], Counter()
     for path in paths:
         df = sweep.load(path)
-        for _, row in df[df["status"].isin(sweep.stats.RESULT_STATUSES)].iterrows():
+        for _, row in df[df["status"].isin(sweep.analysis.stats.RESULT_STATUSES)].iterrows():
             p = sweep.load_profile(path, row["hash"])
             x, g = p["x_mean"].values, p["gap_mean"].values
             gaps = g[:-1]

@@ -16,7 +16,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from .errors import EXIT_INTERNAL, EXIT_OK, EXIT_STORE, ConfigError, Interrupted, SweepError
+from sweep.errors import EXIT_INTERNAL, EXIT_OK, EXIT_STORE, ConfigError, Interrupted, SweepError
 
 __all__ = ["main", "build_parser"]
 
@@ -75,8 +75,7 @@ def _count(text: str) -> int:
 def _version() -> str:
     """``sweep (floewave 0.1.0, model version 3, store schema 2)``."""
     import floewave
-
-    from .schema import SCHEMA_VERSION
+    from sweep.store.schema import SCHEMA_VERSION
 
     return (f"sweep (floewave {floewave.__version__}, model version {floewave.MODEL_VERSION},"
             f" store schema {SCHEMA_VERSION})")
@@ -84,7 +83,7 @@ def _version() -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (documented in sweep/README.md)."""
-    from .executor import DEFAULT_COMPUTE
+    from sweep.run.launch import DEFAULT_COMPUTE
 
     p = argparse.ArgumentParser(prog="sweep", description="Run and analyse floewave"
                                 " parameter campaigns (MPI master/worker, one HDF5 store).")
@@ -190,7 +189,7 @@ _LATE_STOP: list[int] = []  # stop signals after the campaign's own handlers wer
 
 
 def _stop_during_start_up(signum: int, frame: Any) -> None:
-    from . import signals
+    from sweep.run import signals
 
     if signals.campaign_over:  # nothing left to stop: the command ends as it would
         _LATE_STOP.append(signum)
@@ -203,32 +202,28 @@ def _stop_during_start_up(signum: int, frame: Any) -> None:
                       " the same command again")
 
 
-#: Variables an MPI launcher sets (used by :func:`sweep.executor.mpi_world`; kept here
-#: so that the check needs no heavy import).
-_LAUNCHER_VARS = ("PMI_RANK", "PMI_SIZE", "PMIX_RANK", "OMPI_COMM_WORLD_SIZE",
-                  "MPI_LOCALNRANKS", "HYDRA_CONTROL_FD", "PMI_FD")
-
-
 def _catch_stops_at_start_up(argv: Sequence[str]) -> None:
     """``run`` and ``merge``: a stop signal before the store is opened ends the command
     with status 6 (nothing was changed). Not under an MPI launcher: there rank 0 alone
     leaving would leave the workers waiting; the default action ends the job."""
     if not argv or argv[0] not in ("run", "merge"):
         return
-    from . import signals
+    from sweep.run import signals
+    from sweep.run.mpi import launched
 
     signals.campaign_over = False  # a new command: its stops stop it
     _START_UP_STOP.clear()
     _LATE_STOP.clear()
-    if any(v in os.environ for v in _LAUNCHER_VARS):
+    if launched():
         return
     for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1):
         signal.signal(sig, _stop_during_start_up)
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    from .config import load_campaign
-    from .executor import check_launch, mpi_world, run_campaign
+    from sweep.config import load_campaign
+    from sweep.run.launch import run_campaign
+    from sweep.run.mpi import check_launch, mpi_world
 
     comm = mpi_world()
     rank = comm.Get_rank() if comm is not None else 0
@@ -263,8 +258,8 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
-    from .config import DEFAULT_EXPECTED_ITERATIONS, EXTRA_WINDOWS, load_campaign
-    from .plan import plan
+    from sweep.config import DEFAULT_EXPECTED_ITERATIONS, EXTRA_WINDOWS, load_campaign
+    from sweep.run.plan import plan
 
     campaign = load_campaign(args.config)  # a SweepError is reported by main
     points = campaign.points()
@@ -306,7 +301,7 @@ def _swept_text(swept: dict[str, Any]) -> str:
 def status_report(path: Path, slowest: int = 5) -> dict[str, Any]:
     """The data behind ``sweep status``: counts, the points that did not converge or
     failed (with their swept values), the slowest points, and one line per run."""
-    from .analysis import journal_points, load, store_attrs, store_runs
+    from sweep.analysis.load import journal_points, load, store_attrs, store_runs
 
     df = load(path)
     journaled = journal_points(path)
@@ -379,7 +374,7 @@ def cmd_status(args: argparse.Namespace) -> int:
 
 
 def cmd_export(args: argparse.Namespace) -> int:
-    from .analysis import load
+    from sweep.analysis.load import load
 
     suffix = args.output.suffix.lower()
     if suffix not in (".csv", ".parquet"):
@@ -399,7 +394,7 @@ def cmd_export(args: argparse.Namespace) -> int:
         else:
             df.to_parquet(args.output, index=False)
     except OSError as exc:  # a full disk (/dev/full), an I/O error
-        from .errors import StoreError
+        from sweep.errors import StoreError
 
         raise StoreError(f"--output {args.output}: cannot be written:"
                          f" {exc.strerror or exc}") from None
@@ -415,11 +410,11 @@ def _parquet_engine() -> bool:
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
-    from .schema import validate
+    from sweep.store.validate import validate
 
     problems = validate(args.store)
     if args.deep and not any("not a readable HDF5 file" in p for p in problems):
-        from .verify import compare_with_journal
+        from sweep.store.verify import compare_with_journal
 
         try:
             deep = compare_with_journal(args.store)
@@ -441,7 +436,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
 
 
 def cmd_merge(args: argparse.Namespace) -> int:
-    from .merge import merge
+    from sweep.store.merge import merge
 
     report = merge(args.output, args.inputs)  # a SweepError is reported by main
     print(f"sweep: {report}")
@@ -449,7 +444,7 @@ def cmd_merge(args: argparse.Namespace) -> int:
 
 
 def cmd_figures(args: argparse.Namespace) -> int:
-    from .figures import KINDS, make_figures
+    from sweep.analysis.figures import KINDS, make_figures
 
     if args.max < 1:
         raise ConfigError(f"--max {args.max}: must be at least 1")
@@ -471,13 +466,13 @@ def cmd_figures(args: argparse.Namespace) -> int:
 def cmd_paper_check(args: argparse.Namespace) -> int:
     """Exit status 0 whatever the verdicts; 3 if a store is missing or unreadable (the
     table is printed all the same, those claims inconclusive)."""
-    from .papercheck import check_stores, format_table
+    from sweep.paper.check import check_stores, format_table
 
     def log(msg: str) -> None:
         print(f"sweep: {msg}", file=sys.stderr)
 
     if args.seeds:
-        from .paperseeds import across_seeds, check_seeds, format_seed_table
+        from sweep.paper.seeds import across_seeds, check_seeds, format_seed_table
 
         reports = check_seeds(args.stores, args.seeds, run=args.run, configs=args.configs,
                               compute=args.compute, log=log)
@@ -502,7 +497,7 @@ def cmd_paper_check(args: argparse.Namespace) -> int:
 
 
 def cmd_report(args: argparse.Namespace) -> int:
-    from .report import command
+    from sweep.report import command
 
     return command(args)
 
@@ -516,9 +511,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``sweep`` console script; returns the exit status.
 
     From the command line (``argv`` None), ``sweep run`` runs under its guard
-    (:mod:`sweep.guard`): a parent process that turns an exit with status 0 before the
+    (:mod:`sweep.run.guard`): a parent process that turns an exit with status 0 before the
     campaign finished (``exit(0)`` in a compute function) into status 6."""
-    from . import guard
+    from sweep.run import guard
 
     args_ = list(sys.argv[1:] if argv is None else argv)
     _catch_stops_at_start_up(args_)  # first: a stop from the first instants is status 6

@@ -24,7 +24,8 @@ from __future__ import annotations
 
 __all__ = ["SweepError", "ConfigError", "StoreError", "StoreLockedError",
            "SchemaVersionError", "CampaignMismatchError", "LaunchError", "WorkerError",
-           "Interrupted", "PointNotFoundError", "EXIT_OK", "EXIT_INTERNAL", "EXIT_CONFIG",
+           "Interrupted", "PointNotFoundError", "StoreCorruptedError", "StoreUnreadableError",
+           "UnstorableError", "BadJournalLineError", "EXIT_OK", "EXIT_INTERNAL", "EXIT_CONFIG",
            "EXIT_STORE", "EXIT_LAUNCH", "EXIT_WORKER", "EXIT_INTERRUPTED"]
 
 EXIT_OK = 0
@@ -111,3 +112,16 @@ class Interrupted(SweepError, RuntimeError):
     """The campaign stopped on a signal; what finished is stored and it is resumable."""
 
     exit_status = EXIT_INTERRUPTED
+
+
+class StoreUnreadableError(StoreError):
+    """A store file exists but HDF5 cannot open it (perhaps caught in the middle of a
+    rebuild's rename: readers retry it)."""
+
+
+class UnstorableError(SweepError, ValueError):
+    """A record holds a value the schema cannot store; the message says which."""
+
+
+class BadJournalLineError(SweepError, ValueError):
+    """A journal line that cannot be trusted; the message is the reason."""

@@ -1,4 +1,4 @@
-"""sweep.papercheck: each rule's three verdicts on hand-built inputs, the claims on
+"""sweep.paper.check: each rule's three verdicts on hand-built inputs, the claims on
 hand-built tables (with and without the ensemble's *_stderr columns), and ``sweep
 paper-check`` end to end on stores of the shipped paper campaigns computed by a stand-in."""
 import json
@@ -8,9 +8,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from sweep import papercheck as pc
 from sweep.cli import main
-from sweep.papercheck import FAILS, HOLDS, INCONCLUSIVE, Estimate
+from sweep.paper import check as pc
+from sweep.paper.check import FAILS, HOLDS, INCONCLUSIVE, Estimate
 
 
 def E(value, se=0.01, label="p"):
@@ -343,7 +343,7 @@ def test_a_partial_fig6a_store_is_not_compared_with_itself():
 
 # ---------------------------------------------------------------------- --seeds
 def test_a_verdict_across_seeds_stands_only_where_every_seed_gives_it():
-    from sweep.paperseeds import SEED_DEPENDENT, across_seeds
+    from sweep.paper.seeds import SEED_DEPENDENT, across_seeds
 
     assert across_seeds([HOLDS, HOLDS]) == HOLDS
     assert across_seeds([FAILS, FAILS, FAILS]) == FAILS
@@ -353,7 +353,7 @@ def test_a_verdict_across_seeds_stands_only_where_every_seed_gives_it():
 
 def test_seeded_campaign_files_differ_only_in_their_seed(tmp_path):
     from sweep.config import load_campaign
-    from sweep.paperseeds import seeded_configs
+    from sweep.paper.seeds import seeded_configs
 
     out = seeded_configs(pc.default_configs(), 7, tmp_path / "c")
     for name in pc.PAPER_CAMPAIGNS:

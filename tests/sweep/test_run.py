@@ -223,7 +223,7 @@ def test_a_requested_stop_is_not_reported_as_an_error(capsys):
 def test_load_profiles_of_failed_points_are_nan_variables(tmp_path, campaign):
     """Points without results are NaN in every profile variable, even when no selected
     point has any (the variables exist, so ds.a works)."""
-    from sweep.schema import PROFILE_VARS
+    from sweep.store.schema import PROFILE_VARS
 
     store = tmp_path / "f.h5"
     run_campaign(campaign, str(store), compute="sweep.testing:raising_point")  # eps 0.4 fails
@@ -236,7 +236,7 @@ def test_load_profiles_of_failed_points_are_nan_variables(tmp_path, campaign):
 def test_load_profiles_by_parameter(tmp_path, campaign):
     """Issue *first hour*: one Dataset of every profile along the swept dimensions and a
     floe dimension; missing points NaN; units on every variable; selection by value."""
-    from sweep.schema import PROFILE_VARS
+    from sweep.store.schema import PROFILE_VARS
 
     store = tmp_path / "s.h5"
     run_campaign(campaign.shard(0, 2), str(store), compute="sweep.testing:fake_point")

@@ -9,14 +9,15 @@ from pathlib import Path
 from typing import Any
 
 import floewave
-
-from . import reader
-from .config import parse_campaign
-from .errors import CampaignMismatchError, Interrupted, StoreError
-from .provenance import environment
-from .record import Record
-from .schema import MIGRATIONS, SCHEMA_VERSION
-from .store import Store
+from sweep.config import parse_campaign
+from sweep.errors import CampaignMismatchError, Interrupted, SchemaVersionError, StoreError
+from sweep.provenance import environment
+from sweep.store import reader
+from sweep.store.cells import text
+from sweep.store.migrate import migration_steps
+from sweep.store.record import Record
+from sweep.store.schema import SCHEMA_VERSION
+from sweep.store.store import Store
 
 __all__ = ["merge", "iter_records"]
 
@@ -25,7 +26,7 @@ _BATCH = 256
 
 
 def iter_records(path: str | Path) -> Iterator[Record]:
-    """Every committed point of a store as a :class:`sweep.record.Record`."""
+    """Every committed point of a store as a :class:`sweep.store.record.Record`."""
     with reader.open_file(path) as f:
         yield from reader.iter_records(f)
 
@@ -84,12 +85,14 @@ def merge(output: str | Path, inputs: list[str | Path]) -> str:
                     number = int(version)
                 except (TypeError, ValueError):
                     number = -1
-                if number > SCHEMA_VERSION or (number < SCHEMA_VERSION and
-                                               number not in MIGRATIONS):
+                try:
+                    migration_steps(number)
+                except SchemaVersionError:
                     raise StoreError(f"{path}: schema version {version!r}: this sweep"
-                                     f" (schema version {SCHEMA_VERSION}) cannot merge it")
-                hashes.append(reader.text(f.attrs["campaign_hash"]))
-                texts.append(reader.text(f.attrs["campaign_toml"]))
+                                     f" (schema version {SCHEMA_VERSION}) cannot merge it"
+                                     ) from None
+                hashes.append(text(f.attrs["campaign_hash"]))
+                texts.append(text(f.attrs["campaign_toml"]))
                 # every row still hashes to its hash: a merge never spreads a bad row
                 cols = reader.table_columns(f, ("hash", "config_json", "provenance",
                                                 *floewave.SWEPT_FIELDS))

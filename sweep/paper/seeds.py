@@ -5,7 +5,7 @@ Every stored number of an ensemble is a statistic of chaotic runs: another ``see
 other trajectories, and a claim decided at the edge of its rule can hold with one seed and
 be inconclusive with another. With ``--seeds S1 S2 ...`` each shipped paper campaign is run
 (or resumed) once per seed, its ``[base] seed`` set to S, into ``<stores>/seed<S>/``; the
-checks of :mod:`sweep.papercheck` run on each set of stores, and the claim's verdict across
+checks of :mod:`sweep.paper.check` run on each set of stores, and the claim's verdict across
 seeds is the common one when every seed gives it, else :data:`SEED_DEPENDENT`.
 """
 from __future__ import annotations
@@ -14,8 +14,8 @@ import re
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from .errors import ConfigError
-from .papercheck import (
+from sweep.errors import ConfigError
+from sweep.paper.check import (
     FAILS,
     HOLDS,
     INCONCLUSIVE,
@@ -61,7 +61,7 @@ def across_seeds(verdicts: Sequence[str]) -> str:
 def check_seeds(stores: Path, seeds: Sequence[int], *, run: bool = False,
                 configs: Path | None = None, compute: str | None = None,
                 log: Callable[[str], None] | None = None) -> dict[int, PaperReport]:
-    """:func:`sweep.papercheck.check_stores` on ``<stores>/seed<S>/`` for every seed S
+    """:func:`sweep.paper.check.check_stores` on ``<stores>/seed<S>/`` for every seed S
     (with ``run``, the campaigns are first run with that seed)."""
     if len(set(seeds)) < 2:
         raise ConfigError(f"--seeds {' '.join(map(str, seeds))}: give at least two different"

@@ -49,8 +49,7 @@ def warm_up(configs: list[dict[str, Any]], compute: str) -> tuple[float, str]:
         return 0.0, ""
     try:
         from floewave import ModelConfig
-
-        from .worker import resolve_compute
+        from sweep.run.compute import resolve_compute
 
         fn = resolve_compute(compute)
         for c in configs:

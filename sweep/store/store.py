@@ -1,9 +1,9 @@
 """The result store: one HDF5 file written only by the master, a journal and a lock.
 
-The parts: :mod:`sweep.lock` (who may write), :mod:`sweep.journal` (the durable truth,
-checksummed lines), :mod:`sweep.writer` (the HDF5 file), :mod:`sweep.reader` (reading
-stored rows back), :mod:`sweep.campaign_check` (is this the store's campaign, or an
-``--extend`` of it), :mod:`sweep.record` (what a point is). :class:`Store` is the policy
+The parts: :mod:`sweep.store.lock` (who may write), :mod:`sweep.store.journal` (the durable truth,
+checksummed lines), :mod:`sweep.store.writer` (the HDF5 file), :mod:`sweep.store.reader` (reading
+stored rows back), :mod:`sweep.store.campaign_check` (is this the store's campaign, or an
+``--extend`` of it), :mod:`sweep.store.record` (what a point is). :class:`Store` is the policy
 that ties them together.
 
 Writing points (group commit): :meth:`Store.add` stages a point (converted to the
@@ -36,7 +36,6 @@ import contextlib
 import datetime as _dt
 import os
 import re
-import signal
 import stat
 import sys
 import time
@@ -46,29 +45,36 @@ from typing import Any
 
 import numpy as np
 
-from .campaign_check import check_campaign, check_legacy_journal
-from .errors import SchemaVersionError, StoreError, StoreLockedError
-from .journal import BadLine, Journal, JournalScan, decode, encode, journal_path, rejected_path
-from .lock import Lock, lock_path
-from .reader import text
-from .record import Record
-from .schema import FORMAT, MIGRATIONS, SCHEMA_VERSION, STATUSES
-from .writer import (
+from sweep.errors import (
+    BadJournalLineError,
+    SchemaVersionError,
+    StoreError,
+    StoreLockedError,
+    UnstorableError,
+)
+from sweep.store.campaign_check import check_campaign, check_legacy_journal
+from sweep.store.cells import text
+from sweep.store.journal import (
+    Journal,
+    JournalScan,
+    decode,
+    encode,
+    journal_path,
+    rejected_path,
+)
+from sweep.store.lock import Lock, lock_path
+from sweep.store.migrate import migrate, migration_steps
+from sweep.store.record import Record
+from sweep.store.schema import FORMAT, STATUSES
+from sweep.store.writer import (
     HDF5_SIGNATURE,
     H5Writer,
-    Unstorable,
-    fsync_dir,
-    fsync_path,
     set_campaign,
 )
+from sweep.system import fsync_dir, fsync_path, signals_deferred, utc_now
 
-__all__ = ["Store", "Record", "journal_path", "lock_path", "rejected_path", "utc_now",
-           "read_journal", "Unstorable"]
+__all__ = ["Store", "read_journal"]
 
-#: Signals whose Python handlers must not run in the middle of a commit, an open or a
-#: rebuild (the in-process grace timer raises from its handler; a default action would
-#: kill the process half-way): they are delivered when that is done.
-_DEFERRED_SIGNALS = {signal.SIGINT, signal.SIGTERM, signal.SIGUSR1, signal.SIGALRM}
 #: Errors h5py raises for a file it cannot read (besides OSError).
 _H5_ERRORS = (OSError, RuntimeError, ValueError, KeyError, TypeError, IndexError)
 #: HDF5 messages that mean "in use", not "damaged".
@@ -79,29 +85,6 @@ _IN_USE = re.compile(r"\block|already open|temporarily unavailable|\bin use\b", 
 _MAX_NAME = 255 - 32
 #: Journal records written per batch while rebuilding or replaying.
 _REPLAY_BATCH = 256
-
-
-@contextlib.contextmanager
-def signals_deferred() -> Iterator[None]:
-    """Block the stop signals (and SIGALRM) in this thread; pending ones arrive after."""
-    try:
-        old = signal.pthread_sigmask(signal.SIG_BLOCK, _DEFERRED_SIGNALS)
-    except (AttributeError, OSError, ValueError):  # pragma: no cover - no pthread_sigmask
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
-
-
-_signals_deferred = signals_deferred  # the name used before the split
-
-
-def utc_now() -> str:
-    """The current time, ISO 8601 UTC with microseconds."""
-    return _dt.datetime.now(_dt.UTC).isoformat(timespec="microseconds")
-
 
 
 def read_journal(path: str | Path) -> Iterator[Record]:
@@ -179,12 +162,12 @@ class Store:
         must belong to it (same definition hash) unless ``extend`` is true.
     extend : accept a store of the same base whose swept values are a subset of the
         campaign's (new grid values are added; old points stay).
-    lock, journal : injectable parts (tests); default :class:`sweep.lock.Lock` of
-        ``<path>.lock`` and :class:`sweep.journal.Journal` of ``<path>.journal``.
+    lock, journal : injectable parts (tests); default :class:`sweep.store.lock.Lock` of
+        ``<path>.lock`` and :class:`sweep.store.journal.Journal` of ``<path>.journal``.
     report : called with one line per notable event of the open (set-aside lines,
         rebuilds, damaged files kept aside); default: printed to stderr.
     verify : compare a clean file with the journal's checksummed records
-        (:func:`sweep.verify.differences`); a file whose values differ is damaged
+        (:func:`sweep.store.verify.differences`); a file whose values differ is damaged
         (bit rot) and rebuilt from the journal, kept aside first.
 
     Raises
@@ -317,7 +300,7 @@ class Store:
     def _campaign_json(campaign: Any) -> str:
         if campaign is None:
             return ""
-        from .identity import canonical_json
+        from sweep.identity import canonical_json
 
         return canonical_json(campaign.definition())
 
@@ -379,16 +362,10 @@ class Store:
                 except (TypeError, ValueError):
                     raise StoreError(f"{p}: schema_version {text(raw)!r} is not a version"
                                      " number; it was left untouched") from None
-                if version > SCHEMA_VERSION:
-                    raise SchemaVersionError(
-                        f"{p}: store schema version {version} is newer than this sweep's"
-                        f" schema version {SCHEMA_VERSION}; upgrade sweep to use it")
-                step = version
-                while step < SCHEMA_VERSION:  # a migration path, checked before changes
-                    if step not in MIGRATIONS:
-                        raise SchemaVersionError(f"{p}: no migration from schema version"
-                                                 f" {step} to {SCHEMA_VERSION}")
-                    step = MIGRATIONS[step][0]
+                try:        # a migration path, checked before changes
+                    migration_steps(version)
+                except SchemaVersionError as exc:
+                    raise SchemaVersionError(f"{p}: {exc}") from None
                 info["campaign_json"] = text(f.attrs.get("campaign_json", ""))
                 self._file_schema = version
                 table = f["table"]
@@ -415,7 +392,7 @@ class Store:
         damaged (rebuilt from the journal), unless it holds points the journal lacks
         (a rebuild would drop them: they are journaled first, the next --verify
         rebuilds)."""
-        from .verify import differences
+        from sweep.store.verify import differences
 
         try:
             found, _, missing = differences(self.path, self.journal)
@@ -529,7 +506,7 @@ class Store:
             try:
                 obj, _ = decode(line, require_checksum=False)
                 batch.append(Record.coerce(obj))
-            except (BadLine, Unstorable) as exc:
+            except (BadJournalLineError, UnstorableError) as exc:
                 bad.append((offset, len(line), f"cannot be written to HDF5: {exc}"))
                 continue
             if len(batch) >= _REPLAY_BATCH:
@@ -577,7 +554,7 @@ class Store:
         missing = [h for h in w.rows if h not in self.scan.latest]
         if not missing:
             return
-        from . import reader
+        from sweep.store import reader
 
         lines = [rec.journal_line()
                  for rec in reader.iter_records(w.file, set(missing), normalise=False)]
@@ -592,15 +569,10 @@ class Store:
         self.scan = self.journal.scan(self.model_version, STATUSES, self._grid)
 
     def _migrate(self, f: Any) -> None:
-        version = int(f.attrs.get("schema_version", 0))
-        while version < SCHEMA_VERSION:
-            if version not in MIGRATIONS:
-                raise SchemaVersionError(f"{self.path}: no migration from schema version"
-                                         f" {version} to {SCHEMA_VERSION}")
-            version, _, migrate = MIGRATIONS[version]
+        try:
             migrate(f)
-            f.attrs["schema_version"] = version
-            f.flush()
+        except SchemaVersionError as exc:
+            raise SchemaVersionError(f"{self.path}: {exc}") from None
 
     def _start_run(self, info: dict[str, Any]) -> int:
         assert self.w is not None
@@ -661,8 +633,8 @@ class Store:
     def add(self, record: Record | dict[str, Any]) -> None:
         """Stage one point for the next :meth:`commit` (nothing is written yet).
 
-        ``record`` is a :class:`sweep.record.Record` (or a dict of its members, converted
-        to the schema's kinds first: :class:`Unstorable` if a value cannot be; nothing
+        ``record`` is a :class:`sweep.store.record.Record` (or a dict of its members, converted
+        to the schema's kinds first: :class:`UnstorableError` if a value cannot be; nothing
         is staged then). A staged point is not stored: a crash or :meth:`close` before
         :meth:`commit` loses it (it was never acknowledged).
         """
@@ -752,7 +724,7 @@ class Store:
         import fcntl
         import struct
 
-        from .lock import KILLED_WRITER_WAIT
+        from sweep.store.lock import KILLED_WRITER_WAIT
 
         cmd = getattr(fcntl, "F_OFD_SETLK", None)
         if cmd is None:

@@ -1,13 +1,13 @@
 """One finished point: :class:`Record`, built once from (point, outcome).
 
-A worker's outcome (:func:`sweep.executor.compute_point`: status, message, scalars,
-profiles, residual history and where and when it ran), a point the master knows the
-outcome of without a worker (``invalid``, ``crashed``: :func:`known_outcome`), a record
-read back from a store (:mod:`sweep.reader`) or from the journal: each becomes a
+A worker's :class:`sweep.protocol.Outcome` (status, message, scalars, profiles,
+residual history and where and when it ran; :meth:`~sweep.protocol.Outcome.known` for a
+point the master decides without a worker: ``invalid``, ``crashed``), a record
+read back from a store (:mod:`sweep.store.reader`) or from the journal: each becomes a
 :class:`Record` holding the table row and the point's datasets, already converted to the
-schema's kinds (:func:`sweep.writer.normalise_record`). The store stages Records
-(:meth:`sweep.store.Store.add`); the journal line (:meth:`Record.journal_line`) and the
-HDF5 row and datasets (:meth:`sweep.writer.H5Writer.write_many`) are written from it.
+schema's kinds (:func:`sweep.store.writer.normalise_record`). The store stages Records
+(:meth:`sweep.store.store.Store.add`); the journal line (:meth:`Record.journal_line`) and the
+HDF5 row and datasets (:meth:`sweep.store.writer.H5Writer.write_many`) are written from it.
 
 A Record also reads like the dict it replaces (``rec["row"]``, ``rec["profiles"]``,
 ``rec["residual_history"]``), so code holding the old ``{"row": ..., "profiles": ...,
@@ -15,37 +15,24 @@ A Record also reads like the dict it replaces (``rec["row"]``, ``rec["profiles"]
 """
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
-import os
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-__all__ = ["Record", "plain", "known_outcome", "provenance_json"]
+import floewave
+from sweep.errors import UnstorableError
+from sweep.identity import canonical_json
+from sweep.protocol import Outcome
+from sweep.store.cells import check_profiles, normalise_record
+from sweep.store.journal import encode
+from sweep.store.schema import column
 
-
-def plain(value: Any) -> Any:
-    """A value as plain Python (numpy scalars and arrays to Python numbers and lists)."""
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
-
-
-def known_outcome(h: str, status: str, message: str) -> dict[str, Any]:
-    """The outcome of a point the master decides without computing it (``invalid``: its
-    configuration is impossible; ``crashed``: it killed its worker ``max_attempts``
-    times), as :func:`sweep.executor.compute_point` would describe it."""
-    from .provenance import host
-    from .store import utc_now
-
-    now = utc_now()
-    return {"hash": h, "status": status, "message": message, "host": host(), "rank": 0,
-            "pid": os.getpid(), "start_time": now, "end_time": now, "wall_time": 0.0}
+__all__ = ["Record", "provenance_json"]
 
 
 @dataclass
@@ -81,41 +68,36 @@ class Record:
     @classmethod
     def coerce(cls, record: Record | Mapping[str, Any]) -> Record:
         """A Record as stored: ``record`` (a Record or a dict of the same members)
-        converted to the schema's kinds (:class:`sweep.writer.Unstorable` names a value
+        converted to the schema's kinds (:class:`sweep.errors.UnstorableError` names a value
         that cannot be; a row without ``hash`` is unstorable)."""
-        from .writer import Unstorable, check_profiles, normalise_record
-
         if isinstance(record, Record) and record.normal:
             return record
         rec = normalise_record(record if isinstance(record, Mapping)
                                else record.as_dict())
         if "hash" not in rec["row"]:
-            raise Unstorable("no 'hash'")
+            raise UnstorableError("no 'hash'")
         check_profiles(rec["row"], rec["profiles"])
         return cls(rec["row"], rec["profiles"], rec["residual_history"], normal=True)
 
     @classmethod
-    def from_outcome(cls, point: Any, out: Mapping[str, Any],
+    def from_outcome(cls, point: Any, out: Outcome,
                      config: dict[str, Any] | None = None,
                      provenance: Callable[[int, str], str] | None = None) -> Record:
         """The Record of ``point`` (a :class:`sweep.config.Point`) from a worker's
-        outcome ``out`` (or :func:`known_outcome`): its swept values, its scalar
+        outcome ``out`` (or :meth:`sweep.protocol.Outcome.known`): its swept values, its scalar
         results converted to their columns' kinds, the bookkeeping (status, message,
         host, rank, pid, times, canonical ``config_json``) and ``provenance(rank,
         kernel_mode)`` (the JSON of the environment that computed it).
 
         A result the schema cannot hold makes a ``failed`` record saying why (never an
         exception): a scalar of the wrong kind ("does not fit the schema"), or a value
-        or profile :func:`sweep.writer.normalise_record` refuses ("cannot be stored").
+        or profile :func:`sweep.store.writer.normalise_record` refuses ("cannot be stored").
         """
-        from .writer import Unstorable
 
         try:
             return cls.coerce(_row_of(point, out, config, provenance))
-        except Unstorable as exc:  # the record cannot be stored: a failed point
-            out = dict(out, status="failed", scalars={}, profiles={},
-                       residual_history=np.zeros(0),
-                       message=f"the result cannot be stored: {exc}")
+        except UnstorableError as exc:  # the record cannot be stored: a failed point
+            out = out.without_results("failed", f"the result cannot be stored: {exc}")
             return cls.coerce(_row_of(point, out, config, provenance))
 
     def as_dict(self) -> dict[str, Any]:
@@ -133,9 +115,7 @@ class Record:
 
     # ------------------------------------------------------------------ writing
     def journal_line(self) -> bytes:
-        """The record's journal line (:func:`sweep.journal.encode`)."""
-        from .journal import encode
-
+        """The record's journal line (:func:`sweep.store.journal.encode`)."""
         return encode({"row": self.row,
                        "profiles": {k: np.asarray(v).tolist()
                                     for k, v in self.profiles.items()},
@@ -150,17 +130,12 @@ class Record:
         return str(self.row.get("status", ""))
 
 
-def _row_of(point: Any, out: Mapping[str, Any], config: dict[str, Any] | None,
+def _row_of(point: Any, out: Outcome, config: dict[str, Any] | None,
             provenance: Callable[[int, str], str] | None) -> dict[str, Any]:
     """The record dict of ``point`` from outcome ``out`` (before normalisation)."""
-    import floewave
-
-    from .identity import canonical_json
-    from .schema import column
-
     row: dict[str, Any] = {name: getattr(point.config, name)
                            for name in floewave.SWEPT_FIELDS}
-    scalars = out.get("scalars", {})
+    scalars = out.scalars
     unusable = []
     for name, value in scalars.items():
         if name in ("status", "wall_time"):
@@ -187,18 +162,18 @@ def _row_of(point: Any, out: Mapping[str, Any], config: dict[str, Any] | None,
     except (TypeError, ValueError):
         unusable.append(f"wall_time = {str(scalars.get('wall_time'))[:40]!r}")
     if unusable:  # the schema cannot hold the result: a failed point, with the reason
-        out = dict(out, status="failed", profiles={}, residual_history=np.zeros(0),
-                   message="the result does not fit the schema: " + ", ".join(unusable))
+        out = dataclasses.replace(
+            out, status="failed", profiles={}, residual_history=np.zeros(0),
+            message="the result does not fit the schema: " + ", ".join(unusable))
         row = {name: getattr(point.config, name) for name in floewave.SWEPT_FIELDS}
-    row.update(hash=point.hash, status=out["status"], message=out["message"],
-               host=out["host"], rank=int(out["rank"]), pid=int(out["pid"]),
-               start_time=out["start_time"], end_time=out["end_time"],
-               wall_time=float(out["wall_time"]), config_json=canonical_json(
+    row.update(hash=point.hash, status=out.status, message=out.message,
+               host=out.host, rank=int(out.rank), pid=int(out.pid),
+               start_time=out.start_time, end_time=out.end_time,
+               wall_time=float(out.wall_time), config_json=canonical_json(
                    point.config.to_dict() if config is None else config))
     if provenance is not None:  # the same for every point of a rank and kernel mode
-        row["provenance"] = provenance(int(out["rank"]), str(scalars.get("kernel_mode", "")))
-    return {"row": row, "profiles": out.get("profiles", {}),
-            "residual_history": out.get("residual_history", np.zeros(0))}
+        row["provenance"] = provenance(int(out.rank), str(scalars.get("kernel_mode", "")))
+    return {"row": row, "profiles": out.profiles, "residual_history": out.residual_history}
 
 
 def provenance_json(env: Mapping[str, Any], git: Mapping[str, Any], kernel_mode: str) -> str:

@@ -11,8 +11,8 @@ written it did not finish: the guard says so and exits with :data:`EXIT_INTERRUP
 by signal N makes the guard end by the same signal).
 
 The guard forwards SIGINT, SIGTERM, SIGUSR1 and SIGHUP to the child (a signal sent to
-the process group reaches both: :class:`sweep.signals.StopSignals` counts a repeat
-within :data:`sweep.signals.REPEAT_WINDOW` once). The child dies with its guard
+the process group reaches both: :class:`sweep.run.signals.StopSignals` counts a repeat
+within :data:`sweep.run.signals.REPEAT_WINDOW` once). The child dies with its guard
 (``PR_SET_PDEATHSIG``), so ``kill -9`` of the guard ends the campaign as before.
 Under an MPI launcher every rank is guarded: a worker rank that ends with 0 in the
 middle of a point makes its guard exit 6, and the launcher ends the job non-zero.
@@ -26,7 +26,7 @@ import os
 import signal
 import sys
 
-from .errors import EXIT_INTERRUPTED
+from sweep.errors import EXIT_INTERRUPTED
 
 __all__ = ["guarded", "report_status", "unblock"]
 

@@ -7,9 +7,9 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from .errors import CampaignMismatchError
-from .identity import canonical_json, sha256_hex
-from .schema import SCHEMA_VERSION
+from sweep.errors import CampaignMismatchError
+from sweep.identity import canonical_json, sha256_hex
+from sweep.store.schema import SCHEMA_VERSION
 
 __all__ = ["check_campaign", "check_legacy_journal"]
 

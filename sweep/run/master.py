@@ -1,14 +1,14 @@
 """The master of a campaign run: schedules points onto workers, stores each result.
 
 The master (:class:`Master`) is a small state machine over a transport
-(:mod:`sweep.transport`): keep every worker supplied with the costliest pending points,
+(:mod:`sweep.run.transport`): keep every worker supplied with the costliest pending points,
 wait (blocking with backoff, never a hot spin) for a result, take every other result
-already waiting, store them all with one group commit (:meth:`sweep.store.Store.commit`:
+already waiting, store them all with one group commit (:meth:`sweep.store.store.Store.commit`:
 one journal fsync, one HDF5 flush), count them as stored, repeat; ``None`` is the stop
 message. A worker holds one task at a time while points are slow; when points take less
 than a few commits' time it is given a short queue of tasks (up to :data:`_MAX_DEPTH`)
 so that it computes while the master commits. Each result becomes one
-:class:`sweep.record.Record` (:meth:`Master.record`).
+:class:`sweep.store.record.Record` (:meth:`Master.record`).
 """
 from __future__ import annotations
 
@@ -18,14 +18,15 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
-from .config import Point
-from .errors import Interrupted, WorkerError
-from .progress import Progress
-from .record import Record, provenance_json
-from .signals import GraceExpired, StopSignals
-from .store import Store
-from .transport import Transport
-from .worker import DEFAULT_COMPUTE
+from sweep.config import Point
+from sweep.errors import Interrupted, WorkerError
+from sweep.protocol import Kind, Outcome, Task, WorkerFailure
+from sweep.run.compute import DEFAULT_COMPUTE
+from sweep.run.progress import Progress
+from sweep.run.signals import GraceExpired, StopSignals
+from sweep.run.transport import Transport
+from sweep.store.record import Record, provenance_json
+from sweep.store.store import Store
 
 __all__ = ["Master", "RunSummary"]
 
@@ -54,7 +55,7 @@ class RunSummary:
     #: the master computed the points itself (no MPI workers): its CPU share is the
     #: computation's, not the scheduling overhead, and is not reported
     in_process: bool = False
-    #: [s] compiling or loading the kernels before the first point (:mod:`sweep.warmup`)
+    #: [s] compiling or loading the kernels before the first point (:mod:`sweep.run.warmup`)
     warm_up: float = 0.0
 
     @property
@@ -78,7 +79,7 @@ class Master:
 
     Parameters
     ----------
-    store : the open :class:`sweep.store.Store` (this process is its only writer).
+    store : the open :class:`sweep.store.store.Store` (this process is its only writer).
     transport : :class:`InProcessTransport` or :class:`MPITransport`.
     compute : the compute function spec sent with every task.
     """
@@ -107,10 +108,15 @@ class Master:
         ratio = self.commit_time / (_COMMIT_SHARE * max(self.point_time, 1e-6))
         return max(1, min(_MAX_DEPTH, 1 + int(ratio)))
 
-    def record(self, point: Point, out: dict[str, Any],
+    def _task(self, point: Point, config: dict[str, Any]) -> Task:
+        """The :class:`~sweep.protocol.Task` of ``point`` (``config``: its configuration
+        as a dict, kept with the worker's queue)."""
+        return Task(point.hash, config, float(self.point_timeout or 0.0))
+
+    def record(self, point: Point, out: Outcome,
                config: dict[str, Any] | None = None) -> Record:
-        """The :class:`sweep.record.Record` of a worker's outcome (or of
-        :func:`sweep.record.known_outcome`) for ``point``."""
+        """The :class:`sweep.store.record.Record` of a worker's outcome (or of
+        :meth:`sweep.protocol.Outcome.known`) for ``point``."""
         return Record.from_outcome(point, out, config, self._provenance_of)
 
     def _provenance_of(self, rank: int, kernel_mode: str) -> str:
@@ -156,9 +162,7 @@ class Master:
                     queues[worker].append((point, point.config.to_dict()))
                     self.store.handout([(point.hash, worker)], alone=True)
                     self.outstanding += 1
-                    self.transport.send(worker, {"hash": point.hash, "compute": self.compute,
-                                                 "config": queues[worker][-1][1],
-                                                 "timeout": self.point_timeout})
+                    self.transport.send(worker, self._task(point, queues[worker][-1][1]))
                 elif not signals.requested and not suspects:
                     depth = self.depth
                     sent: list[tuple[Point, dict[str, Any], int]] = []
@@ -171,10 +175,7 @@ class Master:
                     self.store.handout([(p.hash, w) for p, _, w in sent])
                     for point, config, worker in sent:
                         self.outstanding += 1
-                        self.transport.send(worker, {"hash": point.hash,
-                                                     "compute": self.compute,
-                                                     "config": config,
-                                                     "timeout": self.point_timeout})
+                        self.transport.send(worker, self._task(point, config))
                 if not self.outstanding:
                     break
                 if time.monotonic() > stop_at:
@@ -186,7 +187,7 @@ class Master:
                 batch = [msg]
                 window_end = time.monotonic() + _BATCH_WINDOW
                 while len(batch) < min(self.outstanding, _MAX_BATCH) and \
-                        batch[-1][1] != "error" and time.monotonic() < window_end:
+                        batch[-1][1] != Kind.ERROR and time.monotonic() < window_end:
                     more = self.transport.poll(0.0)
                     if more is None:
                         break
@@ -218,29 +219,29 @@ class Master:
         """
         t0 = time.perf_counter()
         statuses: list[str] = []
-        error: dict[str, Any] | None = None
+        error: WorkerFailure | None = None
         wall = 0.0
         for worker, kind, payload in batch:
-            if kind == "error":
+            if kind == Kind.ERROR:
                 error = payload
                 break
             point, config = queues[worker].popleft()
-            if payload.get("hash", point.hash) != point.hash:
-                raise WorkerError(f"worker rank {worker} returned point"
-                                  f" {str(payload.get('hash'))[:12]}, expected"
-                                  f" {point.hash[:12]} (protocol error)")
+            if kind != Kind.RESULT or payload.hash != point.hash:
+                raise WorkerError(f"worker rank {worker} returned {kind} of point"
+                                  f" {str(getattr(payload, 'hash', ''))[:12]}, expected the"
+                                  f" result of {point.hash[:12]} (protocol error)")
             rec = self.record(point, payload, config)
             self.store.add(rec)
             statuses.append(rec.status)
-            wall += float(payload.get("wall_time", 0.0))
+            wall += float(payload.wall_time)
         self.store.commit()  # now they are stored: count them
         for status in statuses:
             summary.computed += 1
             summary.counts[status] = summary.counts.get(status, 0) + 1
             progress.update(status)
         if error is not None:
-            raise WorkerError(f"worker rank {error['rank']} on {error['host']}:"
-                              f" {error['message']}\n{error['traceback']}")
+            raise WorkerError(f"worker rank {error.rank} on {error.host}:"
+                              f" {error.message}\n{error.traceback}")
         if statuses:
             self.point_time = _average(self.point_time, wall / len(statuses))
             self.commit_time = _average(self.commit_time, time.perf_counter() - t0)

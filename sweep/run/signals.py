@@ -4,7 +4,7 @@
 in-process, arms a grace timer whose expiry raises :class:`GraceExpired` in the master
 (the point being computed is abandoned); under MPI the master waits up to the grace
 period for the running points and stops. Workers ignore stop signals
-(:func:`sweep.worker.worker_loop`): the master decides.
+(:func:`sweep.run.worker.worker_loop`): the master decides.
 """
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ __all__ = ["StopSignals", "GraceExpired", "MAX_TIMER", "REPEAT_WINDOW"]
 MAX_TIMER = 1e7
 #: [s] the same stop signal again within this time is the same request: a signal sent
 #: to the process group reaches the campaign and its guard, which forwards it
-#: (:mod:`sweep.guard`); a second Ctrl-C a person types comes later than this.
+#: (:mod:`sweep.run.guard`); a second Ctrl-C a person types comes later than this.
 REPEAT_WINDOW = 0.25
 
 
@@ -91,7 +91,3 @@ class StopSignals:
         for sig, old in self._old.items():
             with contextlib.suppress(ValueError, TypeError):
                 signal.signal(sig, old)
-
-
-_StopSignals = StopSignals  # the names used before the split
-_GraceExpired = GraceExpired

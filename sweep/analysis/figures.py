@@ -46,10 +46,10 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from .analysis import load, load_profile
-from .errors import ConfigError
-from .schema import column
-from .stats import RESULT_STATUSES, SWEPT, alpha_omega, collision_stats, derived
+from sweep.analysis.load import load, load_profile
+from sweep.analysis.stats import RESULT_STATUSES, SWEPT, alpha_omega, collision_stats, derived
+from sweep.errors import ConfigError
+from sweep.store.schema import column
 
 __all__ = ["make_figures", "KINDS", "PAPER_SETUP", "WHY", "NothingToDrawError"]
 

@@ -3,7 +3,7 @@
 - :class:`InProcessTransport`: one worker, the master's own process (plain ``python``);
 - :class:`MPITransport`: mpi4py, MPI-1 point-to-point only (``send``/``Iprobe``/``recv``):
   rank 0 is the master and the only process that opens the store, ranks 1..N-1 run
-  :func:`sweep.worker.worker_loop`.
+  :func:`sweep.run.worker.worker_loop`; the messages are :mod:`sweep.protocol`'s.
 
 Waiting is never a hot spin: :class:`Backoff` sleeps between probes, from
 :data:`POLL_MIN` doubling up to :data:`POLL_MAX` (MPICH's blocking ``recv`` polls at
@@ -19,15 +19,15 @@ import time
 from collections.abc import Callable
 from typing import Any, Protocol
 
-from .errors import WorkerError
-from .provenance import environment
-from .warmup import warm_up
-from .worker import DEFAULT_COMPUTE, compute_in_child, compute_point, resolve_compute
+from sweep.errors import WorkerError
+from sweep.protocol import TAG_RESULT, TAG_TASK, Kind, Task, WarmUp
+from sweep.provenance import environment
+from sweep.run.compute import DEFAULT_COMPUTE, compute_in_child, compute_point, resolve_compute
+from sweep.run.warmup import warm_up
 
 __all__ = ["Transport", "InProcessTransport", "MPITransport", "Backoff", "wait_message",
-           "TAG_TASK", "TAG_RESULT", "POLL_MIN", "POLL_MAX"]
+           "POLL_MIN", "POLL_MAX"]
 
-TAG_TASK, TAG_RESULT = 1, 2
 POLL_MIN, POLL_MAX = 0.0005, 0.005  # [s] backoff of the waiting loops
 #: MPICH's Iprobe makes progress on one call and sees the message on the next, so each
 #: wake-up probes a few times (measured: 1 probe per wake-up waits ~3 backoff periods).
@@ -74,11 +74,11 @@ class Transport(Protocol):
     workers: list[int]
     worker_env: dict[int, dict[str, Any]]
 
-    def send(self, worker: int, task: dict[str, Any]) -> None: ...
+    def send(self, worker: int, task: Task) -> None: ...
 
     def warm_up(self, configs: list[dict[str, Any]]) -> tuple[float, str]: ...
 
-    def poll(self, timeout: float) -> tuple[int, str, Any] | None: ...
+    def poll(self, timeout: float) -> tuple[int, Kind, Any] | None: ...
 
     def shutdown(self) -> None: ...
 
@@ -93,22 +93,22 @@ class InProcessTransport:
         self.compute = compute
         self.workers = [0]
         self.worker_env = {0: environment(with_git=False)}
-        self._tasks: collections.deque[dict[str, Any]] = collections.deque()
+        self._tasks: collections.deque[Task] = collections.deque()
 
-    def send(self, worker: int, task: dict[str, Any]) -> None:
+    def send(self, worker: int, task: Task) -> None:
         self._tasks.append(task)
 
     def warm_up(self, configs: list[dict[str, Any]]) -> tuple[float, str]:
-        """Compile the kernels of ``configs`` here (:mod:`sweep.warmup`)."""
+        """Compile the kernels of ``configs`` here (:mod:`sweep.run.warmup`)."""
         return warm_up(configs, self.compute)
 
-    def poll(self, timeout: float) -> tuple[int, str, Any] | None:
+    def poll(self, timeout: float) -> tuple[int, Kind, Any] | None:
         if not self._tasks:
             return None
         task = self._tasks.popleft()
-        if task.get("timeout") and hasattr(os, "fork"):  # a limit: in a child process
-            return 0, "result", compute_in_child(task, self.fn, 0)
-        return 0, "result", compute_point(task, self.fn, 0)
+        if task.timeout and hasattr(os, "fork"):  # a limit: in a child process
+            return 0, Kind.RESULT, compute_in_child(task, self.fn, 0)
+        return 0, Kind.RESULT, compute_point(task, self.fn, 0)
 
     def shutdown(self) -> None:
         self._tasks.clear()
@@ -137,39 +137,38 @@ class MPITransport:
         for _ in self.workers:
             wait_message(self.comm, self.MPI.ANY_SOURCE, TAG_RESULT, self._status)
             kind, payload = self.comm.recv(source=self._status.Get_source(), tag=TAG_RESULT)
-            if kind == "error":
+            if kind == Kind.ERROR:
                 errors.append(payload)
             else:
                 self.worker_env[self._status.Get_source()] = payload
         if errors:
             e = errors[0]
-            raise WorkerError(f"worker rank {e['rank']} on {e['host']} failed to start:"
-                              f" {e['message']}" + (f"\n{e['traceback']}" if e["traceback"]
-                                                    else ""))
+            raise WorkerError(f"worker rank {e.rank} on {e.host} failed to start:"
+                              f" {e.message}" + (f"\n{e.traceback}" if e.traceback else ""))
 
-    def send(self, worker: int, task: dict[str, Any]) -> None:
+    def send(self, worker: int, task: Task) -> None:
         self.comm.send(task, dest=worker, tag=TAG_TASK)
 
     def warm_up(self, configs: list[dict[str, Any]]) -> tuple[float, str]:
-        """Every worker compiles the kernels of ``configs`` (:mod:`sweep.warmup`); returns
+        """Every worker compiles the kernels of ``configs`` (:mod:`sweep.run.warmup`); returns
         the longest time and the first problem reported."""
         if not configs:
             return 0.0, ""
         for w in self.workers:
-            self.comm.send({"warm_up": configs}, dest=w, tag=TAG_TASK)
+            self.comm.send(WarmUp(tuple(configs)), dest=w, tag=TAG_TASK)
         longest, problem = 0.0, ""
         for _ in self.workers:
             wait_message(self.comm, self.MPI.ANY_SOURCE, TAG_RESULT, self._status)
             source = self._status.Get_source()
             kind, payload = self.comm.recv(source=source, tag=TAG_RESULT)
-            if kind != "warm":  # pragma: no cover - a protocol error
+            if kind != Kind.WARM:  # pragma: no cover - a protocol error
                 raise WorkerError(f"worker rank {source}: expected its warm-up reply, got"
                                   f" {kind!r}")
             longest = max(longest, payload[0])
             problem = problem or (f"rank {source}: {payload[1]}" if payload[1] else "")
         return longest, problem
 
-    def poll(self, timeout: float) -> tuple[int, str, Any] | None:
+    def poll(self, timeout: float) -> tuple[int, Kind, Any] | None:
         if not self._backoff.wait(
                 lambda: _probe(self.comm, self.MPI.ANY_SOURCE, TAG_RESULT, self._status),
                 time.monotonic() + timeout):

@@ -16,10 +16,10 @@ import pandas as pd
 import xarray as xr
 
 import floewave
-
-from . import reader
-from .errors import PointNotFoundError, StoreError
-from .schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, REPLICA_VARS, column
+from sweep.errors import PointNotFoundError, StoreError, StoreUnreadableError
+from sweep.store import reader
+from sweep.store.cells import text
+from sweep.store.schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, REPLICA_VARS, column
 
 __all__ = ["load", "load_xarray", "load_profile", "load_profiles", "store_attrs", "store_runs",
            "resolve_hash", "journal_points", "STATUS_ORDER", "PROFILE_LEADING_DIMS"]
@@ -38,15 +38,11 @@ _NOT_RESULTS = {"hash", "message", "host", "rank", "pid", "start_time", "end_tim
                 "seq", "config_json", "provenance", "kernel_mode"}
 
 
-class _OpenError(StoreError):
-    """The file exists but HDF5 cannot open it (yet): a writer may be mid-commit."""
-
-
 def _open(path: str | Path) -> h5py.File:
     try:
         return reader.open_file(path)
     except (OSError, FileNotFoundError) as exc:
-        cls = _OpenError if Path(path).is_file() else StoreError
+        cls = StoreUnreadableError if Path(path).is_file() else StoreError
         raise cls(f"{path}: cannot open store: {exc}") from None
 
 
@@ -84,7 +80,7 @@ def journal_points(path: str | Path) -> int | None:
     import os
     import re
 
-    from .journal import journal_path
+    from sweep.store.journal import journal_path
 
     jp = journal_path(os.path.realpath(path))  # beside the file, as the writer names it
     if not jp.exists():
@@ -113,7 +109,7 @@ def _retried(read: Any) -> Any:
         try:
             return read()
         except StoreError as exc:
-            if not isinstance(exc, _OpenError) or attempt == READ_RETRIES:
+            if not isinstance(exc, StoreUnreadableError) or attempt == READ_RETRIES:
                 raise
             time.sleep(delay)
             delay *= 2
@@ -137,7 +133,7 @@ def load(path: str | Path) -> pd.DataFrame:
 def _load(path: str | Path) -> pd.DataFrame:
     """The per-point table as a DataFrame: one row per stored point.
 
-    Columns are those of :data:`sweep.schema.COLUMNS` (swept values, status, message,
+    Columns are those of :data:`sweep.store.schema.COLUMNS` (swept values, status, message,
     scalar results and diagnostics, provenance); ``DataFrame.attrs`` holds ``units`` and
     ``long_name`` per column and the campaign JSON.
     """
@@ -145,7 +141,7 @@ def _load(path: str | Path) -> pd.DataFrame:
         if "table" not in f:
             raise StoreError(f"{path}: not a sweep store (no /table)")
         data = reader.table_columns(f)
-        campaign = reader.text(f.attrs.get("campaign_json", ""))
+        campaign = text(f.attrs.get("campaign_json", ""))
         # every row's config_json still hashes to its hash (StoreCorruptedError if not)
         reader.check_hashes(path, data["hash"], data["config_json"], reader.model_version(f),
                             data["provenance"],
@@ -301,7 +297,7 @@ def load_profiles(path: str | Path, **selectors: Any) -> xr.Dataset:
 
     ``sweep.load_profiles("demo.h5", eps=0.6, dispersion="ml")`` keeps the points with
     those values; a scalar selector drops its dimension (as ``Dataset.sel`` does), a list
-    keeps it with those values. Every variable of :data:`sweep.schema.PROFILE_VARS`
+    keeps it with those values. Every variable of :data:`sweep.store.schema.PROFILE_VARS`
     becomes a variable with dimensions (swept..., floe) -- or (swept..., replica, floe)
     for a profile stored with a leading axis (:data:`PROFILE_LEADING_DIMS`) -- with its
     ``units`` and ``long_name``. The floe axis is as long as the longest sheet (N_f

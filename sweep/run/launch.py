@@ -2,75 +2,35 @@
 outcome is known without a worker, runs the master over a transport, and decides what an
 error ends (under MPI: the whole job while workers are busy).
 
-The parts: :mod:`sweep.worker` (compute one point; the MPI worker loop),
-:mod:`sweep.transport` (in-process and MPI, one :class:`~sweep.transport.Backoff`),
-:mod:`sweep.master` (scheduling and group commits), :mod:`sweep.signals` (stop signals
-and the grace period), :mod:`sweep.record` (one Record per finished point). Their public
-names are importable from here as before.
+The parts: :mod:`sweep.run.compute` (compute one point), :mod:`sweep.run.worker` (the MPI
+worker loop), :mod:`sweep.run.transport` (in-process and MPI), :mod:`sweep.run.master`
+(scheduling and group commits), :mod:`sweep.run.signals` (stop signals and the grace
+period), :mod:`sweep.run.mpi` (the launch checks), :mod:`sweep.protocol` (the messages).
 """
 from __future__ import annotations
 
 import contextlib
-import os
 import sys
 import time
 from typing import Any
 
-from .config import Campaign, Point
-from .errors import Interrupted, LaunchError, SweepError
-from .master import Master, RunSummary
-from .progress import Progress, log_line
-from .provenance import environment
-from .record import known_outcome
-from .signals import GraceExpired, StopSignals, _GraceExpired, _StopSignals  # noqa: F401
-from .store import Store
-from .transport import Backoff, InProcessTransport, MPITransport, Transport  # noqa: F401
-from .warmup import warm_up_configs
-from .worker import (  # noqa: F401 - re-exported
-    DEFAULT_COMPUTE,
-    MODEL_STATUSES,
-    compute_point,
-    resolve_compute,
-    worker_loop,
-)
+from sweep.config import Campaign, Point
+from sweep.errors import Interrupted, SweepError
+from sweep.protocol import Outcome
+from sweep.provenance import environment
+from sweep.run.compute import DEFAULT_COMPUTE
+from sweep.run.master import Master, RunSummary
+from sweep.run.progress import Progress, log_line
+from sweep.run.signals import GraceExpired, StopSignals
+from sweep.run.transport import InProcessTransport, MPITransport, Transport
+from sweep.run.warmup import warm_up_configs
+from sweep.run.worker import worker_loop
+from sweep.store.store import Store
 
-__all__ = ["run_campaign", "compute_point", "worker_loop", "Master", "InProcessTransport",
-           "MPITransport", "RunSummary", "resolve_compute", "mpi_world", "check_launch",
-           "DEFAULT_COMPUTE", "Backoff"]
+__all__ = ["run_campaign"]
 
 #: Stored statuses that ``--retry-failed`` computes again.
 _RETRIED = ("failed", "crashed", "timeout")
-
-from .cli import _LAUNCHER_VARS  # noqa: E402 - one list (the CLI checks it early)
-
-
-def mpi_world() -> Any:
-    """``MPI.COMM_WORLD`` when started by an MPI launcher (mpiexec/srun), else ``None``.
-
-    Without a launcher mpi4py is not even imported, so plain ``python`` runs work on
-    machines without MPI.
-    """
-    if not any(v in os.environ for v in _LAUNCHER_VARS):
-        return None
-    try:
-        from mpi4py import MPI
-    except ImportError as exc:
-        raise LaunchError(f"started by an MPI launcher but mpi4py cannot be imported: {exc};"
-                          " pip install 'floewave[mpi]'") from None
-    return MPI.COMM_WORLD
-
-
-def check_launch(size: int, environ: dict[str, str] | None = None) -> None:
-    """Refuse an MPI size that differs from ``SLURM_NTASKS`` (the N-singletons launch)."""
-    env = os.environ if environ is None else environ
-    ntasks = env.get("SLURM_NTASKS")
-    if ntasks and ntasks.isdigit() and int(ntasks) != size:
-        raise LaunchError(
-            f"MPI size is {size} but SLURM_NTASKS={ntasks}: the ranks did not join one MPI"
-            " job (N singletons: mpi4py built against another MPI than the launcher's, or"
-            " 'sweep run' started without srun/mpiexec); fix the launch, or pass"
-            " --ignore-slurm-ntasks if this is intended")
-
 
 def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_COMPUTE,
                  retry_failed: bool = False, extend: bool = False, comm: Any = None,
@@ -82,7 +42,7 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
     With ``comm`` (an MPI communicator of size > 1) rank 0 is the master and the other
     ranks are workers (they return ``None``); otherwise the campaign runs in-process.
     ``point_timeout`` [s] overrides ``[run] point_timeout`` (0: none); ``verify``:
-    compare the store with its journal on opening (:class:`sweep.store.Store`).
+    compare the store with its journal on opening (:class:`sweep.store.store.Store`).
     The workers' start-up is checked before the store is touched; stop signals are
     caught from before the store is opened (a stop during the open or its rebuild is
     honoured right after it: :class:`Interrupted`).
@@ -172,7 +132,7 @@ def _end_mpi_job(exc: BaseException, transport: Transport, master: Master | None
 def _warm_up(master: Master, todo: list[Point], signals: StopSignals,
              summary: RunSummary) -> None:
     """Compile the kernels on every worker before the progress clock starts, and say how
-    long it took on a line of its own (:mod:`sweep.warmup`)."""
+    long it took on a line of its own (:mod:`sweep.run.warmup`)."""
     configs = warm_up_configs(todo, master.compute)
     if not configs:
         return
@@ -206,7 +166,7 @@ def _run_points(campaign: Campaign, store: Store, master: Master, signals: StopS
         known = _known_outcomes(todo, store, master, campaign.run.max_attempts,
                                 retry_failed)
         for p, status, message in known:
-            store.add(master.record(p, known_outcome(p.hash, status, message)))
+            store.add(master.record(p, Outcome.known(p.hash, status, message)))
         store.commit()  # one group commit for all of them
         for _, status, _ in known:
             summary.computed += 1

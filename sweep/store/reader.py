@@ -1,12 +1,12 @@
 """Reading the stored layout back: the one place that parses a store file.
 
-:mod:`sweep.schema` says what the layout is; this module reads it: the root and run
+:mod:`sweep.store.schema` says what the layout is; this module reads it: the root and run
 attributes, the committed table (rows below ``/table.attrs["n_rows"]``; a column an
 older schema version lacks reads as its fill value), a point's profile group, and every
-committed point as a :class:`sweep.record.Record`. Bytes are decoded here only
-(:func:`text`, :func:`texts`). Used by :func:`sweep.analysis.load` and its relatives,
-:func:`sweep.merge.merge`, :func:`sweep.schema.validate` and the store's repair path
-(:meth:`sweep.store.Store` journals stored rows its journal lacks).
+committed point as a :class:`sweep.store.record.Record`. Bytes are decoded by
+:func:`sweep.store.cells.text`. Used by :func:`sweep.analysis.load.load` and its relatives,
+:func:`sweep.store.merge.merge`, :func:`sweep.store.validate.validate` and the store's repair path
+(:meth:`sweep.store.store.Store` journals stored rows its journal lacks).
 
 Each reader re-checks that every stored row's ``config_json`` still hashes to its
 ``hash`` (:func:`hash_mismatches`; the journal does the same for its lines): a row
@@ -23,28 +23,22 @@ from typing import Any
 import h5py
 import numpy as np
 
-from .errors import StoreCorruptedError
-from .identity import config_hashes_to
-from .record import Record
-from .schema import COLUMNS, HISTORY_VAR, MIGRATION_FILL, PROFILE_VARS, REPLICA_VARS, profile_path
+from sweep.errors import StoreCorruptedError
+from sweep.identity import config_hashes_to
+from sweep.store.cells import text, texts
+from sweep.store.record import Record
+from sweep.store.schema import (
+    COLUMNS,
+    HISTORY_VAR,
+    MIGRATION_FILL,
+    PROFILE_VARS,
+    REPLICA_VARS,
+    profile_path,
+)
 
-__all__ = ["text", "texts", "attrs_of", "open_file", "n_rows", "table_columns",
+__all__ = ["attrs_of", "open_file", "n_rows", "table_columns",
            "profile_group", "iter_records", "model_version", "hash_mismatches",
            "check_hashes"]
-
-
-def text(value: Any) -> str:
-    """A stored string: HDF5 gives ``bytes`` (variable-length UTF-8) or ``str``."""
-    return value.decode() if isinstance(value, bytes) else str(value)
-
-
-def texts(values: np.ndarray) -> np.ndarray:
-    """A stored column decoded: strings as an object array of ``str``; numbers as they
-    are."""
-    if values.dtype.kind in "OS":
-        return np.array([v.decode() if isinstance(v, bytes) else v for v in values],
-                        dtype=object)
-    return values
 
 
 def attrs_of(obj: Any) -> dict[str, Any]:
@@ -54,7 +48,7 @@ def attrs_of(obj: Any) -> dict[str, Any]:
 
 def open_file(path: str | Path) -> h5py.File:
     """A store opened read-only without HDF5 file locking (a reader never blocks the
-    writer; :mod:`sweep.lock` is the writers' lock)."""
+    writer; :mod:`sweep.store.lock` is the writers' lock)."""
     return h5py.File(path, "r", locking=False)
 
 
@@ -66,8 +60,8 @@ def n_rows(f: h5py.File) -> int:
 def table_columns(f: h5py.File, names: Iterable[str] | None = None,
                   n: int | None = None) -> dict[str, np.ndarray]:
     """The committed rows of the table columns ``names`` (default: all of
-    :data:`sweep.schema.COLUMNS`), strings decoded; a column an older schema version
-    lacks reads as its fill value (:data:`sweep.schema.MIGRATION_FILL` where given)."""
+    :data:`sweep.store.schema.COLUMNS`), strings decoded; a column an older schema version
+    lacks reads as its fill value (:data:`sweep.store.schema.MIGRATION_FILL` where given)."""
     table = f["table"]
     n = n_rows(f) if n is None else n
     wanted = set(names) if names is not None else None
@@ -100,7 +94,7 @@ def profile_group(f: h5py.File, h: str, names: Iterable[str] | None = None,
 def iter_records(f: h5py.File, only: set[str] | None = None,
                  normalise: bool = True) -> Iterator[Record]:
     """Every committed point of an open store (those whose hash is in ``only``, when
-    given) as a :class:`sweep.record.Record`, in table order; ``normalise=False``: the
+    given) as a :class:`sweep.store.record.Record`, in table order; ``normalise=False``: the
     values as read, not converted again (:meth:`Record.coerce`)."""
     cols = table_columns(f)
     for i in range(len(cols["hash"])):

@@ -494,7 +494,7 @@ def paper_checks(tables: Mapping[str, pd.DataFrame | None],
         profiles are inconclusive (and a_end has only its column SE or the floor).
     missing : campaign name -> why its table is absent (shown in the evidence).
     """
-    from .stats import derived
+    from sweep.analysis.stats import derived
 
     missing = dict(missing or {})
     d: dict[str, pd.DataFrame] = {}
@@ -706,7 +706,7 @@ class PaperReport:
 
 def default_configs() -> Path:
     """The shipped ``configs/`` directory of this checkout."""
-    return Path(__file__).resolve().parent.parent / "configs"
+    return Path(__file__).resolve().parents[2] / "configs"
 
 
 def check_stores(stores: str | Path = "paper", *, run: bool = False,
@@ -726,8 +726,8 @@ def check_stores(stores: str | Path = "paper", *, run: bool = False,
         ``stores`` is not a directory (without ``run``), or with ``run`` a campaign file
         is missing or invalid.
     """
-    from .analysis import load, load_profile
-    from .errors import ConfigError, StoreError
+    from sweep.analysis.load import load, load_profile
+    from sweep.errors import ConfigError, StoreError
 
     stores = Path(stores)
     configs = Path(configs) if configs is not None else default_configs()
@@ -738,8 +738,8 @@ def check_stores(stores: str | Path = "paper", *, run: bool = False,
                           " with --run, or see README 'Checking the paper's claims')")
     paths = {name: stores / f"{name}.h5" for name in PAPER_CAMPAIGNS}
     if run:
-        from .config import load_campaign
-        from .executor import DEFAULT_COMPUTE, run_campaign
+        from sweep.config import load_campaign
+        from sweep.run.launch import DEFAULT_COMPUTE, run_campaign
 
         campaigns = {}
         for name in PAPER_CAMPAIGNS:
@@ -800,5 +800,5 @@ def format_table(checks: Sequence[Check]) -> str:
                  f" {counts[INCONCLUSIVE]} inconclusive. Rule: |z| >= {Z_CRIT:g} (Student-t"
                  " for SEs from unweighted fits' residuals); '(floor)': no stored SE, the"
                  " stated floor used instead"
-                 " (sweep.papercheck.FLOORS).")
+                 " (sweep.paper.check.FLOORS).")
     return "\n".join(lines)

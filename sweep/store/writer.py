@@ -1,18 +1,17 @@
 """The HDF5 side of a store: create, open, write points, close (no policy here).
 
 :class:`H5Writer` owns one open ``h5py.File`` of a sweep store and knows its layout
-(:mod:`sweep.schema`); :class:`sweep.store.Store` decides when to create, open, repair
+(:mod:`sweep.store.schema`); :class:`sweep.store.store.Store` decides when to create, open, repair
 or rebuild it. Records are converted to the schema's column kinds by
-:func:`normalise_record` *before* they are journaled, so a record that reaches the
-journal can be written (:class:`Unstorable` names the value that cannot).
-HDF5's own file locking is off (``locking=False``): :mod:`sweep.lock` is the lock, and
+:func:`sweep.store.cells.normalise_record` *before* they are journaled, so a record that
+reaches the journal can be written.
+HDF5's own file locking is off (``locking=False``): :mod:`sweep.store.lock` is the lock, and
 HDF5's fails on NFS (h5py issue #1101).
 """
 from __future__ import annotations
 
 import contextlib
 import json
-import math
 import os
 from pathlib import Path
 from typing import Any
@@ -21,8 +20,8 @@ import h5py
 import numpy as np
 from h5py import h5a, h5d, h5g, h5s, h5t
 
-from .reader import text
-from .schema import (
+from sweep.store.cells import text
+from sweep.store.schema import (
     COLUMNS,
     FORMAT,
     HISTORY_VAR,
@@ -31,9 +30,9 @@ from .schema import (
     SCHEMA_VERSION,
     profile_path,
 )
+from sweep.system import utc_now
 
-__all__ = ["H5Writer", "Unstorable", "normalise_record", "check_profiles", "HDF5_SIGNATURE",
-           "fsync_path", "fsync_dir"]
+__all__ = ["H5Writer", "HDF5_SIGNATURE"]
 
 HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 _STR = h5py.string_dtype("utf-8")
@@ -41,117 +40,6 @@ _DTYPES = {"float": np.float64, "int": np.int64, "str": _STR}
 _NP_DTYPES = {"float": np.float64, "int": np.int64, "str": object}
 #: The table datasets grow by whole chunks (rows beyond ``n_rows`` are not committed).
 _TABLE_CHUNK = 1024
-_BY_NAME = {c.name: c for c in COLUMNS}
-_I64 = (-(2 ** 63), 2 ** 63 - 1)
-#: Statuses stored without profiles (every other status has each of PROFILE_VARS, of
-#: length n_floes: what `sweep validate` checks).
-_NO_PROFILES = ("failed", "invalid", "crashed", "timeout")
-
-
-class Unstorable(ValueError):
-    """A record holds a value the schema cannot store; the message says which."""
-
-
-
-def _clean_str(value: Any) -> str:
-    """A string HDF5 can store as UTF-8: lone surrogates and NULs escaped."""
-    s = value.decode("utf-8", "backslashreplace") if isinstance(value, bytes) else str(value)
-    try:
-        s.encode("utf-8")
-    except UnicodeEncodeError:
-        s = s.encode("utf-8", "backslashreplace").decode("utf-8")
-    return s.replace("\x00", "\\x00")
-
-
-def _convert(kind: str, name: str, value: Any) -> Any:
-    if kind == "str":
-        return _clean_str(value)
-    if isinstance(value, (str, bytes)) or isinstance(value, (list, dict, tuple)):
-        raise Unstorable(f"{name} = {str(value)[:60]!r} is not a number")
-    try:
-        if kind == "float":
-            return float(value)
-        if isinstance(value, float) and math.isnan(value):
-            return -1  # missing
-        if isinstance(value, float) and math.isinf(value):
-            raise Unstorable(f"{name} = {value!r} is not a finite integer")
-        v = int(value)
-    except (TypeError, ValueError, OverflowError) as exc:
-        raise Unstorable(f"{name} = {str(value)[:60]!r}: {exc}") from None
-    if not _I64[0] <= v <= _I64[1]:
-        raise Unstorable(f"{name} = {value!r} does not fit a 64-bit integer")
-    return v
-
-
-def normalise_record(record: dict[str, Any]) -> dict[str, Any]:
-    """The record as it will be journaled and stored: known columns only, each converted
-    to its kind (str / float / int64), profiles and history as float64 arrays.
-
-    Raises
-    ------
-    Unstorable
-        When a value cannot be converted (text in a float column, an integer beyond
-        64 bits, a profile that is not a 1-D array of numbers (2-D for the per-replica
-        profiles)...).
-    """
-    row_in = record.get("row")
-    if not isinstance(row_in, dict):
-        raise Unstorable("no 'row'")
-    row = {}
-    for name, value in row_in.items():
-        col = _BY_NAME.get(name)
-        if col is None:
-            continue
-        row[name] = col.fill if value is None else _convert(col.kind, name, value)
-    profiles = {}
-    for name, value in (record.get("profiles") or {}).items():
-        if np.iscomplexobj(value):
-            raise Unstorable(f"profile {name}: complex values (the schema holds real"
-                             " numbers)")
-        try:
-            arr = np.asarray(value, dtype=np.float64)
-        except (TypeError, ValueError, OverflowError) as exc:
-            raise Unstorable(f"profile {name}: {exc}") from None
-        if name in REPLICA_VARS:
-            # exactly the schema's shape, (R,) or (R, N_f), as `sweep validate` checks it
-            dims = REPLICA_VARS[name][2]
-            sizes = {"R": row.get("replicas"), "N_f": row.get("n_floes")}
-            want = tuple(sizes[d] for d in dims)
-            if arr.ndim != len(dims) or any(w is None or w < 1 for w in want) \
-                    or arr.shape != want:
-                raise Unstorable(f"profile {name}: shape {arr.shape}, expected"
-                                 f" {'x'.join(dims)} = {want} (columns replicas, n_floes)")
-            profiles[str(name)] = arr
-            continue
-        if arr.ndim > 1:
-            raise Unstorable(f"profile {name}: {arr.ndim}-D, expected 1-D")
-        profiles[str(name)] = arr.reshape(-1)
-
-    if np.iscomplexobj(record.get("residual_history", ())):
-        raise Unstorable("residual_history: complex values")
-    try:
-        hist = np.asarray(record.get("residual_history", ()), dtype=np.float64).reshape(-1)
-    except (TypeError, ValueError, OverflowError) as exc:
-        raise Unstorable(f"residual_history: {exc}") from None
-    return {"row": row, "profiles": profiles, "residual_history": hist}
-
-
-def check_profiles(row: dict[str, Any], profiles: dict[str, np.ndarray]) -> None:
-    """Refuse (:class:`Unstorable`) a point whose status has profiles (all but failed,
-    invalid, crashed, timeout) without each of PROFILE_VARS of length ``n_floes``: what
-    ``sweep validate`` checks of a stored point."""
-    if row.get("status") in _NO_PROFILES:
-        return
-    n = row.get("n_floes")
-    for name in PROFILE_VARS:
-        if name not in profiles:
-            raise Unstorable(f"profile {name}: missing (a {row.get('status')} point has"
-                             " every profile)")
-        if not (isinstance(n, int) and n >= 1) or profiles[name].shape != (n,):
-            raise Unstorable(f"profile {name}: {profiles[name].size} values, expected"
-                             f" n_floes = {n}")
-
-
 def _cell(col: Any, row: dict[str, Any]) -> Any:
     return row.get(col.name, col.fill)
 
@@ -178,24 +66,9 @@ def _dataset(gid: Any, name: str, data: Any) -> None:
         dset.write(h5s.ALL, h5s.ALL, arr)
 
 
-def fsync_path(path: str | Path) -> None:
-    """``fsync`` a file by path."""
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
-def fsync_dir(path: str | Path) -> None:
-    """``fsync`` the directory holding ``path`` (makes a rename durable)."""
-    with contextlib.suppress(OSError):
-        fsync_path(Path(path).parent)
-
-
 def set_campaign(f: h5py.File, campaign: Any) -> None:
     """Write the campaign identity attributes of the store root."""
-    from .identity import canonical_json
+    from sweep.identity import canonical_json
 
     f.attrs["campaign_toml"] = campaign.text
     f.attrs["campaign_json"] = canonical_json(campaign.definition())
@@ -215,7 +88,6 @@ class H5Writer:
     @classmethod
     def create(cls, path: str | Path, campaign: Any) -> H5Writer:
         """A new, empty store file at ``path`` (truncating whatever is there)."""
-        from .store import utc_now
 
         f = h5py.File(path, "w", locking=False)
         f.attrs["schema_version"] = SCHEMA_VERSION

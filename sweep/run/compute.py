@@ -1,5 +1,4 @@
-"""The worker side of a campaign: compute one point, whatever happens, and the MPI
-worker loop.
+"""Computing one point, whatever happens: the compute function resolved, run, timed out or crashed, described as an Outcome.
 
 Points are computed by a pluggable function ``"module:function"`` (:func:`resolve_compute`)
 taking a :class:`floewave.ModelConfig` and returning a :class:`floewave.PointResult` (or a
@@ -7,7 +6,8 @@ dict like its ``to_dict()``); the default is ``floewave:run_point``. :func:`comp
 turns whatever happens into an outcome: ``invalid`` for
 :class:`floewave.InvalidPointError`, ``failed`` for any other exception or NaN results
 (the message carries rank, host and traceback), ``timeout`` past ``point_timeout``, the
-model's own status otherwise. The master makes it a :class:`sweep.record.Record`.
+model's own status otherwise: a :class:`sweep.protocol.Outcome`, which the master makes a
+:class:`sweep.store.record.Record`.
 """
 from __future__ import annotations
 
@@ -24,17 +24,15 @@ import numpy as np
 
 import floewave
 from floewave import ModelConfig
+from sweep.errors import ConfigError, SweepError
+from sweep.protocol import Outcome, Task, plain
+from sweep.provenance import host
+from sweep.run.signals import GraceExpired
+from sweep.store.schema import PROFILE_VARS, REPLICA_VARS
+from sweep.system import utc_now
 
-from .errors import ConfigError, SweepError
-from .provenance import environment, host
-from .record import plain
-from .schema import PROFILE_VARS, REPLICA_VARS
-from .signals import GraceExpired
-from .store import utc_now
-from .warmup import warm_up
-
-__all__ = ["DEFAULT_COMPUTE", "MODEL_STATUSES", "resolve_compute", "compute_point",
-           "compute_in_child", "worker_loop"]
+__all__ = ["DEFAULT_COMPUTE", "MODEL_STATUSES", "PointTimeout", "resolve_compute",
+           "compute_point", "compute_in_child"]
 
 DEFAULT_COMPUTE = "floewave:run_point"
 MODEL_STATUSES = floewave.results.STATUSES
@@ -42,7 +40,7 @@ MODEL_STATUSES = floewave.results.STATUSES
 _MAX_TIMER = 1e7
 
 
-class _PointTimeout(BaseException):
+class PointTimeout(BaseException):
     """Raised in the computing thread when a point runs past its ``point_timeout``."""
 
 
@@ -59,7 +57,7 @@ class _Deadline:
     """``point_timeout`` for the computation in the main thread.
 
     Soft: a timer thread sends SIGUSR2 to the main thread at the limit and its handler
-    raises :class:`_PointTimeout` (between bytecodes: at once in Python code or a sleep,
+    raises :class:`PointTimeout` (between bytecodes: at once in Python code or a sleep,
     when a numba kernel call returns). Hard: ``faulthandler`` ends the process a margin
     later if the point is stuck in native code.
     """
@@ -70,7 +68,7 @@ class _Deadline:
         self._old: Any = None
 
     def _raise(self, signum: int, frame: Any) -> None:
-        raise _PointTimeout(f"ran longer than point_timeout = {self.seconds:g} s")
+        raise PointTimeout(f"ran longer than point_timeout = {self.seconds:g} s")
 
     def __enter__(self) -> _Deadline:
         import faulthandler
@@ -118,22 +116,17 @@ def resolve_compute(spec: str) -> Callable[[ModelConfig], Any]:
     return fn  # type: ignore[return-value]
 
 
-def compute_point(task: dict[str, Any], fn: Callable[[ModelConfig], Any],
-                  rank: int = 0) -> dict[str, Any]:
-    """Compute one point and describe the outcome; never raises for a point's fault.
-
-    Returns a dict with ``hash``, ``status``, ``message``, ``scalars``, ``profiles``,
-    ``residual_history`` and the provenance fields ``host``, ``rank``, ``pid``,
-    ``start_time``, ``end_time``, ``wall_time``.
-    """
+def compute_point(task: Task, fn: Callable[[ModelConfig], Any], rank: int = 0) -> Outcome:
+    """Compute one point and describe the :class:`~sweep.protocol.Outcome`; never raises
+    for a point's fault."""
     start_wall, t0 = utc_now(), time.perf_counter()
-    out: dict[str, Any] = {"hash": task["hash"], "status": "failed", "message": "",
-                           "scalars": {}, "profiles": {}, "residual_history": np.zeros(0)}
+    out: dict[str, Any] = {"status": "failed", "message": "", "scalars": {},
+                           "profiles": {}, "residual_history": np.zeros(0)}
     try:
         # not checked again here: the master checked every point's physics when it
         # expanded the grid (sweep.config), and impossible points never reach a worker
-        cfg = ModelConfig.from_dict(task["config"])
-        limit = float(task.get("timeout") or 0.0)
+        cfg = ModelConfig.from_dict(task.config)
+        limit = float(task.timeout or 0.0)
         if limit > 0:
             with _Deadline(limit):
                 result = fn(cfg)
@@ -169,7 +162,7 @@ def compute_point(task: dict[str, Any], fn: Callable[[ModelConfig], Any],
         out["message"] = f"{type(exc).__name__}: {exc}"
     except GraceExpired:
         raise  # the in-process grace period ran out: the master stops
-    except _PointTimeout as exc:
+    except PointTimeout as exc:
         out["status"] = "timeout"
         out["scalars"], out["profiles"] = {}, {}
         out["residual_history"] = np.zeros(0)
@@ -181,9 +174,9 @@ def compute_point(task: dict[str, Any], fn: Callable[[ModelConfig], Any],
         out["residual_history"] = np.zeros(0)
         out["message"] = (f"{type(exc).__name__}: {exc} (rank {rank}, host {host()},"
                           f" pid {os.getpid()})\n{traceback.format_exc()}")
-    out.update(host=host(), rank=rank, pid=os.getpid(), start_time=start_wall,
-               end_time=utc_now(), wall_time=time.perf_counter() - t0)
-    return out
+    return Outcome(hash=task.hash, **out, host=host(), rank=rank, pid=os.getpid(),
+                   start_time=start_wall, end_time=utc_now(),
+                   wall_time=time.perf_counter() - t0)
 
 
 #: In-process, a point with a ``point_timeout`` runs in a child process killed this long
@@ -192,8 +185,7 @@ def compute_point(task: dict[str, Any], fn: Callable[[ModelConfig], Any],
 _CHILD_MARGIN = float(os.environ.get("SWEEP_CHILD_MARGIN", "1.0"))
 
 
-def compute_in_child(task: dict[str, Any], fn: Callable[[ModelConfig], Any],
-                     rank: int = 0) -> dict[str, Any]:
+def compute_in_child(task: Task, fn: Callable[[ModelConfig], Any], rank: int = 0) -> Outcome:
     """:func:`compute_point` in a forked child process (in-process runs with a
     ``point_timeout``): the child is killed a margin after the limit if it has not
     returned, so a point that ignores its timeout is ``timeout`` in this run; a child
@@ -204,7 +196,7 @@ def compute_in_child(task: dict[str, Any], fn: Callable[[ModelConfig], Any],
     import select
     import sys
 
-    limit = float(task.get("timeout") or 0.0)
+    limit = float(task.timeout or 0.0)
     hard = limit + max(_CHILD_MARGIN, 0.05 * limit)
     sys.stdout.flush()
     sys.stderr.flush()
@@ -256,8 +248,6 @@ def compute_in_child(task: dict[str, Any], fn: Callable[[ModelConfig], Any],
     finally:
         os.close(r)
         _, status = os.waitpid(pid, 0)
-    out: dict[str, Any] = {"hash": task["hash"], "scalars": {}, "profiles": {},
-                           "residual_history": np.zeros(0)}
     where = f"rank {rank}, host {host()}, pid {pid}"
     if chunks and not killed:
         try:
@@ -265,50 +255,15 @@ def compute_in_child(task: dict[str, Any], fn: Callable[[ModelConfig], Any],
         except Exception:  # noqa: BLE001 - a torn result: the child died writing it
             pass
     if killed:
-        out.update(status="timeout", message=f"ran longer than point_timeout = {limit:g} s"
-                   f" and did not stop: its process was killed after {hard:g} s ({where})")
+        kind, message = "timeout", (f"ran longer than point_timeout = {limit:g} s and did"
+                                    f" not stop: its process was killed after {hard:g} s"
+                                    f" ({where})")
     else:
         how = (f"by signal {signal.Signals(os.WTERMSIG(status)).name}"
                if os.WIFSIGNALED(status) else
                f"with status {os.waitstatus_to_exitcode(status)}")
-        out.update(status="crashed", message=f"its process ended {how} while computing it,"
-                   f" without a result (a crash, or exit() in the model) ({where})")
-    out.update(host=host(), rank=rank, pid=pid, start_time=start_wall, end_time=utc_now(),
-               wall_time=time.perf_counter() - t0)
-    return out
-
-
-def worker_loop(comm: Any, compute: str = DEFAULT_COMPUTE) -> None:
-    """Run on ranks 1..N-1: receive tasks from rank 0 until ``None``, send back results.
-
-    Stop signals are ignored here: the master decides when to stop (grace period).
-    """
-    from .transport import TAG_RESULT, TAG_TASK, wait_message
-
-    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1):
-        with contextlib.suppress(ValueError, OSError):
-            signal.signal(sig, signal.SIG_IGN)
-    rank = comm.Get_rank()
-    try:
-        fn = resolve_compute(compute)
-        env = environment(with_git=False, with_mpi=True)
-    except Exception as exc:  # noqa: BLE001 - reported to the master, which stops
-        plain = isinstance(exc, SweepError)  # its message says it all
-        comm.send(("error", {"rank": rank, "host": host(),
-                             "message": str(exc) if plain else f"{exc!r}",
-                             "traceback": "" if plain else traceback.format_exc()}),
-                  dest=0, tag=TAG_RESULT)
-        fn, env = None, {}
-    else:
-        comm.send(("ready", env), dest=0, tag=TAG_RESULT)
-    while True:
-        wait_message(comm, 0, TAG_TASK)
-        task = comm.recv(source=0, tag=TAG_TASK)
-        if task is None:
-            return
-        if fn is None:
-            continue
-        if "warm_up" in task:  # before the campaign's clock starts (sweep.warmup)
-            comm.send(("warm", warm_up(task["warm_up"], compute)), dest=0, tag=TAG_RESULT)
-            continue
-        comm.send(("result", compute_point(task, fn, rank)), dest=0, tag=TAG_RESULT)
+        kind, message = "crashed", (f"its process ended {how} while computing it, without"
+                                    f" a result (a crash, or exit() in the model) ({where})")
+    return Outcome(hash=task.hash, status=kind, message=message, host=host(), rank=rank,
+                   pid=pid, start_time=start_wall, end_time=utc_now(),
+                   wall_time=time.perf_counter() - t0)

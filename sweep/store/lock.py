@@ -7,7 +7,7 @@ the kernel drops the flock when the process dies, so the lock of a killed writer
 stale and the next writer takes it over (and records whose it was).
 
 Deleting the lock file of a live run does not let a second writer in: the writer also
-holds an ``flock`` on its journal (:meth:`sweep.journal.Journal.open_for_append`), and
+holds an ``flock`` on its journal (:meth:`sweep.store.journal.Journal.open_for_append`), and
 after taking the lock file's flock a writer checks that the file it locked is still the
 one at the path (an unlinked lock file is retried). On filesystems where ``flock`` is
 not available (``ENOLCK``/``EOPNOTSUPP``, e.g. NFS without a lock manager) the identity
@@ -28,7 +28,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from .errors import StoreError, StoreLockedError
+from sweep.errors import StoreError, StoreLockedError
 
 __all__ = ["Lock", "lock_path", "pid_alive", "holders_of", "flock_waiting",
            "KILLED_WRITER_WAIT"]
@@ -129,7 +129,7 @@ class Lock:
 
         A held lock is tried again for :data:`KILLED_WRITER_WAIT` seconds first: a
         writer killed a moment ago may still be exiting (the campaign process of a
-        ``sweep run`` whose guard got ``kill -9``, :mod:`sweep.guard`)."""
+        ``sweep run`` whose guard got ``kill -9``, :mod:`sweep.run.guard`)."""
         deadline = time.monotonic() + KILLED_WRITER_WAIT
         for _ in range(20):
             fd = self._open()

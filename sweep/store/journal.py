@@ -27,7 +27,6 @@ acknowledged) is cut off on open.
 from __future__ import annotations
 
 import contextlib
-import datetime as _dt
 import json
 import os
 import time
@@ -37,10 +36,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .errors import StoreError, StoreLockedError
-from .identity import HASH_LENGTH, config_hashes_to
+from sweep.errors import BadJournalLineError, StoreError, StoreLockedError
+from sweep.identity import HASH_LENGTH, config_hashes_to
+from sweep.system import fsync_dir, utc_now
 
-__all__ = ["Journal", "JournalScan", "BadLine", "journal_path", "rejected_path",
+__all__ = ["Journal", "JournalScan", "journal_path", "rejected_path",
            "encode", "decode", "check_record", "HEADER_KIND", "JOURNAL_VERSION"]
 
 HEADER_KIND = "sweep-journal"
@@ -59,14 +59,6 @@ def rejected_path(path: str | Path) -> Path:
     return Path(str(path) + ".journal.rejected")
 
 
-def _now() -> str:
-    return _dt.datetime.now(_dt.UTC).isoformat(timespec="microseconds")
-
-
-class BadLine(ValueError):
-    """A journal line that cannot be trusted; the message is the reason."""
-
-
 def encode(obj: dict[str, Any]) -> bytes:
     """One journal line: compact JSON ending in its CRC-32 member, and a newline."""
     body = json.dumps(obj, separators=(",", ":")).encode()
@@ -78,7 +70,7 @@ def decode(line: bytes, *, require_checksum: bool = True) -> tuple[dict[str, Any
 
     Raises
     ------
-    BadLine
+    BadJournalLineError
         When the checksum is wrong or missing (``require_checksum``) or the line is not
         a JSON object.
     """
@@ -90,19 +82,19 @@ def decode(line: bytes, *, require_checksum: bool = True) -> tuple[dict[str, Any
         try:
             crc = int(line[i + len(_CRC): i + len(_CRC) + 8], 16)
         except ValueError:
-            raise BadLine("unreadable checksum") from None
+            raise BadJournalLineError("unreadable checksum") from None
         if zlib.crc32(body) != crc:
-            raise BadLine("checksum mismatch (the line was altered after it was written)")
+            raise BadJournalLineError("checksum mismatch (the line was altered after it was written)")
     elif require_checksum:
-        raise BadLine("no checksum")
+        raise BadJournalLineError("no checksum")
     else:
         body = line
     try:
         obj = json.loads(body)
     except (ValueError, RecursionError) as exc:
-        raise BadLine(f"not JSON: {exc}") from None
+        raise BadJournalLineError(f"not JSON: {exc}") from None
     if not isinstance(obj, dict):
-        raise BadLine("not a JSON object")
+        raise BadJournalLineError("not a JSON object")
     return obj, checked
 
 
@@ -221,7 +213,7 @@ class Journal:
         except OSError as exc:
             raise StoreError(f"{path}: cannot open the journal: {exc.strerror or exc}"
                              ) from None
-        from .lock import KILLED_WRITER_WAIT, flock_waiting, holders_of
+        from sweep.store.lock import KILLED_WRITER_WAIT, flock_waiting, holders_of
 
         try:
             flock_waiting(fh.fileno(), time.monotonic() + KILLED_WRITER_WAIT)
@@ -252,7 +244,7 @@ class Journal:
         """Append (and sync) a campaign line."""
         self.append([encode({"journal": HEADER_KIND, "version": JOURNAL_VERSION,
                              "campaign_hash": campaign_hash, "campaign_json": campaign_json,
-                             "time": _now()})])
+                             "time": utc_now()})])
 
     def close(self) -> None:
         if self._fh is not None:
@@ -315,14 +307,14 @@ class Journal:
         With ``grid`` (the hashes of the campaign's grid points), a record of any other
         point after a campaign line is set aside too: a checksummed line of another
         campaign (a journal of before version 2, without campaign lines, is checked
-        whole by :func:`sweep.campaign_check.check_legacy_journal`)."""
+        whole by :func:`sweep.store.campaign_check.check_legacy_journal`)."""
         out = JournalScan()
         for offset, line in self.lines():
             if not line.strip():
                 continue
             try:
                 obj, checked = decode(line, require_checksum=bool(out.headers))
-            except BadLine as exc:
+            except BadJournalLineError as exc:
                 out.bad.append((offset, len(line), str(exc)))
                 continue
             if "journal" in obj:
@@ -373,7 +365,7 @@ class Journal:
                 continue
             try:
                 obj, _ = decode(line, require_checksum=False)
-            except BadLine:
+            except BadJournalLineError:
                 continue
             if "row" in obj:
                 yield obj
@@ -388,7 +380,7 @@ class Journal:
         with open(self.rejected, "ab") as rej:
             for offset, line in self.lines():
                 if offset in drop:
-                    rej.write(json.dumps({"time": _now(), "reason": drop[offset],
+                    rej.write(json.dumps({"time": utc_now(), "reason": drop[offset],
                                           "journal_offset": offset,
                                           "line": line.decode("utf-8", "backslashreplace")
                                           .rstrip("\n")}).encode() + b"\n")
@@ -406,19 +398,10 @@ class Journal:
             with contextlib.suppress(OSError):
                 os.unlink(tmp)
             raise
-        _fsync_dir(self.path)
+        fsync_dir(self.path)
         had = self._fh is not None
         self.close()
         if had:
             self._fh = new
         else:
             new.close()
-
-
-def _fsync_dir(path: Path) -> None:
-    with contextlib.suppress(OSError):
-        fd = os.open(path.parent, os.O_RDONLY)
-        try:
-            os.fsync(fd)
-        finally:
-            os.close(fd)

@@ -1,6 +1,6 @@
 """The store file against its journal: ``sweep validate --deep``.
 
-The journal's point records are checksummed (:mod:`sweep.journal`); the HDF5 file is
+The journal's point records are checksummed (:mod:`sweep.store.journal`); the HDF5 file is
 not, so a flipped bit in a table column or a profile passes every other check (666.05
 read back as 666.0500305175781). :func:`compare_with_journal` compares, for every point
 whose last good journal record (highest ``seq``) is in the file, each table value the
@@ -25,8 +25,15 @@ from typing import Any
 
 import numpy as np
 
-from .journal import Journal, decode, journal_path, rejected_path
-from .schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, REPLICA_VARS, STATUSES, profile_path
+from sweep.store.journal import Journal, decode, journal_path, rejected_path
+from sweep.store.schema import (
+    COLUMNS,
+    HISTORY_VAR,
+    PROFILE_VARS,
+    REPLICA_VARS,
+    STATUSES,
+    profile_path,
+)
 
 __all__ = ["compare_with_journal", "differences"]
 
@@ -77,7 +84,7 @@ def differences(path: Path, journal: Journal,
     file at ``path`` that differs from the last good journal record of its point (and
     per journal line that would be set aside), the number of journal points the file
     lacks, and the stored hashes the journal lacks. ``f``: the file already open."""
-    from . import reader
+    from sweep.store import reader
 
     if f is None:
         with reader.open_file(path) as f:
