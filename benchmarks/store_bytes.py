@@ -13,8 +13,8 @@ The campaigns (stand-in compute functions of :mod:`sweep.testing`, no DEM kernel
 2. a 2 x 2 x 2 grid with ``raising_point`` (failures) and ``nan_point`` (NaN
    amplitudes), then resumed with ``--retry-failed`` (two runs in one store);
 3. ``configs/demo.toml`` with ``power_point`` under ``mpiexec -n 3`` (master and two
-   workers), if ``mpiexec`` is found; rows and journal lines are sorted by content,
-   since the order of completion is not deterministic;
+   workers), if ``mpiexec`` is found; rows and journal lines are sorted by content and
+   ``seq`` is masked, since the order of completion is not deterministic;
 4. ``sweep merge`` of two shard stores of campaign 2.
 
 Every HDF5 attribute and dataset is printed (dtype, shape and values); JSON strings are
@@ -54,17 +54,22 @@ name = "bytes"
 """
 
 
-def mask(value, tmp: str):
+#: Also masked in the MPI campaign: the order in which the two workers' results arrive.
+ORDER = re.compile(r"^seq$")
+
+
+def mask(value, tmp: str, unordered: bool = False):
     """``value`` with masked keys replaced by ``"*"`` and ``tmp`` by ``TMP``."""
     if isinstance(value, dict):
-        return {k: "*" if MASKED.match(str(k)) else mask(v, tmp) for k, v in value.items()}
+        return {k: "*" if MASKED.match(str(k)) or (unordered and ORDER.match(str(k)))
+                else mask(v, tmp, unordered) for k, v in value.items()}
     if isinstance(value, list):
-        return [mask(v, tmp) for v in value]
+        return [mask(v, tmp, unordered) for v in value]
     if isinstance(value, str):
         text = value.strip()
         if text[:1] in "{[":
             try:
-                return mask(json.loads(text), tmp)
+                return mask(json.loads(text), tmp, unordered)
             except ValueError:
                 pass
         value = FRAMES.sub("  <frames>\n", value.replace(tmp, "TMP"))
@@ -107,7 +112,8 @@ def dump_store(path: Path, tmp: str, unordered: bool) -> list[str]:
                 data = obj[...]
                 if order is not None and name.startswith("table/"):
                     data = data[order]
-                shown = "*" if MASKED.match(leaf) else plain(np.asarray(data), tmp)
+                hidden = MASKED.match(leaf) or (unordered and ORDER.match(leaf))
+                shown = "*" if hidden else plain(np.asarray(data), tmp)
                 columns[name] = f"{obj.dtype} {obj.shape} {obj.chunks} {obj.compression} "
                 out.append(f"{name} {columns[name]}= {json.dumps(shown, sort_keys=True)}")
 
@@ -119,7 +125,7 @@ def dump_journal(path: Path, tmp: str, unordered: bool) -> list[str]:
     """The journal's lines, parsed and masked (sorted if ``unordered``)."""
     lines = []
     for raw in path.read_bytes().splitlines():
-        lines.append(json.dumps(mask(json.loads(raw), tmp), sort_keys=True))
+        lines.append(json.dumps(mask(json.loads(raw), tmp, unordered), sort_keys=True))
     return sorted(lines) if unordered else lines
 
 

@@ -25,8 +25,9 @@ from __future__ import annotations
 __all__ = ["SweepError", "ConfigError", "StoreError", "StoreLockedError",
            "SchemaVersionError", "CampaignMismatchError", "LaunchError", "WorkerError",
            "Interrupted", "PointNotFoundError", "StoreCorruptedError", "StoreUnreadableError",
-           "UnstorableError", "BadJournalLineError", "EXIT_OK", "EXIT_INTERNAL", "EXIT_CONFIG",
-           "EXIT_STORE", "EXIT_LAUNCH", "EXIT_WORKER", "EXIT_INTERRUPTED"]
+           "UnstorableError", "BadJournalLineError", "NothingToDrawError", "EXIT_OK",
+           "EXIT_INTERNAL", "EXIT_CONFIG", "EXIT_STORE", "EXIT_LAUNCH", "EXIT_WORKER",
+           "EXIT_INTERRUPTED"]
 
 EXIT_OK = 0
 EXIT_INTERNAL = 1
@@ -125,3 +126,12 @@ class UnstorableError(SweepError, ValueError):
 
 class BadJournalLineError(SweepError, ValueError):
     """A journal line that cannot be trusted; the message is the reason."""
+
+
+class NothingToDrawError(ConfigError):
+    """No figure of the asked kinds can be drawn from the store's grid (exit status 2, as
+    any input that cannot give what was asked); ``reasons`` maps each figure to why."""
+
+    def __init__(self, message: str, reasons: dict[str, str]) -> None:
+        super().__init__(message)
+        self.reasons = dict(reasons)

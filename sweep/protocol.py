@@ -1,4 +1,4 @@
-"""The worker protocol: the Task a master hands out, the Outcome a worker sends back, and the message kinds.
+"""The worker protocol: the Task a master hands out, the Outcome a worker returns, the kinds.
 
 The master (:mod:`sweep.run.master`) sends a :class:`Task` (or a :class:`WarmUp`, or
 ``None``: stop) to a worker on :data:`TAG_TASK`; a worker answers on :data:`TAG_RESULT`

@@ -1,4 +1,4 @@
-"""Operating-system helpers every layer of sweep may use: the time stamp, fsync, and deferred signals.
+"""Operating-system helpers every layer of sweep may use: time stamps, fsync, deferred signals.
 
 This module imports nothing of sweep: it is the bottom layer.
 """

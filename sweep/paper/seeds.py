@@ -15,15 +15,9 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from sweep.errors import ConfigError
-from sweep.paper.check import (
-    FAILS,
-    HOLDS,
-    INCONCLUSIVE,
-    PAPER_CAMPAIGNS,
-    PaperReport,
-    check_stores,
-    default_configs,
-)
+from sweep.paper.check import PaperReport, check_stores, default_configs
+from sweep.paper.claims import PAPER_CAMPAIGNS
+from sweep.paper.estimates import FAILS, HOLDS, INCONCLUSIVE
 
 __all__ = ["SEED_DEPENDENT", "seeded_configs", "across_seeds", "check_seeds",
            "format_seed_table"]

@@ -1,4 +1,4 @@
-"""Computing one point, whatever happens: the compute function resolved, run, timed out or crashed, described as an Outcome.
+"""Computing one point, whatever happens, into an Outcome: run, timed out, failed or crashed.
 
 Points are computed by a pluggable function ``"module:function"`` (:func:`resolve_compute`)
 taking a :class:`floewave.ModelConfig` and returning a :class:`floewave.PointResult` (or a

@@ -1,4 +1,4 @@
-"""Detecting and checking an MPI launch: the launcher's variables, the world communicator, the Slurm size check.
+"""Detecting and checking an MPI launch: launcher variables, the world, the Slurm size check.
 
 Light on purpose (mpi4py is imported only under a launcher): the CLI reads
 :data:`LAUNCHER_VARS` before anything heavy is imported.

@@ -3,6 +3,7 @@ store's file or journal holds, and what ``--extend`` accepts (same base and mode
 version, same swept dimensions, grid values only added)."""
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
@@ -71,3 +72,14 @@ def check_legacy_journal(journal: Path, hashes: Iterable[str], campaign: Any) ->
             f"{journal}: holds {len(foreign)} point(s) that are not in this"
             f" campaign's grid (e.g. {foreign[0][:12]}): it belongs to another campaign;"
             " use another --store, or move the journal away")
+
+
+def grid_hashes(campaign: Any) -> frozenset[str] | None:
+    """The hashes of every point of ``campaign``'s grid (all shards: a shard's store may
+    hold points of the others after a merge); ``None`` without a campaign. An
+    ``--extend``-ed campaign's grid holds every grid of its history."""
+    if campaign is None:
+        return None
+    if getattr(campaign, "shard_of", None) is not None:
+        campaign = dataclasses.replace(campaign, shard_of=None)
+    return frozenset(p.hash for p in campaign.points())

@@ -1,4 +1,4 @@
-"""Values converted to and from the store's cells: records normalised to the column kinds, text decoded.
+"""Values converted to and from the store's cells: records normalised, stored text decoded.
 
 A record is normalised (:func:`normalise_record`) *before* it is journaled, so a record
 that reaches the journal can be written; :class:`sweep.errors.UnstorableError` names a

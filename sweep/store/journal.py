@@ -84,7 +84,8 @@ def decode(line: bytes, *, require_checksum: bool = True) -> tuple[dict[str, Any
         except ValueError:
             raise BadJournalLineError("unreadable checksum") from None
         if zlib.crc32(body) != crc:
-            raise BadJournalLineError("checksum mismatch (the line was altered after it was written)")
+            raise BadJournalLineError("checksum mismatch (the line was altered after it was"
+                                      " written)")
     elif require_checksum:
         raise BadJournalLineError("no checksum")
     else:

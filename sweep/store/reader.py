@@ -26,6 +26,7 @@ import numpy as np
 from sweep.errors import StoreCorruptedError
 from sweep.identity import config_hashes_to
 from sweep.store.cells import text, texts
+from sweep.store.journal import Journal
 from sweep.store.record import Record
 from sweep.store.schema import (
     COLUMNS,
@@ -38,7 +39,7 @@ from sweep.store.schema import (
 
 __all__ = ["attrs_of", "open_file", "n_rows", "table_columns",
            "profile_group", "iter_records", "model_version", "hash_mismatches",
-           "check_hashes"]
+           "check_hashes", "read_journal"]
 
 
 def attrs_of(obj: Any) -> dict[str, Any]:
@@ -189,3 +190,15 @@ def check_hashes(path: str | Path, hashes: Iterable[str], config_jsons: Iterable
         " holds the row as written (sweep validate lists every such row): with an intact"
         " journal, moving the store file away and running the campaign again rebuilds it",
         [h for _, h in bad])
+
+
+def read_journal(path: str | Path) -> Iterator[Record]:
+    """Yield the point records of a journal as written (torn or unreadable lines
+    skipped; values as the journal holds them, profiles and history as arrays)."""
+    for rec in Journal(path).read():
+        try:
+            yield Record(rec["row"], {k: np.asarray(v, dtype=np.float64)
+                                      for k, v in rec.get("profiles", {}).items()},
+                         np.asarray(rec.get("residual_history", []), dtype=np.float64))
+        except (TypeError, ValueError, AttributeError):
+            continue

@@ -4,7 +4,8 @@ This module is the single source of the layout: the store writes it, the analysi
 reads it, :func:`sweep.store.validate.validate` checks a file against it,
 :mod:`sweep.store.migrate` brings older layouts up to it, and
 ``results_schema/schema_v1.json`` is generated from it
-(:func:`sweep.store.document.schema_document`; a test keeps the two identical). Layout of a store (one HDF5 file)::
+(:func:`sweep.store.document.schema_document`; a test keeps the two identical).
+Layout of a store (one HDF5 file)::
 
     /                      attrs: schema_version, format, created, campaign_toml,
                                   campaign_json, campaign_hash, swept_fields (JSON)

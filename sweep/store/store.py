@@ -3,8 +3,9 @@
 The parts: :mod:`sweep.store.lock` (who may write), :mod:`sweep.store.journal` (the durable truth,
 checksummed lines), :mod:`sweep.store.writer` (the HDF5 file), :mod:`sweep.store.reader` (reading
 stored rows back), :mod:`sweep.store.campaign_check` (is this the store's campaign, or an
-``--extend`` of it), :mod:`sweep.store.record` (what a point is). :class:`Store` is the policy
-that ties them together.
+``--extend`` of it), :mod:`sweep.store.record` (what a point is), :mod:`sweep.store.files`
+(the file's state, free space, the inode lock), :mod:`sweep.store.repair` (rebuilding from
+the journal). :class:`Store` is the policy that ties them together.
 
 Writing points (group commit): :meth:`Store.add` stages a point (converted to the
 schema's kinds; nothing is written); :meth:`Store.commit` makes every staged point
@@ -33,117 +34,41 @@ Opening (all with stop signals deferred, so a stop can never interrupt it half-w
 from __future__ import annotations
 
 import contextlib
-import datetime as _dt
 import os
-import re
-import stat
 import sys
-import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from sweep.errors import (
-    BadJournalLineError,
     SchemaVersionError,
     StoreError,
-    StoreLockedError,
-    UnstorableError,
 )
-from sweep.store.campaign_check import check_campaign, check_legacy_journal
+from sweep.store.campaign_check import check_campaign, check_legacy_journal, grid_hashes
 from sweep.store.cells import text
+from sweep.store.files import H5_ERRORS, MAX_NAME, InodeLock, check_space, inspect_file, oserror
 from sweep.store.journal import (
     Journal,
     JournalScan,
-    decode,
     encode,
     journal_path,
     rejected_path,
 )
 from sweep.store.lock import Lock, lock_path
-from sweep.store.migrate import migrate, migration_steps
+from sweep.store.migrate import migrate
 from sweep.store.record import Record
-from sweep.store.schema import FORMAT, STATUSES
+from sweep.store.repair import JournalRepair
+from sweep.store.schema import STATUSES
 from sweep.store.writer import (
-    HDF5_SIGNATURE,
     H5Writer,
     set_campaign,
 )
 from sweep.system import fsync_dir, fsync_path, signals_deferred, utc_now
 
-__all__ = ["Store", "read_journal"]
-
-#: Errors h5py raises for a file it cannot read (besides OSError).
-_H5_ERRORS = (OSError, RuntimeError, ValueError, KeyError, TypeError, IndexError)
-#: HDF5 messages that mean "in use", not "damaged".
-_IN_USE = re.compile(r"\block|already open|temporarily unavailable|\bin use\b", re.I)
-#: (HDF5's damage messages name its "sblock" (superblock): "lock" only as a word.)
-#: Longest store file name [bytes]: NAME_MAX (255) less what the names beside it add
-#: (".NAME.journal.rewrite-<pid>.tmp").
-_MAX_NAME = 255 - 32
-#: Journal records written per batch while rebuilding or replaying.
-_REPLAY_BATCH = 256
-
-
-def read_journal(path: str | Path) -> Iterator[Record]:
-    """Yield the point records of a journal as written (torn or unreadable lines
-    skipped; values as the journal holds them, profiles and history as arrays)."""
-    for rec in Journal(path).read():
-        try:
-            yield Record(rec["row"], {k: np.asarray(v, dtype=np.float64)
-                                      for k, v in rec.get("profiles", {}).items()},
-                         np.asarray(rec.get("residual_history", []), dtype=np.float64))
-        except (TypeError, ValueError, AttributeError):
-            continue
-
+__all__ = ["Store"]
 
 def _stderr(message: str) -> None:
     print(f"sweep: {message}", file=sys.stderr, flush=True)
-
-
-def _oserror(path: Path, exc: BaseException, doing: str) -> StoreError:
-    """One clear line for an OS-level failure (disk full, permissions...)."""
-    errno_ = getattr(exc, "errno", None)
-    text = str(exc)
-    if errno_ == 28 or "No space left" in text or "errno = 28" in text:
-        return StoreError(f"{path}: no space left on the device while {doing}; nothing"
-                          " acknowledged was lost: free space and run the same command again")
-    return StoreError(f"{path}: {doing} failed: {getattr(exc, 'strerror', None) or text}")
-
-
-#: Free space [bytes] kept in reserve beyond what a write needs (HDF5 metadata, the
-#: journal's next lines): below it a write is refused with one clear line instead of
-#: failing half-way inside HDF5 (which can crash the process).
-_SPACE_RESERVE = 1 << 20
-
-
-def _check_space(path: Path, needed: int, doing: str) -> None:
-    """Refuse to start a write that the free space cannot hold (exit 3, one line)."""
-    try:
-        st = os.statvfs(path.parent)
-    except OSError:
-        return
-    free = st.f_bavail * st.f_frsize
-    if free < needed + _SPACE_RESERVE:
-        raise StoreError(f"{path}: no space left on the device for {doing} ({free >> 10}"
-                         f" KiB free, about {(needed + _SPACE_RESERVE) >> 10} KiB needed);"
-                         " nothing acknowledged was lost: free space and run the same"
-                         " command again")
-
-
-def _grid_hashes(campaign: Any) -> frozenset[str] | None:
-    """The hashes of every point of ``campaign``'s grid (all shards: a shard's store may
-    hold points of the others after a merge); ``None`` without a campaign. An
-    ``--extend``-ed campaign's grid holds every grid of its history."""
-    if campaign is None:
-        return None
-    if getattr(campaign, "shard_of", None) is not None:
-        import dataclasses
-
-        campaign = dataclasses.replace(campaign, shard_of=None)
-    return frozenset(p.hash for p in campaign.points())
 
 
 def _json(text: str) -> dict[str, Any]:
@@ -152,7 +77,7 @@ def _json(text: str) -> dict[str, Any]:
     return json.loads(text)
 
 
-class Store:
+class Store(JournalRepair):
     """The single writer of a campaign store.
 
     Parameters
@@ -180,9 +105,9 @@ class Store:
                  journal: Journal | None = None,
                  report: Callable[[str], None] | None = None, verify: bool = False) -> None:
         self._verify = verify
-        if len(os.fsencode(Path(path).name)) > _MAX_NAME:
+        if len(os.fsencode(Path(path).name)) > MAX_NAME:
             raise StoreError(f"{str(path)[:200]}...: the store's file name is too long (at"
-                             f" most {_MAX_NAME} bytes: the journal and temporary files"
+                             f" most {MAX_NAME} bytes: the journal and temporary files"
                              " beside it add to it)")
         if os.path.islink(path) and not os.path.exists(path):
             raise StoreError(f"{path}: a symbolic link to nothing; remove it or use"
@@ -190,7 +115,7 @@ class Store:
         # the file reached, not the name given: a symlink and its target are one store
         # (one lock, one journal); hard links are caught by the flock on the file itself
         self.path = Path(os.path.realpath(path))
-        self._inode_fd: int | None = None
+        self._inode = InodeLock(self.path)
         self.journal = journal or Journal(journal_path(self.path), rejected_path(self.path))
         self.journal_path = self.journal.path
         self._lock = lock or Lock(lock_path(self.path))
@@ -228,11 +153,6 @@ class Store:
             self._abandon()
             raise
 
-    # ------------------------------------------------------------------ notes
-    def _note(self, message: str) -> None:
-        self.notes.append(message)
-        self.report(message)
-
     # ------------------------------------------------------------------ opening
     def _open(self, campaign: Any, extend: bool) -> None:
         import floewave
@@ -244,13 +164,14 @@ class Store:
             journal.open_for_append()  # the second guard against two writers
         self._remove_stale_temps()
         if self.path.is_file():
-            self._hold_file(self.path)
+            self._inode.hold(self.path)
         self.model_version = (_json(campaign_json)["model_version"]
                               if (campaign_json := self._campaign_json(campaign))
                               else floewave.MODEL_VERSION)
-        self._grid = _grid_hashes(campaign)
+        self._grid = grid_hashes(campaign)
         scan = journal.scan(self.model_version, STATUSES, self._grid)
-        state, info = self._inspect(scan)
+        state, info = inspect_file(self.path, bool(scan.records or scan.identity))
+        self._file_schema = info.get("schema_version", "?")
         if campaign is None and state != "ok":
             raise StoreError(f"{self.path}: no usable store here")
         # the campaign check, before anything is changed: the file and the journal
@@ -278,7 +199,7 @@ class Store:
             self._open_in_place(campaign, extend)
         except StoreError:
             raise
-        except _H5_ERRORS as exc:
+        except H5_ERRORS as exc:
             if not self.scan.records or campaign is None:
                 raise StoreError(f"{self.path}: cannot be read ({exc}) and there is no"
                                  " journal to rebuild it from") from None
@@ -294,7 +215,7 @@ class Store:
             try:
                 journal.write_header(campaign.definition_hash(), self._campaign_json(campaign))
             except OSError as exc:
-                raise _oserror(journal.path, exc, "writing the journal") from None
+                raise oserror(journal.path, exc, "writing the journal") from None
 
     @staticmethod
     def _campaign_json(campaign: Any) -> str:
@@ -313,219 +234,15 @@ class Store:
                 with contextlib.suppress(OSError):
                     tmp.unlink()
 
-    def _inspect(self, scan: JournalScan) -> tuple[str, dict[str, Any]]:
-        """The file's state: ``absent``, ``ok``, ``unclean`` or ``damaged``.
-
-        Raises :class:`StoreError` for a path that is not (provably) a sweep store.
-        """
-        import h5py
-
-        p = self.path
-        try:
-            st = os.stat(p)
-        except FileNotFoundError:
-            if os.path.islink(p):
-                raise StoreError(f"{p}: a symbolic link to nothing; remove it or use"
-                                 " another --store") from None
-            return "absent", {}
-        except OSError as exc:
-            raise StoreError(f"{p}: cannot use this path: {exc.strerror or exc}") from None
-        if stat.S_ISDIR(st.st_mode):
-            raise StoreError(f"{p}: is a directory, not a store file")
-        if not stat.S_ISREG(st.st_mode):
-            raise StoreError(f"{p}: not a regular file")
-        if not os.access(p, os.R_OK | os.W_OK):
-            raise StoreError(f"{p}: cannot open the store: permission denied")
-        ours = bool(scan.records or scan.identity)
-        if st.st_size == 0:
-            if not ours:
-                raise StoreError(f"{p}: an empty file and no journal beside it: not a sweep"
-                                 " store; remove it or use another --store")
-            return "damaged", {"why": "empty file"}
-        with open(p, "rb") as fh:
-            head = fh.read(8)
-        if head != HDF5_SIGNATURE:
-            raise StoreError(f"{p}: not an HDF5 file; it was left untouched (use another"
-                             " --store)")
-        info: dict[str, Any] = {}
-        try:
-            with h5py.File(p, "r", locking=False) as f:
-                fmt = text(f.attrs.get("format", ""))
-                if fmt != FORMAT:
-                    if fmt or not ours:
-                        raise StoreError(f"{p}: an HDF5 file but not a sweep store (format"
-                                         f" {fmt!r}); it was left untouched")
-                    return "damaged", {"why": "no format attribute (creation interrupted)"}
-                raw = f.attrs.get("schema_version", 0)
-                try:
-                    version = int(raw)
-                except (TypeError, ValueError):
-                    raise StoreError(f"{p}: schema_version {text(raw)!r} is not a version"
-                                     " number; it was left untouched") from None
-                try:        # a migration path, checked before changes
-                    migration_steps(version)
-                except SchemaVersionError as exc:
-                    raise SchemaVersionError(f"{p}: {exc}") from None
-                info["campaign_json"] = text(f.attrs.get("campaign_json", ""))
-                self._file_schema = version
-                table = f["table"]
-                n = int(table.attrs["n_rows"])
-                len(table["hash"][:n])  # readable?
-                unclean = bool(f.attrs.get("writer_open", False))
-        except StoreError:
-            raise
-        except _H5_ERRORS as exc:
-            if _IN_USE.search(str(exc)):
-                raise StoreError(f"{p}: cannot open the store, it is in use ({exc}); close"
-                                 " the program holding it and run again") from None
-            if not ours:
-                raise StoreError(f"{p}: cannot be read ({type(exc).__name__}: {exc}) and"
-                                 " there is no journal to rebuild it from; it was left as"
-                                 " it is") from None
-            return "damaged", {"why": f"{type(exc).__name__}: {exc}"}
-        if unclean and ours:
-            return "unclean", info
-        return "ok", info
-
-    def _verified(self, state: str, info: dict[str, Any]) -> tuple[str, dict[str, Any]]:
-        """``--verify``: the clean file against the journal. Values that differ make it
-        damaged (rebuilt from the journal), unless it holds points the journal lacks
-        (a rebuild would drop them: they are journaled first, the next --verify
-        rebuilds)."""
-        from sweep.store.verify import differences
-
-        try:
-            found, _, missing = differences(self.path, self.journal)
-        except _H5_ERRORS as exc:
-            return "damaged", {"why": f"cannot be compared with its journal:"
-                                      f" {type(exc).__name__}: {exc}"}
-        if not found:
-            self._note(f"{self.path}: verified: every stored value is its journal's")
-            return state, info
-        if missing:
-            self._note(f"{self.path}: {len(found)} value(s) differ from the journal (e.g."
-                       f" {found[0]}) but {len(missing)} stored point(s) are not in it:"
-                       " not rebuilt now (they are journaled first; run --verify again)")
-            return state, info
-        return "damaged", {"why": f"{len(found)} value(s) differ from the journal's"
-                                  f" checksummed records, e.g. {found[0]}"}
-
-    def _set_aside(self, bad: list[tuple[int, int, str]]) -> None:
-        try:
-            self.journal.set_aside(bad)
-        except OSError as exc:
-            raise _oserror(self.journal.path, exc, "setting journal lines aside") from None
-        # offsets moved
-        self.scan = self.journal.scan(self.model_version, STATUSES, self._grid)
-        reasons: dict[str, int] = {}
-        for _, _, reason in bad:
-            reasons[reason] = reasons.get(reason, 0) + 1
-        detail = "; ".join(f"{n} x {r}" for r, n in reasons.items())
-        self.set_aside.extend(r for _, _, r in bad)
-        self._note(f"{self.journal.path}: {len(bad)} journal line(s) set aside to"
-                   f" {self.journal.rejected} ({detail}); their points are computed again")
-
-    def _rebuild(self, campaign: Any, scan: JournalScan, state: str,
-                 info: dict[str, Any]) -> None:
-        """Build the store from the journal into a temporary file, then replace."""
-        tmp = self.path.with_name(f".{self.path.name}.rebuild-{os.getpid()}.tmp")
-        size = self.path.stat().st_size if self.path.exists() else 0
-        _check_space(self.path, max(size, self.journal.size() // 2), "rebuilding the store")
-        w: H5Writer | None = None
-        try:
-            w = H5Writer.create(tmp, campaign)
-            w.prepare()
-            quarantined = self._write_records(w, {off for _, off, _ in scan.latest.values()})
-            self._copy_runs(w.file)
-            w.trim()
-            w.file.attrs["rebuilt_from_journal"] = utc_now()
-            w.durable()
-            w.close()
-            w = None
-            fsync_path(tmp)
-            if state == "damaged":
-                stamp = _dt.datetime.now(_dt.UTC).strftime("%Y%m%dT%H%M%S")
-                aside = self.path.with_name(f"{self.path.name}.damaged-{stamp}-{os.getpid()}")
-                try:
-                    os.link(self.path, aside)  # the damaged file stays where it is too
-                except OSError:
-                    os.replace(self.path, aside)
-                self.damaged_kept = str(aside)
-            self._hold_file(tmp)  # the new file is held before it has the store's name
-            os.replace(tmp, self.path)
-            fsync_dir(self.path)
-        except BaseException as exc:
-            if w is not None:
-                w.close()
-            with contextlib.suppress(OSError):
-                tmp.unlink()
-            if isinstance(exc, OSError) and not isinstance(exc, StoreError):
-                raise _oserror(self.path, exc, "rebuilding the store from its journal"
-                               ) from None
-            raise
-        self.repaired_from_journal = True
-        n = len(scan.latest) - quarantined
-        if state == "damaged":
-            self._note(f"{self.path}: damaged ({info.get('why', '?')}); kept as"
-                       f" {self.damaged_kept}; rebuilt from the journal ({n} points)")
-        elif state == "unclean":
-            self._note(f"{self.path}: its last writer did not close it (killed?); rebuilt"
-                       f" from the journal ({n} points)")
-        elif n:
-            self._note(f"{self.path}: missing; rebuilt from the journal ({n} points)")
-
-    def _copy_runs(self, new: Any) -> None:
-        """Keep the ``/runs`` history of the file being rebuilt, when it can be read
-        (an unclean file; a damaged one may not be); a run still "running" there died."""
-        import h5py
-
-        if not self.path.is_file():
-            return
-        try:
-            with h5py.File(self.path, "r", locking=False) as old:
-                if "runs" not in old:
-                    return
-                for name in old["runs"]:
-                    old.copy(old["runs"][name], new["runs"], name=name)
-                    g = new["runs"][name]
-                    if text(g.attrs.get("outcome", "")) == "running":
-                        g.attrs["outcome"] = "died (its writer did not close the store)"
-        except _H5_ERRORS:
-            pass  # the history is lost with the damaged file (kept aside)
-
-    def _write_records(self, w: H5Writer, offsets: set[int]) -> int:
-        """Write the journal records at ``offsets``; set aside those that cannot be
-        written (once, with the reason). Returns how many were set aside."""
-        bad: list[tuple[int, int, str]] = []
-        batch: list[Record] = []
-        if not offsets:
-            return 0
-        for offset, line in self.journal.lines():
-            if offset not in offsets:
-                continue
-            try:
-                obj, _ = decode(line, require_checksum=False)
-                batch.append(Record.coerce(obj))
-            except (BadJournalLineError, UnstorableError) as exc:
-                bad.append((offset, len(line), f"cannot be written to HDF5: {exc}"))
-                continue
-            if len(batch) >= _REPLAY_BATCH:
-                w.write_many(batch)
-                batch = []
-        w.write_many(batch)
-        if bad:
-            self._set_aside(bad)
-        return len(bad)
-
     def _open_in_place(self, campaign: Any, extend: bool) -> None:
         if not self.path.exists():
             tmp = self.path.with_name(f".{self.path.name}.rebuild-{os.getpid()}.tmp")
             H5Writer.create(tmp, campaign).close()
             fsync_path(tmp)
-            self._hold_file(tmp)
+            self._inode.hold(tmp)
             os.replace(tmp, self.path)
             fsync_dir(self.path)
-        _check_space(self.path, 0, "opening the store")
+        check_space(self.path, 0, "opening the store")
         self.w = w = H5Writer.open(self.path)
         f = w.file
         f.attrs["writer_open"] = True  # before anything in the file changes
@@ -547,26 +264,6 @@ class Store:
         self.next_seq = max(max(w.seq_of.values(), default=-1), self.scan.max_seq) + 1
         w.durable()
         self._backfill_journal(w)
-
-    def _backfill_journal(self, w: H5Writer) -> None:
-        """Journal the committed rows the journal lacks (it was deleted, or predates
-        them): the journal is what a rebuild uses, so it must hold every stored point."""
-        missing = [h for h in w.rows if h not in self.scan.latest]
-        if not missing:
-            return
-        from sweep.store import reader
-
-        lines = [rec.journal_line()
-                 for rec in reader.iter_records(w.file, set(missing), normalise=False)]
-        self.journal.open_for_append()
-        _check_space(self.journal.path, 2 * sum(map(len, lines)), "journaling stored points")
-        try:
-            self.journal.append(lines)
-        except OSError as exc:
-            raise _oserror(self.journal.path, exc, "writing the journal") from None
-        self._note(f"{self.journal.path}: {len(missing)} stored point(s) were not in the"
-                   " journal (removed or older than it); journaled again from the store")
-        self.scan = self.journal.scan(self.model_version, STATUSES, self._grid)
 
     def _migrate(self, f: Any) -> None:
         try:
@@ -657,7 +354,7 @@ class Store:
                 self.journal.append(lines, sync=False)
             except OSError as exc:
                 self._broken = True
-                raise _oserror(self.journal.path, exc, "writing the journal") from None
+                raise oserror(self.journal.path, exc, "writing the journal") from None
 
     def release(self, hashes: list[str]) -> None:
         """Journal that handed-out points were abandoned by a clean stop (no attempt)."""
@@ -686,20 +383,20 @@ class Store:
         staged, lines = self._staged, self._lines
         self._staged, self._lines = [], []
         assert self.w is not None
-        _check_space(self.path, 2 * sum(map(len, lines)), "storing points")
+        check_space(self.path, 2 * sum(map(len, lines)), "storing points")
         with signals_deferred():
             try:
                 self.journal.append(lines)
             except OSError as exc:
                 self._broken = True
-                raise _oserror(self.journal.path, exc, "writing the journal") from None
+                raise oserror(self.journal.path, exc, "writing the journal") from None
             try:
                 self.w.write_many(staged)
                 self.w.durable()
-            except _H5_ERRORS as exc:
+            except H5_ERRORS as exc:
                 # journaled: the next open rebuilds the file from the journal
                 self._broken = True
-                raise _oserror(self.path, exc, "writing the store") from None
+                raise oserror(self.path, exc, "writing the store") from None
         return len(staged)
 
     # ------------------------------------------------------------------ closing
@@ -708,64 +405,11 @@ class Store:
             self.w.close()
             self.w = None
 
-    def _hold_file(self, path: Path) -> None:
-        """Write-lock the store file itself (its inode) for as long as this writer has
-        it: a second writer reaching the same file under another name (a hard link) is
-        refused. The lock file and journal are named after the path, which a hard link
-        does not share (a symlink is resolved before: ``os.path.realpath``).
-
-        An open-file-description lock (``F_OFD_SETLK``, Linux), not ``flock``: HDF5
-        readers that use their file locking take a shared ``flock`` of the file, and
-        must still be able to read it during a run; and unlike a POSIX ``lockf`` it is
-        not dropped when h5py closes another descriptor of the file in this process.
-        Where it is not available (not Linux, ``ENOLCK``...) hard links are not caught.
-        """
-        import errno
-        import fcntl
-        import struct
-
-        from sweep.store.lock import KILLED_WRITER_WAIT
-
-        cmd = getattr(fcntl, "F_OFD_SETLK", None)
-        if cmd is None:
-            return
-        try:
-            fd = os.open(path, os.O_RDWR | os.O_CLOEXEC | os.O_NOFOLLOW)
-        except OSError:
-            return  # _inspect says why the path cannot be used
-        arg = struct.pack("hhqqi4x", fcntl.F_WRLCK, os.SEEK_SET, 0, 0, 0)
-        deadline = time.monotonic() + KILLED_WRITER_WAIT
-        while True:
-            try:
-                fcntl.fcntl(fd, cmd, arg)
-                break
-            except OSError as exc:
-                if exc.errno in (errno.EAGAIN, errno.EACCES) and time.monotonic() < deadline:
-                    time.sleep(0.02)  # a writer killed a moment ago may still be exiting
-                    continue
-                os.close(fd)
-                if exc.errno in (errno.EAGAIN, errno.EACCES):
-                    raise StoreLockedError(
-                        f"{self.path}: the file is being written by another live campaign"
-                        " under another name (a hard link to it?); wait for it to finish"
-                        " or stop it first") from None
-                return  # no such lock on this filesystem
-        old, self._inode_fd = self._inode_fd, fd
-        if old is not None:
-            with contextlib.suppress(OSError):
-                os.close(old)
-
-    def _release_file(self) -> None:
-        if self._inode_fd is not None:
-            with contextlib.suppress(OSError):
-                os.close(self._inode_fd)
-            self._inode_fd = None
-
     def _abandon(self) -> None:
         """Close everything without marking the file clean (an error on open)."""
         self._close_writer()
         self.journal.close()
-        self._release_file()
+        self._inode.release()
         self._lock.release()
 
     def close(self, outcome: str = "complete") -> None:
@@ -786,11 +430,11 @@ class Store:
                         g.attrs["outcome"] = outcome
                         self.w.file.attrs["writer_open"] = False
                         self.w.durable()
-                    except _H5_ERRORS:
+                    except H5_ERRORS:
                         pass  # left unclean: rebuilt from the journal next time
                 self._close_writer()
             self.journal.close()
-            self._release_file()
+            self._inode.release()
             self._lock.release()
 
     def __enter__(self) -> Store:

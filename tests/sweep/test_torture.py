@@ -30,8 +30,8 @@ import sweep
 from sweep.errors import BadJournalLineError
 from sweep.store.journal import decode, journal_path
 from sweep.store.lock import lock_path
+from sweep.store.reader import read_journal
 from sweep.store.schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, REPLICA_VARS
-from sweep.store.store import read_journal
 from sweep.testing import SMALL_REAL_BASE, find_mpiexec
 
 MPIEXEC = find_mpiexec()
