@@ -190,9 +190,9 @@ def test_export_checks_its_output_before_reading(tmp_path, capsys, campaign, mon
                  str(tmp_path / "nodir" / "t.csv")]) == 2  # the path first, not the store
     err = capsys.readouterr().err
     assert "nodir" in err and "does not exist" in err and err.count("\n") == 1
-    import sweep.cli
+    import sweep.analysis.export
 
-    monkeypatch.setattr(sweep.cli, "_parquet_engine", lambda: False)
+    monkeypatch.setattr(sweep.analysis.export, "parquet_engine", lambda: False)
     assert main(["export", str(store), "-o", str(tmp_path / "t.parquet")]) == 2
     err = capsys.readouterr().err
     assert "floewave[parquet]" in err and err.count("\n") == 1
