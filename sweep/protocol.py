@@ -34,7 +34,7 @@ __all__ = ["Kind", "Task", "WarmUp", "Outcome", "WorkerFailure", "TAG_TASK", "TA
 TAG_TASK, TAG_RESULT = 1, 2
 
 
-class Kind(str, enum.Enum):
+class Kind(enum.StrEnum):
     """The kind of a worker's reply (a ``str``, so it prints and compares as its value)."""
 
     READY = "ready"

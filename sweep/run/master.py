@@ -81,7 +81,7 @@ class Master:
     ----------
     store : the open :class:`sweep.store.store.Store` (this process is its only writer).
     transport : :class:`InProcessTransport` or :class:`MPITransport`.
-    compute : the compute function spec sent with every task.
+    compute : the compute function spec (its kernels are warmed up before the run).
     """
 
     def __init__(self, store: Store, transport: Transport, compute: str = DEFAULT_COMPUTE,

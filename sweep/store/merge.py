@@ -88,7 +88,8 @@ def merge(output: str | Path, inputs: list[str | Path]) -> str:
                 try:
                     migration_steps(number)
                 except SchemaVersionError:
-                    raise StoreError(f"{path}: schema version {version!r}: this sweep"
+                    shown = number if number >= 0 else repr(version)
+                    raise StoreError(f"{path}: schema version {shown}: this sweep"
                                      f" (schema version {SCHEMA_VERSION}) cannot merge it"
                                      ) from None
                 hashes.append(text(f.attrs["campaign_hash"]))
