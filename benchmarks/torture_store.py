@@ -40,6 +40,7 @@ import h5py  # noqa: E402
 import numpy as np  # noqa: E402
 
 import sweep  # noqa: E402
+from sweep.analysis.load import journal_points  # noqa: E402
 from sweep.store.journal import decode, encode, journal_path  # noqa: E402
 from sweep.testing import catches_signal  # noqa: E402
 
@@ -123,7 +124,7 @@ def judge(tally: Tally, phase: str, ref: Path, store: Path, rc: int, log: str,
 def _left(store: Path, total: int) -> float:
     """Share of the ``total`` points not yet in the store's journal."""
     try:
-        return 1 - sweep.analysis.load.journal_points(store) / total
+        return 1 - journal_points(store) / total
     except (TypeError, OSError):
         return 1.0
 

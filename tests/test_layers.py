@@ -194,6 +194,25 @@ def test_function_level_imports_count(tmp_path, monkeypatch):
     assert cycles(graph(("pkg",))) == [["pkg.a", "pkg.b"]]
 
 
+def package_graph(package: str = "sweep") -> dict[str, set[str]]:
+    """The import graph between the parts of ``package``: its subpackages and top-level
+    modules (``sweep.store``, ``sweep.run``, ``sweep.cli``...)."""
+    def part(module: str) -> str:
+        return ".".join(module.split(".")[:2])
+
+    edges: dict[str, set[str]] = {}
+    for module, targets in graph((package,)).items():
+        edges.setdefault(part(module), set()).update(
+            part(t) for t in targets if part(t) != part(module))
+    return edges
+
+
+def test_the_parts_of_sweep_form_layers():
+    """No circle between sweep's subpackages either: store, run, analysis, paper, cli each
+    point down only."""
+    assert not cycles(package_graph("sweep"))
+
+
 @pytest.mark.parametrize("package", LINE_RULE)
 def test_no_long_module(package):
     assert not long_modules((package,)), f"modules over {MAX_LINES} lines"
@@ -217,6 +236,11 @@ if __name__ == "__main__":
         print(f"{package}/: {len(edges)} modules, {n_edges} import edges")
         for component in cycles(edges):
             print(f"  circle of {len(component)}: {' '.join(component)}")
+    parts = package_graph("sweep")
+    print("sweep's parts:", "; ".join(f"{k} -> {', '.join(sorted(v))}"
+                                      for k, v in sorted(parts.items()) if v))
+    for component in cycles(parts):
+        print(f"  circle of parts: {' '.join(component)}")
     for line in private_imports(("sweep",)):
         print(f"  private: {line}")
     for name, n in long_modules(PACKAGES):
