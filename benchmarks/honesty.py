@@ -1,7 +1,7 @@
 """Are the ensemble's error bars honest? Two independent ensembles per point, z-scores.
 
 For every point (the paper's 8 Fig. 2 points plus ``--random`` points of the paper's grid,
-MODEL.md §7, drawn with a fixed seed) run two ensembles that differ only in ``seed`` (or
+docs/model.md §7, drawn with a fixed seed) run two ensembles that differ only in ``seed`` (or
 in ``placement``, with ``--placements uniform random``) and compute, per quantity,
 
     z = (x1 - x2) / sqrt(se1^2 + se2^2)

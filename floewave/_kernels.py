@@ -5,7 +5,7 @@ Everything here is nopython, cached, without fast-math (flags and why:
 :mod:`floewave._jit`). The kernels see only numpy arrays and a :class:`KernelParams` named
 tuple of numbers built once per point from the frozen :class:`~floewave.config.ModelConfig`.
 
-**One kernel for R replicas.** The R chains of an ensemble (MODEL.md §4 'Ensembles') run in
+**One kernel for R replicas.** The R chains of an ensemble (docs/model.md §4 'Ensembles') run in
 lockstep: their states are rows of (R, N_f) arrays, and the kernel loops over the flattened
 index ``j = r N_f + i``. Every per-floe loop (drift, drag, wave force, kick) has no
 neighbour dependency and is vectorised across floes *and* replicas; the contact loop runs
@@ -21,7 +21,7 @@ cache keys it by those numbers and loads it in a new process (a closure over ano
 *jitted* function would not be: numba pickles a dispatcher with a per-process id, and every
 process would compile again). Helpers it calls are module-level functions.
 
-Time integration (velocity Verlet, MODEL.md §3), per step n -> n+1::
+Time integration (velocity Verlet, docs/model.md §3), per step n -> n+1::
 
     u_half = u_n + dt/2 acc_n
     x_{n+1} = x_n + dt u_half
@@ -191,7 +191,7 @@ def contact_law(delta, v_n, P, contact, damping, clip):
     """Normal contact force [N] pushing a pair apart at overlap ``delta`` > 0:
     F = k_n delta - gamma_n v_n, ``v_n = u_{i+1} - u_i`` (positive while separating).
 
-    k_n: ``hertz_disk`` f(s) (MODEL.md §3) or ``linear``; gamma_n = -beta sqrt(5 k_n m*)
+    k_n: ``hertz_disk`` f(s) (docs/model.md §3) or ``linear``; gamma_n = -beta sqrt(5 k_n m*)
     (liggghts) or -2 beta sqrt(k_n m*) (exact); clipped at 0 if ``clip``. The option codes
     are arguments so that a caller with constant options (the built time loop) gets them
     folded away.
@@ -209,7 +209,7 @@ def contact_law(delta, v_n, P, contact, damping, clip):
 
 @njit(**JITN)
 def _stiffness(delta, P, contact):
-    """k_n [N m^-1] at overlap ``delta``: ``hertz_disk`` f(s) (MODEL.md §3) or ``linear``."""
+    """k_n [N m^-1] at overlap ``delta``: ``hertz_disk`` f(s) (docs/model.md §3) or ``linear``."""
     if contact == CONTACT_LINEAR:
         return P.kn_lin
     s = delta * P.s_scale
@@ -897,7 +897,7 @@ def make_advance(opts: KernelOptions):
 
 @njit(**JIT)
 def confined_window(x0, a, nsteps, P, cxi, sxi, stats):
-    """Floes held fixed (u = 0, MODEL.md §5): accumulate ``stats`` over ``nsteps`` steps.
+    """Floes held fixed (u = 0, docs/model.md §5): accumulate ``stats`` over ``nsteps`` steps.
 
     Only the wave-side rows (S3, X, FW, FD) are filled; gaps are constant.
     """

@@ -1,4 +1,5 @@
-"""Model configuration: every parameter of MODEL.md in one frozen, validated dataclass.
+"""Model configuration: every parameter of the model (docs/model.md) in one frozen,
+validated dataclass.
 
 ``ModelConfig`` is the single source of truth for a model point. It is frozen and
 hashable, validated in one place (``__post_init__``), and round-trips exactly through
@@ -33,7 +34,7 @@ __all__ = [
 
 # (G: gravity, defined with the dispersion relations it belongs to; re-exported here)
 
-#: The seven swept dimensions of the paper's campaign (MODEL.md §7), in grid order.
+#: The seven swept dimensions of the paper's campaign (docs/model.md §7), in grid order.
 SWEPT_FIELDS = ("L_x", "T", "a0", "C_sd", "eps", "d_f", "dispersion")
 
 DISPERSIONS = ("ep", "ml", "ow")
@@ -54,7 +55,7 @@ STATIONARITY = ("mser", "fixed")
 
 @dataclass(frozen=True)
 class ModelConfig:
-    """All parameters of one model point (SI units; MODEL.md section in brackets).
+    """All parameters of one model point (SI units; docs/model.md section in brackets).
 
     Swept dimensions (paper §4.1)
     ----------------------------
@@ -125,7 +126,7 @@ class ModelConfig:
         one chain whatever ``replicas``, uniform placement)
     overwash : include overwash dissipation (eqs. 17, 18, 21); c_ow [-], s_min [-]
 
-    Ensemble (MODEL.md §4 "Ensembles"; README "Ensembles and error bars")
+    Ensemble (docs/model.md §4 "Ensembles"; docs/convergence.md "Ensembles and error bars")
     -------------------------------------------------------------------
     replicas : R, independent floe chains per point (1: a single trajectory)
     seed : ensemble seed; replica r's arrangement derives from (the configuration without
@@ -153,7 +154,7 @@ class ModelConfig:
     fit_min_floes, fit_min_length : alpha_edge and alpha_inner are fitted only over a zone
         of at least this many floes spanning at least this many metres [-], [m]
     (the rule and how its defaults were chosen: :func:`floewave.results.compact_zones`,
-    README "The collision-zone width W_c")
+    docs/model.md §6 "The compact-zone rule")
     """
 
     # --- swept (paper §4.1) ---
@@ -268,7 +269,7 @@ class ModelConfig:
     # ------------------------------------------------------------------ derived
     @property
     def n_floes(self) -> int:
-        """N_f = round(L_sheet / L_x) (MODEL.md §1)."""
+        """N_f = round(L_sheet / L_x) (docs/model.md §1)."""
         return int(round(self.L_sheet / self.L_x))
 
     @property
@@ -308,7 +309,7 @@ class ModelConfig:
         return self.replicas
 
     def floe_steps_per_iteration(self) -> int:
-        """(n0 + nT) n_t N_f: the cost unit of MODEL.md §4 for the first iteration."""
+        """(n0 + nT) n_t N_f: the cost unit of docs/model.md §4 for the first iteration."""
         return self.floe_steps_of(1)
 
     def floe_steps_of(self, iterations: int) -> int:
@@ -325,7 +326,7 @@ class ModelConfig:
         """Time steps in the shortest binary contact the contact law allows: the half period
         pi sqrt(m* / k_n) of an undamped contact at the stiffest k_n (``linear``: Y* L_y h_i
         / L_x; ``hertz_disk``: pi Y* h_i 0.9117, the limit of f(s)), with the added-mass
-        reduced mass m* = (1 + C_m) m / 2 (MODEL.md §3). A lower bound of the steps a real
+        reduced mass m* = (1 + C_m) m / 2 (docs/model.md §3). A lower bound of the steps a real
         contact takes (measured at 0.05 m/s, lab ice, dt 1e-3: 51-62 steps for
         ``hertz_disk`` where this gives 22; ``benchmarks/dt_convergence.py``)."""
         y_star = self.E / (2.0 * (1.0 - self.nu**2))

@@ -1,4 +1,4 @@
-"""The coupled DEM-wave attenuation iteration (MODEL.md §4, paper §2.4) and ``run_point``."""
+"""The coupled DEM-wave attenuation iteration (docs/model.md §4, paper §2.4) and ``run_point``."""
 from __future__ import annotations
 
 import math
@@ -30,7 +30,7 @@ __all__ = ["FloeChain", "NumericalError", "march_amplitude", "dissipation", "res
 
 
 class FloeChain:
-    """State of the 1-D floe chain (MODEL.md §1), or of R chains in lockstep (an ensemble:
+    """State of the 1-D floe chain (docs/model.md §1), or of R chains in lockstep (an ensemble:
     one row of ``x0`` per replica), and the compiled time loop around it.
 
     The R chains share every coefficient and differ only in state; one call of the kernel
@@ -160,7 +160,7 @@ def kernel_mode(cfg: ModelConfig) -> str:
 
 def run_point(cfg: ModelConfig,
               progress: Callable[[int, float, str], None] | None = None) -> PointResult:
-    """Run the attenuation iteration for one point (MODEL.md §4) and fit the results (§6).
+    """Run the attenuation iteration for one point (docs/model.md §4) and fit the results (§6).
 
     Iteration: start with a_i = a0; per iteration run n0 periods (spin-up, DEM state carried
     over when ``warm_start``) and nT periods accumulating eq. 19; march eq. 20; relax

@@ -122,6 +122,8 @@ def build_parser() -> argparse.ArgumentParser:
     m = sub.add_parser("merge", help="combine shard stores of one campaign (dedup by hash)")
     m.add_argument("output", type=Path, help="merged store (created or extended)")
     m.add_argument("inputs", type=Path, nargs="+", help="shard stores")
+    for parser in (p, *sub.choices.values()):  # `--stor x.h5` is refused, not `--store`
+        parser.allow_abbrev = False
     return p
 
 

@@ -85,7 +85,7 @@ class RunOptions:
 class Point:
     """One grid point: its position, resolved configuration, identity and cost.
 
-    ``cost`` is the floe-steps of the expected number of iterations (MODEL.md §4;
+    ``cost`` is the floe-steps of the expected number of iterations (docs/model.md §4;
     ``ModelConfig.floe_steps_of``: the first iteration spins up n0 periods, later ones n0_warm),
     ``invalid`` the reason the point is physically impossible (``""`` when it is not).
     """

@@ -19,7 +19,15 @@ import floewave
 from sweep.errors import PointNotFoundError, StoreError, StoreUnreadableError
 from sweep.store import reader
 from sweep.store.cells import text
-from sweep.store.schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, REPLICA_VARS, column
+from sweep.store.schema import (
+    COLUMNS,
+    DERIVED,
+    DERIVED_FROM,
+    HISTORY_VAR,
+    PROFILE_VARS,
+    REPLICA_VARS,
+    column,
+)
 
 __all__ = ["load", "load_xarray", "load_profile", "load_profiles", "store_attrs", "store_runs",
            "resolve_hash", "journal_points", "STATUS_ORDER", "PROFILE_LEADING_DIMS"]
@@ -42,6 +50,9 @@ def _open(path: str | Path) -> h5py.File:
     try:
         return reader.open_file(path)
     except (OSError, FileNotFoundError) as exc:
+        why = reader.not_a_store(path)
+        if why is not None:  # one line, no HDF5 message (exit status 3)
+            raise StoreError(f"{path}: {why}") from None
         cls = StoreUnreadableError if Path(path).is_file() else StoreError
         raise cls(f"{path}: cannot open store: {exc}") from None
 
@@ -146,10 +157,20 @@ def _load(path: str | Path) -> pd.DataFrame:
         reader.check_hashes(path, data["hash"], data["config_json"], reader.model_version(f),
                             data["provenance"],
                             {k: data[k] for k in floewave.SWEPT_FIELDS if k in data})
-    df = _typed(pd.DataFrame(data))
-    df.attrs["units"] = {c.name: c.units for c in COLUMNS}
-    df.attrs["long_name"] = {c.name: c.long_name for c in COLUMNS}
+    df = _with_derived(_typed(pd.DataFrame(data)))
+    df.attrs["units"] = {c.name: c.units for c in (*COLUMNS, *DERIVED)}
+    df.attrs["long_name"] = {c.name: c.long_name for c in (*COLUMNS, *DERIVED)}
     df.attrs["campaign"] = campaign
+    return df
+
+
+def _with_derived(df: pd.DataFrame) -> pd.DataFrame:
+    """The :data:`sweep.store.schema.DERIVED` columns (``a_end_rel = a_end / a0`` and its standard
+    error), each placed after the column it is computed from."""
+    for col in DERIVED:
+        num, den = DERIVED_FROM[col.name]
+        values = df[num].astype(float) / df[den].astype(float)
+        df.insert(df.columns.get_loc(num) + 1, col.name, values)
     return df
 
 
@@ -181,7 +202,8 @@ def load_xarray(path: str | Path) -> xr.Dataset:
     campaign = json.loads(attrs["campaign_json"])
     dims = json.loads(attrs["swept_fields"])
     coords = {d: np.asarray(sorted(campaign["sweep"][d])) for d in dims}
-    keep = [c.name for c in COLUMNS if c.name not in _NOT_RESULTS and c.name not in dims
+    keep = [c.name for c in (*COLUMNS, *DERIVED) if c.name not in _NOT_RESULTS
+            and c.name not in dims
             and c.name not in ("L_x", "T", "a0", "C_sd", "eps", "d_f", "dispersion")]
     bad = df["status"].isin(NO_RESULT)
     values = df[dims + keep].copy()

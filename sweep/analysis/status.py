@@ -11,8 +11,9 @@ from typing import Any
 
 from sweep.analysis.load import journal_points, load, store_attrs, store_runs
 from sweep.arguments import plural
+from sweep.store.lock import writer_alive
 
-__all__ = ["status_report", "status_text"]
+__all__ = ["status_report", "status_text", "mark_dead_runs"]
 
 
 def swept_values(row: Any, dims: Sequence[str]) -> dict[str, Any]:
@@ -53,6 +54,7 @@ def status_report(path: Path, slowest: int = 5) -> dict[str, Any]:
              "ended": str(r.get("ended", "")), "outcome": str(r.get("outcome", "")),
              "mpi_size": int(r.get("mpi_size", 1)), "host": str(r.get("host", "")),
              "stored": int((df["run"] == r["index"]).sum())} for r in store_runs(path)]
+    mark_dead_runs(path, runs)
     return {"store": str(path), "grid_points": total, "stored": len(df),
             "journaled": journaled,
             "remaining": max(total - len(df), 0), "counts": counts, "failures": failures,
@@ -63,6 +65,19 @@ def status_report(path: Path, slowest: int = 5) -> dict[str, Any]:
                         for r in slow.itertuples()],
             "runs": runs,
             "total_wall_time": float(df["wall_time"].sum()) if len(df) else 0.0}
+
+
+def mark_dead_runs(path: Path, runs: list[dict[str, Any]]) -> None:
+    """A run recorded as "running" whose writer is gone (killed: SIGKILL, a double
+    Ctrl-C under mpiexec) is shown as such, not as running; only the last run can be
+    live, and only while its writer holds the store's lock."""
+    for i, r in enumerate(runs):
+        if r["outcome"] != "running" or r["ended"]:
+            continue
+        if i == len(runs) - 1 and writer_alive(path):
+            continue
+        r["outcome"] = ("died: its writer was killed; the same command resumes the"
+                        " campaign")
 
 
 def status_text(rep: dict[str, Any]) -> str:
@@ -96,7 +111,9 @@ def status_text(rep: dict[str, Any]) -> str:
     if rep["runs"]:
         out.append("runs:")
         for r in rep["runs"]:
-            out.append(f"  {r['index']}: {r['started'][:19]} to {r['ended'][:19] or '(running)'},"
+            end = r["ended"][:19] or ("(running)" if r["outcome"] == "running"
+                                      else "(no end recorded)")
+            out.append(f"  {r['index']}: {r['started'][:19]} to {end},"
                        f" {r['mpi_size']} rank(s) on {r['host']}, {plural(r['stored'], 'point')}"
                        f" stored: {r['outcome']}")
     return "\n".join(out)

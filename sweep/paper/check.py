@@ -80,7 +80,7 @@ def check_stores(stores: str | Path = "paper", *, run: bool = False,
         stores.mkdir(parents=True, exist_ok=True)
     elif not stores.is_dir():
         raise ConfigError(f"--stores {stores}: no such directory (run the campaigns into it"
-                          " with --run, or see README 'Checking the paper's claims')")
+                          " with --run, or see docs/paper-check.md)")
     paths = {name: stores / f"{name}.h5" for name in PAPER_CAMPAIGNS}
     if run:
         campaigns = {}
@@ -126,7 +126,8 @@ def _cell(text: str) -> str:
 
 
 def format_table(checks: Sequence[Check]) -> str:
-    """The checks as one Markdown table (pasteable into the README), with a count line."""
+    """The checks as one Markdown table (pasteable into docs/paper-check.md), with a count
+    line."""
     lines = ["| # | claim (paper) | campaign: points | quantity | value ± SE | rule: evidence"
              " | verdict |", "|---|---|---|---|---|---|---|"]
     for i, c in enumerate(checks, 1):

@@ -1,4 +1,4 @@
-"""The paper's qualitative claims (Herman et al. 2019, §4; MODEL.md §8), one check each.
+"""The paper's qualitative claims (Herman et al. 2019, §4; docs/model.md §8), each checked.
 
 Each claim is checked on the campaigns' tables and profiles.
 
@@ -34,10 +34,10 @@ PAPER_CAMPAIGNS = ("fig2", "fig5", "fig6a", "fig6b", "periods")
 #: Standard errors assumed where a store gives none (see the module docstring):
 #:
 #: - ``a_rel``: a/a0 of a single trajectory, 0.01 (1 % of a0): the default
-#:   ``target_stderr``; rounding-level reruns differed by 0.1-0.7 % of a0 (README).
+#:   ``target_stderr``; rounding-level reruns differed by 0.1-0.7 % of a0 (docs/convergence.md).
 #:   Used only where the profile's ``a_stderr`` is missing or NaN.
 #: - ``W_c`` [m]: 4 m. Measured: the Fig. 2 points rerun with the floe spacing changed by
-#:   one ulp (``benchmarks/rounding_spread.py``, README "Reproducibility") gave 7 pairs of
+#:   one ulp (``benchmarks/rounding_spread.py``, docs/reproducibility.md) gave 7 pairs of
 #:   W_c differing by 0.5-2.5 m and once 15 m; sigma = RMS difference / sqrt(2) = 4.1 m.
 #: - ``inner_over_c``: 0.1 (10 %) on alpha_inner / alpha_c — *assumed, not measured*
 #:   (single-trajectory stores carry no spread of alpha_inner).

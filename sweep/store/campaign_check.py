@@ -38,6 +38,7 @@ def check_campaign(path: Path, old: dict[str, Any], campaign: Any, extend: bool,
             f" sweep computes model version {new.get('model_version')} (schema"
             f" {SCHEMA_VERSION}), whose points have other hashes. Use another --store;"
             " the old one stays readable (sweep.load, sweep status, sweep export)")
+    problems = _extend_problems(old, new)
     if not extend:
         diff = sorted(k for k in set(old["base"]) | set(new["base"])
                       if old["base"].get(k) != new["base"].get(k))
@@ -45,12 +46,24 @@ def check_campaign(path: Path, old: dict[str, Any], campaign: Any, extend: bool,
                             if old["sweep"].get(k) != new["sweep"].get(k))
         what = ", ".join([f"[base] {k}" for k in diff] + [f"[sweep] {k}" for k in
                                                           sweep_diff]) or "model_version"
+        # suggest --extend only where it would be accepted
+        advice = ("use another --store, or --extend to add grid values to this one"
+                  if not problems else "use another --store (--extend cannot take it: "
+                  + "; ".join(problems) + ")")
         raise CampaignMismatchError(
             f"{path}: the {where} belongs to a different campaign (differs in"
-            f" {what}); use another --store, or --extend to add grid values to this one")
+            f" {what}); {advice}")
+    if problems:
+        raise CampaignMismatchError(f"{path}: cannot --extend this {where}: "
+                                    + "; ".join(problems))
+
+
+def _extend_problems(old: dict[str, Any], new: dict[str, Any]) -> list[str]:
+    """Why ``--extend`` would refuse ``new`` on a store of ``old`` (empty: it accepts it):
+    one store holds one [base] and model version; grid values may only be added."""
     problems = []
     if old["base"] != new["base"] or old["model_version"] != new["model_version"]:
-        problems.append("its [base] (or model version) differs")
+        problems.append("its [base] (or model version) differs, and a store holds one")
     if set(old["sweep"]) != set(new["sweep"]):
         problems.append("its swept dimensions differ")
     else:
@@ -58,9 +71,8 @@ def check_campaign(path: Path, old: dict[str, Any], campaign: Any, extend: bool,
             missing = [v for v in values if v not in new["sweep"][k]]
             if missing:
                 problems.append(f"[sweep] {k} drops {missing}")
-    if problems:
-        raise CampaignMismatchError(f"{path}: cannot --extend this {where}: "
-                                    + "; ".join(problems))
+    return problems
+
 
 def check_legacy_journal(journal: Path, hashes: Iterable[str], campaign: Any) -> None:
     """A journal without a campaign line (written before version 2) is used to rebuild

@@ -13,9 +13,11 @@ from typing import Any
 import numpy as np
 
 from sweep.errors import UnstorableError
-from sweep.store.schema import PROFILE_VARS, REPLICA_VARS, column, has_column
+from sweep.store.schema import COLUMNS, PROFILE_VARS, REPLICA_VARS
 
 __all__ = ["normalise_record", "check_profiles", "text", "texts", "NO_PROFILES"]
+
+_STORED = {c.name: c for c in COLUMNS}
 
 _I64 = (-(2 ** 63), 2 ** 63 - 1)
 #: Statuses stored without profiles (every other status has each of PROFILE_VARS, of
@@ -69,9 +71,9 @@ def normalise_record(record: dict[str, Any]) -> dict[str, Any]:
         raise UnstorableError("no 'row'")
     row = {}
     for name, value in row_in.items():
-        if not has_column(name):
+        col = _STORED.get(name)
+        if col is None:     # not a stored column (derived ones included): dropped
             continue
-        col = column(name)
         row[name] = col.fill if value is None else _convert(col.kind, name, value)
     profiles = {}
     for name, value in (record.get("profiles") or {}).items():

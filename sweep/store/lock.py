@@ -31,7 +31,7 @@ from typing import Any
 from sweep.errors import StoreError, StoreLockedError
 
 __all__ = ["Lock", "lock_path", "pid_alive", "holders_of", "flock_waiting",
-           "KILLED_WRITER_WAIT"]
+           "writer_alive", "KILLED_WRITER_WAIT"]
 
 _NO_FLOCK = {errno.ENOLCK, errno.EOPNOTSUPP, errno.ENOSYS, errno.EINVAL}
 
@@ -87,6 +87,22 @@ def holders_of(path: str | Path) -> list[int]:
             with contextlib.suppress(ValueError):
                 pids.append(int(parts[4]))
     return pids
+
+
+def writer_alive(store: str | Path) -> bool:
+    """Whether a live process may be writing ``store``: its lock file exists and is
+    flock-held, or names a live process on this host, or a process on another host
+    (which cannot be checked from here). A writer killed by SIGKILL or a double Ctrl-C
+    leaves its lock file behind, held by nobody: not alive."""
+    path = lock_path(os.path.realpath(store))
+    if holders_of(path):
+        return True
+    try:
+        who = json.loads(path.read_text())
+        pid, host = int(who["pid"]), str(who["host"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return False  # no lock file (released), or one without an identity
+    return host != socket.gethostname() or pid_alive(pid)
 
 
 def _identity() -> dict[str, Any]:

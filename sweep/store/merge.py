@@ -103,7 +103,8 @@ def merge(output: str | Path, inputs: list[str | Path]) -> str:
         except StoreError:
             raise
         except (OSError, KeyError, ValueError, RuntimeError, TypeError) as exc:
-            raise StoreError(f"{path}: not a readable sweep store: {exc}") from None
+            why = reader.not_a_store(path) if isinstance(exc, OSError) else None
+            raise StoreError(f"{path}: not a readable sweep store: {why or exc}") from None
     if len(set(map(os.path.realpath, inputs))) != len(inputs):
         raise StoreError("an input store is given twice")
     if len(set(hashes)) != 1:

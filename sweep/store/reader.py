@@ -53,6 +53,24 @@ def open_file(path: str | Path) -> h5py.File:
     return h5py.File(path, "r", locking=False)
 
 
+def not_a_store(path: str | Path) -> str | None:
+    """Why ``path`` cannot be a store, in words (``None``: it may be one): no such file,
+    a directory, or a file without HDF5's signature (a campaign file given by mistake).
+    An empty file is not judged (a writer may be creating it)."""
+    p = Path(path)
+    if not p.exists():
+        return "no such store (file not found)"
+    if p.is_dir():
+        return "is a directory, not a store (a store is the .h5 file of sweep run --store)"
+    try:
+        if p.is_file() and p.stat().st_size > 0 and not h5py.is_hdf5(p):
+            return ("not a sweep store: not an HDF5 file (a store is the .h5 file of sweep"
+                    " run --store)")
+    except OSError:
+        return None
+    return None
+
+
 def n_rows(f: h5py.File) -> int:
     """The committed rows of the store's table."""
     return int(f["table"].attrs["n_rows"])

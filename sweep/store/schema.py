@@ -28,9 +28,10 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["SCHEMA_VERSION", "FORMAT", "Column", "COLUMNS", "PROFILE_VARS", "REPLICA_VARS",
+__all__ = ["SCHEMA_VERSION", "FORMAT", "Column", "COLUMNS", "DERIVED", "DERIVED_FROM",
+           "PROFILE_VARS", "REPLICA_VARS",
            "STATUSES", "ADDED_IN", "MIGRATION_FILL", "HISTORY_VAR", "ROOT_ATTRS", "RUN_ATTRS",
-           "column", "has_column", "profile_path"]
+           "column", "profile_path"]
 
 SCHEMA_VERSION = 3
 FORMAT = "sweep-store"
@@ -116,7 +117,16 @@ COLUMNS: tuple[Column, ...] = (
     _C("config_json", "str", "", "canonical JSON of the resolved ModelConfig"),
     _C("provenance", "str", "", "JSON: versions of package, git, python, numpy, numba, MPI"),
 )
-_BY_NAME = {c.name: c for c in COLUMNS}
+#: Columns that :func:`sweep.load` and :func:`sweep.load_xarray` derive from stored ones
+#: when they read a store (not stored: the store's layout and version do not change).
+DERIVED: tuple[Column, ...] = (
+    _C("a_end_rel", "float", "1", "a_end / a0: relative amplitude at the far end of the"
+       " sheet"),
+    _C("a_end_rel_stderr", "float", "1", "standard error of a_end_rel: a_end_stderr / a0"),
+)
+#: What each derived column is computed from (``a / b``, by name).
+DERIVED_FROM = {"a_end_rel": ("a_end", "a0"), "a_end_rel_stderr": ("a_end_stderr", "a0")}
+_BY_NAME = {c.name: c for c in (*COLUMNS, *DERIVED)}
 #: Schema version that added a column (columns not listed: version 1).
 ADDED_IN = {"compact_zone": 2, "compact_end": 2, "ice_extent": 2,
             **{name: 3 for name in ("replicas", "W_c_stderr", "W_c_n", "alpha_all_stderr",
@@ -178,7 +188,3 @@ def column(name: str) -> Column:
     """The :class:`Column` called ``name``."""
     return _BY_NAME[name]
 
-
-def has_column(name: str) -> bool:
-    """Whether the table has a column called ``name``."""
-    return name in _BY_NAME

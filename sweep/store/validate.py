@@ -44,7 +44,7 @@ def validate(path: str | Path) -> list[str]:
     try:
         f = h5py.File(path, "r", locking=False)
     except OSError as exc:
-        return [f"{path}: not a readable HDF5 file: {exc}"]
+        return [f"{path}: not a readable HDF5 file: {reader.not_a_store(path) or exc}"]
     with f:
         for key in ROOT_ATTRS:
             if key not in f.attrs:

@@ -1,4 +1,4 @@
-"""The ``noise_floor`` attenuation iteration (MODEL.md §4) on a reduced full-DEM point (the
+"""The ``noise_floor`` attenuation iteration (docs/model.md §4) on a reduced full-DEM point (the
 stationary protocol's own tests: tests/floewave/test_protocol.py)."""
 import numpy as np
 import pytest
