@@ -44,8 +44,8 @@ _LAZY = {
     "derived": "analysis.stats",
 }
 #: Subpackages and modules reachable as attributes of ``sweep`` (imported on first use).
-_MODULES = {"analysis", "cli", "config", "errors", "identity", "paper", "provenance", "report",
-            "run", "store", "system", "testing"}
+_MODULES = {"analysis", "arguments", "cli", "config", "errors", "identity", "paper",
+            "protocol", "provenance", "report", "run", "store", "system", "testing"}
 
 
 def __getattr__(name: str) -> Any:
