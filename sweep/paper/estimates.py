@@ -14,10 +14,10 @@ comes from, in order of preference:
    exist, then inflated by sqrt(chi^2 / dof) when that exceeds 1 — the Birge ratio — and
    treated as a known SE whatever chi^2 / dof is; else the unweighted fit's residual SE
    with n - 2 degrees of freedom);
-4. otherwise a stated **floor** (:data:`FLOORS`): the noise a single trajectory is known
-   (or assumed, where so marked) to carry. A quantity with no SE and no floor keeps a NaN
-   SE and can only be ``inconclusive``. So a quantity without an error bar can only hold
-   or fail when the effect is large against its floor.
+4. otherwise a stated **floor** (:data:`sweep.paper.claims.FLOORS`): the noise a single
+   trajectory is known (or assumed, where so marked) to carry. A quantity with no SE and
+   no floor keeps a NaN SE and can only be ``inconclusive``. So a quantity without an
+   error bar can only hold or fail when the effect is large against its floor.
 
 The critical value is z_c = 2 (two standard errors); an SE estimated from a fit's
 residuals with nu degrees of freedom uses the Student-t value with the same tail

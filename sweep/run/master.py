@@ -80,7 +80,8 @@ class Master:
     Parameters
     ----------
     store : the open :class:`sweep.store.store.Store` (this process is its only writer).
-    transport : :class:`InProcessTransport` or :class:`MPITransport`.
+    transport : :class:`sweep.run.transport.InProcessTransport` or
+        :class:`sweep.run.transport.MPITransport`.
     compute : the compute function spec (its kernels are warmed up before the run).
     """
 

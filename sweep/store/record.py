@@ -5,7 +5,7 @@ residual history and where and when it ran; :meth:`~sweep.protocol.Outcome.known
 point the master decides without a worker: ``invalid``, ``crashed``), a record
 read back from a store (:mod:`sweep.store.reader`) or from the journal: each becomes a
 :class:`Record` holding the table row and the point's datasets, already converted to the
-schema's kinds (:func:`sweep.store.writer.normalise_record`). The store stages Records
+schema's kinds (:func:`sweep.store.cells.normalise_record`). The store stages Records
 (:meth:`sweep.store.store.Store.add`); the journal line (:meth:`Record.journal_line`) and the
 HDF5 row and datasets (:meth:`sweep.store.writer.H5Writer.write_many`) are written from it.
 
@@ -91,7 +91,7 @@ class Record:
 
         A result the schema cannot hold makes a ``failed`` record saying why (never an
         exception): a scalar of the wrong kind ("does not fit the schema"), or a value
-        or profile :func:`sweep.store.writer.normalise_record` refuses ("cannot be stored").
+        or profile :func:`sweep.store.cells.normalise_record` refuses ("cannot be stored").
         """
 
         try:

@@ -330,10 +330,10 @@ class Store(JournalRepair):
     def add(self, record: Record | dict[str, Any]) -> None:
         """Stage one point for the next :meth:`commit` (nothing is written yet).
 
-        ``record`` is a :class:`sweep.store.record.Record` (or a dict of its members, converted
-        to the schema's kinds first: :class:`UnstorableError` if a value cannot be; nothing
-        is staged then). A staged point is not stored: a crash or :meth:`close` before
-        :meth:`commit` loses it (it was never acknowledged).
+        ``record`` is a :class:`sweep.store.record.Record` (or a dict of its members,
+        converted to the schema's kinds first: :class:`sweep.errors.UnstorableError` if a
+        value cannot be; nothing is staged then). A staged point is not stored: a crash or
+        :meth:`close` before :meth:`commit` loses it (it was never acknowledged).
         """
         rec = Record.coerce(record).stamped(self.next_seq, self.run_index)
         line = rec.journal_line()
