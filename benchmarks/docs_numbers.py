@@ -112,7 +112,7 @@ def main() -> int:
     else:       # the stores' own run records: when each campaign started and ended
         from datetime import datetime
 
-        from sweep.analysis import store_runs
+        from sweep.analysis.load import store_runs
 
         for name in ("demo", *CAMPAIGNS):
             run_ = store_runs(out / f"{name}.h5")[-1]

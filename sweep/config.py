@@ -27,9 +27,8 @@ import floewave
 from floewave import ModelConfig, solve_dispersion
 from floewave._help import did_you_mean
 from floewave.transient import transient_windows
-
-from .errors import ConfigError
-from .identity import canonical_json, point_hash, sha256_hex
+from sweep.errors import ConfigError
+from sweep.identity import canonical_json, point_hash, sha256_hex
 
 __all__ = ["Campaign", "Point", "RunOptions", "load_campaign", "parse_campaign",
            "DEFAULT_EXPECTED_ITERATIONS"]

@@ -1,4 +1,4 @@
-"""docs/output.md is generated from sweep/schema.py by docs/make_output.py: the committed
+"""docs/output.md is generated from sweep/store/schema.py by docs/make_output.py: the committed
 file must be what the script writes, and it must name every stored and derived column
 and every profile dataset."""
 from __future__ import annotations
@@ -23,7 +23,7 @@ def test_output_reference_is_what_the_script_generates():
 
 
 def test_output_reference_names_every_column_and_dataset():
-    from sweep.schema import COLUMNS, DERIVED, HISTORY_VAR, PROFILE_VARS, REPLICA_VARS
+    from sweep.store.schema import COLUMNS, DERIVED, HISTORY_VAR, PROFILE_VARS, REPLICA_VARS
 
     text = _script().render()
     for name in [c.name for c in (*COLUMNS, *DERIVED)] + list(PROFILE_VARS) + list(

@@ -102,7 +102,8 @@ def test_campaign_bits_in_process_mpi_and_after_kill_and_resume(tmp_path):
 
     if MPIEXEC is None:
         pytest.skip("no mpiexec (pip install mpich)")
-    from sweep.store import journal_path, read_journal
+    from sweep.store.journal import journal_path
+    from sweep.store.reader import read_journal
 
     config = tmp_path / "c.toml"
     config.write_text(TORTURE_TOML)

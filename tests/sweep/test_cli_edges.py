@@ -18,9 +18,10 @@ import floewave.cli
 import sweep
 import sweep.cli
 from sweep import parse_campaign
-from sweep.campaign_check import check_campaign
+from sweep.analysis.status import status_report
 from sweep.errors import CampaignMismatchError
-from sweep.lock import Lock, lock_path
+from sweep.store.campaign_check import check_campaign
+from sweep.store.lock import Lock, lock_path
 
 ROOT = Path(__file__).resolve().parents[2]
 TOML = "[base]\nL_sheet = 6.0\n[sweep]\neps = [0.2, 0.4]\n"
@@ -121,7 +122,7 @@ def test_status_does_not_show_a_killed_run_as_running(store, run_main):
     assert p.returncode == 0
     assert "(running)" not in p.stdout and "(no end recorded)" in p.stdout, p.stdout
     assert "died: its writer was killed" in p.stdout
-    rep = sweep.cli.status_report(store)
+    rep = status_report(store)
     assert rep["runs"][-1]["outcome"].startswith("died")
 
 

@@ -1,4 +1,4 @@
-"""Columns derived at load time (sweep.schema.DERIVED): a_end_rel = a_end / a0 and its
+"""Columns derived at load time (sweep.store.schema.DERIVED): a_end_rel = a_end / a0 and its
 standard error, in sweep.load's DataFrame and in load_xarray; the store is unchanged."""
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import sweep
-from sweep.schema import COLUMNS, DERIVED, SCHEMA_VERSION
+from sweep.store.schema import COLUMNS, DERIVED, SCHEMA_VERSION
 
 TOML = "[base]\nL_sheet = 6.0\n[sweep]\na0 = [0.0125, 0.025]\neps = [0.2, 0.4]\n"
 

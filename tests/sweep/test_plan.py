@@ -1,10 +1,10 @@
-"""sweep.plan: kernel shapes, the projection at given rates, and the plan of a campaign."""
+"""sweep.run.plan: kernel shapes, the projection at given rates, and the plan of a campaign."""
 import math
 
 import pytest
 
 from sweep import parse_campaign
-from sweep.plan import core_seconds, given_rate, kernel_shape, plan
+from sweep.run.plan import core_seconds, given_rate, kernel_shape, plan
 
 # two floe counts (L_sheet / L_x), each twice (two eps), drag by quadrature (cells count)
 TOML = """\
