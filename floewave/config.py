@@ -92,7 +92,7 @@ class ModelConfig:
         many time steps, at the centre of the steps they are held for (multiple time
         stepping: the floe-bottom sums cost most of a step, the contacts need every step;
         second order in the hold); n_t must be a multiple of it; 1 evaluates them every
-        step as the paper does; default 5 by measurement (docs/convergence.md)
+        step as the paper does; default 4 by measurement (docs/convergence.md)
     integrator : ``"predictor"`` (velocity Verlet, velocity-dependent forces at the
         predicted end-of-step velocity u + dt*a: second order) or ``"half_step"``
         (forces at the half-step velocity as LIGGGHTS does: first order in the damping)
@@ -189,7 +189,7 @@ class ModelConfig:
     dt: float = 1.0e-3
     dx: float = 0.01
     drag_integration: str = "quadrature"
-    drag_every: int = 5
+    drag_every: int = 4
     integrator: str = "predictor"
     protocol: str = "stationary"
     n0: int = 5
@@ -358,10 +358,12 @@ class ModelConfig:
         _require_integral("T", self.T, self.dt, "dt")
         _require_integral("L_x", self.L_x, self.dx, "dx")
         if self.n_t % self.drag_every:
+            fits = max(d for d in range(1, self.drag_every) if self.n_t % d == 0)
             raise InvalidPointError(
                 f"T / dt = {self.n_t} time steps per period is not a multiple of drag_every ="
-                f" {self.drag_every} (the drag is evaluated every drag_every steps)",
-                field="drag_every")
+                f" {self.drag_every} (the drag is evaluated every drag_every steps): set"
+                f" drag_every = {fits}, or a T that is a multiple of"
+                f" {self.drag_every * self.dt:g} s", field="drag_every")
         steps = self.contact_steps()
         if not self.confined and steps < MIN_CONTACT_STEPS:
             raise InvalidPointError(

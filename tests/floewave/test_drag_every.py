@@ -112,6 +112,10 @@ def test_replica_invariance_with_a_held_drag(steps):
 def test_drag_every_must_divide_the_steps_of_a_period():
     with pytest.raises(ConfigError, match="drag_every"):
         ModelConfig(drag_every=0)
-    with pytest.raises(InvalidPointError, match="drag_every"):
+    with pytest.raises(InvalidPointError, match="drag_every = 2, or a T that is a multiple"
+                                                " of 0.003 s"):
         ModelConfig(T=1.1, dt=1e-3, drag_every=3).check_physics()    # 1100 steps
+    with pytest.raises(InvalidPointError, match="set drag_every = 2"):
+        ModelConfig(T=1.25, dt=1e-3).check_physics()                  # the default, 4
     ModelConfig(T=1.1, dt=1e-3, drag_every=4).check_physics()
+    ModelConfig(T=1.25, dt=1e-3, drag_every=5).check_physics()

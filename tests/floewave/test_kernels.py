@@ -16,7 +16,7 @@ from floewave.model import FloeChain
     dict(drag_every=4, L_x=3.0, integrator="half_step"),
 ])
 def test_numba_kernel_equals_numpy_twin(opts):
-    """(The default holds the drag over drag_every = 5 steps; the twin holds it alike, from
+    """(The default holds the drag over drag_every = 4 steps; the twin holds it alike, from
     the drag the kernel holds when the twin takes over.)"""
     # the paper's dt: 5000 steps of 1e-4 s stay short of chaos amplifying rounding (and
     # resolve the linear law's contacts)

@@ -16,9 +16,9 @@ from sweep.identity import canonical_json, point_hash, short_hash
 # version 4 (issue *ensemble*): replicas. Model version 5 (issue *SIMD*): the quadrature
 # drag of floes with a root by closed-form prefix sums (equal to the cell loop to rounding:
 # other trajectories). Model version 6 (issue *protocol*): the stationary protocol, dt 1e-3.
-# Model version 7: the drag held over drag_every = 5 steps (a new field).
+# Model version 7: the drag held over drag_every = 4 steps (a new field).
 KNOWN = {
-    "default": "607aca50a3f55cc6e731eb01a09a2212664169dd1fbea5bdbd78dd39aa259f73",
+    "default": "9af45f891dfa949af53b1acbca675690742949060634cded5cedebe41522deab",
 }
 
 
@@ -54,8 +54,8 @@ def test_known_hashes(changes, expected):
 
 
 PINNED = {
-    "KNOWN_1": "5d338523b7875ef0758593dee12204fa6f43033514bc8839b098c29595888ea4",
-    "KNOWN_2": "10b90e3fecf790fe7361df71924a579911a7c89ea7996645d43d1fd1a5fe8168",
+    "KNOWN_1": "710f592470273283066678a15edab67ed18d7c24ea3a4e660e4d7acecec09aaa",
+    "KNOWN_2": "5044b1d9f3b657e4e03b6557b6f112270429c89d0539522db092041a956bbf09",
 }
 
 
