@@ -198,7 +198,7 @@ class ModelConfig:
     relax: float = 0.5
     max_iterations: int = 100
     noise_window: int = 4
-    n_average: int = 8
+    n_average: int = 10
     target_stderr: float = 0.01
     target_W_c_stderr: float = 1.0
     n0_warm: int = 0
