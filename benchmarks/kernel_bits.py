@@ -1,6 +1,7 @@
 """Is the time loop of this checkout bit for bit that of another commit?
 
     python benchmarks/kernel_bits.py [--against REV] [--periods 0.5]
+    python benchmarks/kernel_bits.py --against 8cbf2b1 --every-step   # drag_every = 1 is v6
 
 A kernel change that only restructures loops (vectorisation, fission, branch-free selects)
 must not change a single bit of any trajectory: otherwise it is a new model version (every
@@ -57,10 +58,21 @@ from floewave.ensemble import initial_positions
 from floewave.model import FloeChain
 cases, periods, out = json.loads(sys.argv[1]), float(sys.argv[2]), sys.argv[3]
 arrays = {}
+import dataclasses
+fields = {f.name for f in dataclasses.fields(ModelConfig)}
+every_step = sys.argv[4] == "1"
 for n, case in enumerate(cases):
+    if every_step and "drag_every" in fields:
+        case = {**case, "drag_every": 1}
     cfg = ModelConfig(T=1.2, **case)
     k, _ = solve_dispersion(cfg)
-    x0 = np.array(initial_positions(cfg.replace(replicas=8)))
+    if every_step:      # arrangements that do not depend on the configuration's fields
+        x0 = np.array(initial_positions(cfg.replace(replicas=8, placement="uniform",
+                                                    d_f=0.0)))
+        rng0 = np.random.default_rng(100 + n)
+        x0 = x0 + np.cumsum(rng0.uniform(0.0, 2 * 0.005, x0.shape), axis=1)
+    else:
+        x0 = np.array(initial_positions(cfg.replace(replicas=8)))
     ch = FloeChain(cfg, k, x0)
     rng = np.random.default_rng(n)
     a = cfg.a0 * (0.5 + rng.random(x0.shape))     # every replica its own profile
@@ -79,13 +91,14 @@ np.savez(out, **arrays)
 """
 
 
-def run(checkout: Path, periods: float, out: Path) -> None:
+def run(checkout: Path, periods: float, out: Path, every_step: bool = False) -> None:
     """The trajectories of the floewave in ``checkout``, into ``out`` (.npz)."""
     with tempfile.TemporaryDirectory() as cache:
         env = dict(os.environ, PYTHONPATH=str(checkout), NUMBA_CACHE_DIR=cache,
                    NUMBA_NUM_THREADS="1")
         subprocess.run([sys.executable, "-c", _RUN, json.dumps(CASES), str(periods),
-                        str(out)], env=env, cwd=cache, check=True)
+                        str(out), "1" if every_step else "0"], env=env, cwd=cache,
+                       check=True)
 
 
 def main() -> int:
@@ -93,14 +106,18 @@ def main() -> int:
     p.add_argument("--against", default="HEAD", help="the commit to compare with")
     p.add_argument("--periods", type=float, default=0.5,
                    help="wave periods per phase (four phases per case)")
+    p.add_argument("--every-step", action="store_true",
+                   help="drag_every = 1 where the field exists and arrangements that do not"
+                        " depend on the configuration's fields: model version 7's every-step"
+                        " drag against an older commit (e.g. --against 8cbf2b1)")
     args = p.parse_args()
     import numpy as np
 
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         ref = export_revision(args.against, tmp / "ref", ("floewave",))
-        run(ref, args.periods, tmp / "ref.npz")
-        run(ROOT, args.periods, tmp / "new.npz")
+        run(ref, args.periods, tmp / "ref.npz", args.every_step)
+        run(ROOT, args.periods, tmp / "new.npz", args.every_step)
         a = dict(np.load(tmp / "ref.npz"))
         b = dict(np.load(tmp / "new.npz"))
         for arrays, where in ((a, ref), (b, ROOT)):       # each ran the floewave it should

@@ -62,7 +62,8 @@ def main() -> None:
         plans[name] = (rates, core_seconds(points, rates) / 3600)
         print(f"plan ({name}): {len(points)} points, {plans[name][1]:.2f} core-hours"
               f" projected ({how})")
-    valid = [i for i, q in enumerate(cases["this"]) if not q.invalid]
+    valid = [i for i in range(len(cases["this"]))
+             if not any(points[i].invalid for points in cases.values())]
     sample = random.Random(args.seed).sample(valid, args.n)
     tot = {name: [0.0, 0.0] for name in cases}
     its = {name: [] for name in cases}

@@ -357,7 +357,7 @@ class ModelConfig:
         """
         _require_integral("T", self.T, self.dt, "dt")
         _require_integral("L_x", self.L_x, self.dx, "dx")
-        if self.n_t % self.drag_every:
+        if not self.confined and self.n_t % self.drag_every:     # (confined: no drag loop)
             fits = max(d for d in range(1, self.drag_every) if self.n_t % d == 0)
             raise InvalidPointError(
                 f"T / dt = {self.n_t} time steps per period is not a multiple of drag_every ="

@@ -110,6 +110,12 @@ class FloeChain:
         if stats is None:
             self._loop(self._spin, a, nsteps, np.zeros((K.N_STATS, 0)), False)
         else:
+            every = self.cfg.drag_every
+            if every > 1 and (nsteps % every or self.istep % every):
+                # each drag evaluation's dissipation stands for drag_every steps: a window of
+                # other bounds would hold another number of steps than it divides by
+                raise ValueError(f"statistics over {nsteps} steps from step {self.istep}:"
+                                 f" both must be multiples of drag_every = {every}")
             flat = stats.reshape(K.N_STATS, self.x0.size)
             if not np.shares_memory(flat, stats):
                 raise ValueError("stats must be a contiguous (N_STATS, ...) array")

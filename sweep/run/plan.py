@@ -25,7 +25,7 @@ def kernel_shape(cfg: Any) -> tuple:
     number of chains run in one kernel (replicas) and the steps between drag evaluations."""
     n_x = cfg.n_x if cfg.drag_integration == "quadrature" else 0
     return (cfg.n_floes, n_x, cfg.drag_integration, cfg.confined, cfg.n_chains,
-            cfg.drag_every)
+            1 if cfg.confined else cfg.drag_every)      # the confined kernel holds nothing
 
 
 def calibrate(points: Iterable[Any]) -> tuple[dict[tuple, float], str]:

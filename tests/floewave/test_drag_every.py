@@ -69,15 +69,59 @@ def test_dissipation_sum_stands_for_the_steps_it_holds():
     assert np.max(np.abs(s4 / s1 - 1.0)) < 1e-2
 
 
-def test_drag_every_one_is_the_every_step_kernel():
-    """K = 1 evaluates every step: a loop built for K = 1 and the default options agree
-    bit for bit (the kernel's arithmetic for K = 1 is that of the paper's every-step drag)."""
-    cfg = ModelConfig(replicas=2, drag_every=1)
-    assert K.kernel_options(K.kernel_params(cfg, 1.0), True).drag_every == 1
-    base, k, x0, a, spun = _spun(dict(drag_every=1))
-    x1, u1, s1 = _continue(base, k, x0, a, spun, 1, 500)
-    x1b, u1b, s1b = _continue(base, k, x0, a, spun, 1, 500)
-    assert np.array_equal(x1, x1b) and np.array_equal(s1, s1b)
+def test_statistics_only_over_whole_holds():
+    """A window of statistics must start and end on hold boundaries (each evaluation's
+    dissipation stands for drag_every steps): otherwise it is refused, not misweighted."""
+    cfg = ModelConfig(replicas=1, drag_every=4)
+    k, _ = solve_dispersion(cfg)
+    ch = FloeChain(cfg, k)
+    a = np.full(cfg.n_floes, cfg.a0)
+    st = np.zeros((K.N_STATS, cfg.n_floes))
+    with pytest.raises(ValueError, match="multiples of drag_every = 4"):
+        ch.run(a, 6, st)
+    ch.run(a, 2)                              # istep 2: inside a hold
+    with pytest.raises(ValueError, match="multiples of drag_every = 4"):
+        ch.run(a, 8, st)
+    ch.run(a, 2)
+    ch.run(a, 8, st)                          # istep 4 .. 12: whole holds
+
+
+def test_dissipation_statistic_against_every_step():
+    """The kernel's eq. 19 statistic against the mean over every step of the instantaneous
+    S_sd (floewave.trace) on one trajectory, 3 periods of 60 lab-ice floes: with the drag of
+    every step they differ by the known O(dt acc) (end-of-step against predicted velocity,
+    measured +2.5e-4); the held drag is evaluated at an extrapolated centre state, and its
+    statistic is measured 1.7e-3 above (a known bias of the midpoint evaluation, documented
+    in docs/model.md §3). Asserted: |bias| < 1e-3 at K = 1, within [0, 3e-3] at K = 4."""
+    import math
+
+    from floewave.forces import cell_offsets
+    from floewave.trace import instantaneous
+    from floewave.window import Window, dissipation
+    bias = {}
+    for K_ in (1, 4):
+        cfg = ModelConfig(L_sheet=30.0, replicas=1, placement="uniform", drag_every=K_)
+        k = solve_dispersion(cfg)[0]
+        a = cfg.a0 * np.linspace(1.0, 0.6, cfg.n_floes)
+        ch = FloeChain(cfg, k)
+        ch.run(a, 2 * cfg.n_t)
+        xi = cell_offsets(cfg)
+        rel = []
+        for _ in range(3):
+            st = K.new_stats(cfg.n_floes)
+            tot = np.zeros(cfg.n_floes)
+            for _ in range(cfg.n_t):
+                # one step of the averaging loop (past run()'s whole-hold guard: the
+                # period as a whole is whole holds), then the trace at the same state
+                ch._loop(ch._average, a, 1, st, False)
+                S, _ = instantaneous(ch.x, ch.u, a, 2 * math.pi / cfg.n_t
+                                     * (ch.istep % cfg.n_t), ch.P, cfg, xi)
+                tot += S
+            kern = dissipation(cfg, Window(cfg, st, cfg.n_t, ch.x0).s3_mean)
+            rel.append(kern / (tot / cfg.n_t) - 1.0)
+        bias[K_] = float(np.mean(rel))
+    assert abs(bias[1]) < 1e-3
+    assert 0.0 <= bias[4] < 3e-3
 
 
 @pytest.mark.parametrize("steps", [(1500, 700, 300), (1502, 701, 299)])
@@ -95,15 +139,19 @@ def test_replica_invariance_with_a_held_drag(steps):
     n1, n2, n3 = steps
     ens = FloeChain(cfg, k, x0)
     st = np.zeros((K.N_STATS, 3, cfg.n_floes))
+
+    def stats(n):                 # statistics only over whole holds (run() refuses others)
+        return st if n % 4 == 0 else None
+
     ens.run(a3, n1)
-    ens.run(a3, n2, st)
-    ens.run(b3, n3, st)
+    ens.run(a3, n2, stats(n2))
+    ens.run(b3, n3, stats(n3))
     for r in range(3):
         one = FloeChain(cfg, k, x0[r])
         s1 = np.zeros((K.N_STATS, cfg.n_floes))
         one.run(a3[r], n1)
-        one.run(a3[r], n2, s1)
-        one.run(b3[r], n3, s1)
+        one.run(a3[r], n2, s1 if n2 % 4 == 0 else None)
+        one.run(b3[r], n3, s1 if n3 % 4 == 0 else None)
         assert np.array_equal(one.x, ens.x[r]) and np.array_equal(one.u, ens.u[r])
         assert np.array_equal(s1, st[:, r, :])
     assert np.any(np.diff(ens.x, axis=1) - cfg.L_x < 0), "no contact exercised"
