@@ -167,3 +167,7 @@ def test_drag_every_must_divide_the_steps_of_a_period():
         ModelConfig(T=1.25, dt=1e-3).check_physics()                  # the default, 4
     ModelConfig(T=1.1, dt=1e-3, drag_every=4).check_physics()
     ModelConfig(T=1.25, dt=1e-3, drag_every=5).check_physics()
+    # fixed floes run the confined kernel, which holds nothing: no refusal, one kernel shape
+    ModelConfig(T=1.25, dt=1e-3, confined=True).check_physics()
+    from sweep.run.plan import kernel_shape
+    assert kernel_shape(ModelConfig(confined=True))[5] == 1
