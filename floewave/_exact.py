@@ -1,6 +1,6 @@
-"""Closed-form ("exact") floe-bottom integrals of the quadratic ice-water drag (docs/model.md §3).
+"""Closed-form ("exact") floe-bottom drag integrals of one floe (docs/model.md §3).
 
-The quadrature mode (:func:`floewave._kernels.drag_sums`) sums over the ``n_x = L_x / dx``
+The quadrature mode (:func:`floewave._drag.drag_sums`) sums over the ``n_x = L_x / dx``
 cells of a floe, at the cell midpoints ``xi_j``,
 
     s2 = sum_j |w_j| w_j,     s3 = sum_j |w_j|^3,     w_j = A cos(theta + k xi_j) - v,
@@ -70,15 +70,12 @@ from numba import njit
 from ._jit import JITN as JIT  # no allocation anywhere here: no reference counting
 
 __all__ = ["exact_geometry", "drag_integrals", "drag_sums_exact", "drag_force_exact",
-           "drag_sums_exact_phase", "drag_pass_exact", "general_floes"]
+           "drag_sums_exact_phase", "H_POINT"]
 
 _TWO_PI = 2.0 * math.pi
 # half-width below which s = n_x f(theta) exactly: the floe average differs from the centre
 # value by O(h^2) (f = |w| w is C^1), below rounding; also avoids underflow for tiny kL
-_H_POINT = 1.0e-17
-# the scratch row of drag_pass_exact(defer=True)'s closed-form signs
-# (floewave._kernels.SC_SIG)
-SIG_ROW = 5
+H_POINT = 1.0e-17
 
 
 @njit(**JIT)
@@ -114,7 +111,7 @@ def exact_geometry(kL, n_x):
     h = 0.5 * kL
     sh = math.sin(h)
     ch = math.cos(h)
-    scale = n_x / kL if h > _H_POINT else float(n_x)
+    scale = n_x / kL if h > H_POINT else float(n_x)
     K20 = _h_minus_sincos(h)                   # h - sh ch
     K22 = 2.0 * sh * ch                        # sin 2h
     K31 = 2.0 * sh * sh * sh                   # (3/2) sh - sin(3h) / 2
@@ -392,7 +389,7 @@ def drag_integrals(A, c, s, v, geom):
 
 @njit(**JIT)
 def drag_sums_exact(A, c, s, v, geom):
-    """Exact (dx -> 0) counterpart of :func:`floewave._kernels.drag_sums`: (s2, s3).
+    """Exact (dx -> 0) counterpart of :func:`floewave._drag.drag_sums`: (s2, s3).
 
     Same arguments as ``drag_sums(A, c, s, v, cxi, sxi)`` with the cell tables replaced by
     ``geom = exact_geometry(k L_x, n_x)``. Returns, in the quadrature's units (cells times
@@ -401,7 +398,7 @@ def drag_sums_exact(A, c, s, v, geom):
     ``w = A cos(phi) - v``; drag force ``rho_w C_sd L_y dx s2`` as in the quadrature mode.
     ``kL = 0`` gives the limit ``n_x f(theta)``.
     """
-    if geom[0] <= _H_POINT:
+    if geom[0] <= H_POINT:
         w = A * c - v
         aw = abs(w)
         return geom[4] * aw * w, geom[4] * aw * w * w
@@ -421,92 +418,3 @@ def drag_sums_exact_phase(A, theta, v, kL, n_x):
     """Convenience form ``(A, theta, v, kL, n_x) -> (s2, s3)`` of :func:`drag_sums_exact`
     (computes cos, sin theta and the geometry on every call; use the other in loops)."""
     return drag_sums_exact(A, math.cos(theta), math.sin(theta), v, exact_geometry(kL, n_x))
-
-
-@njit(**JIT)
-def general_floes(flags, idx, everyone):
-    """Write the indices of the floes with ``flags[i] == 1`` (all floes if ``everyone``)
-    to the front of ``idx``; return their count. After the closed-form pass of
-    :func:`drag_pass_exact`, :func:`floewave._kernels.drag_pass` or
-    :func:`floewave._kernels.exact_pass`, only those floes get the general evaluation."""
-    n = flags.shape[0]
-    if everyone:
-        for i in range(n):
-            idx[i] = i
-        return n
-    m = 0
-    for i in range(n):      # branch-free compaction
-        idx[m] = i
-        m += 1 if flags[i] > 0.5 else 0
-    return m
-
-
-@njit(**JIT)
-def drag_pass_exact(ck, sk, cwt, swt, a, u_amp, vs, geom, accumulate, sc, idx,
-                    defer=False):
-    """:func:`drag_sums_exact` of every floe of a chain; returns the number of floes that
-    needed the general (root-finding) evaluation.
-
-    ``defer``: only the closed-form pass, for :func:`floewave._kernels.exact_pass` to
-    complete the floes with a root (``idx[:m]``): their whole-floe sums stay signed (s3 not
-    clipped) and ``sc[SIG_ROW]`` gets the sign the closed form gave them (``sc`` then
-    needs SIG_ROW + 1 rows).
-
-    ``theta_i = k x_i - omega t`` from ``ck, sk = cos, sin(k x_i)`` and ``cwt, swt = cos,
-    sin(omega t)``; ``A_i = a_i u_amp``, ``v_i = vs[i]``. Fills ``sc[0], sc[1] = cos, sin
-    theta_i``, ``sc[2] = s2``, ``sc[3] = s3`` (only if ``accumulate``); ``sc[4]`` and the
-    int array ``idx`` are scratch (``sc`` has at least 5 rows and n columns, ``idx`` n entries,
-    n the floes of all replicas).
-
-    Two passes, same results as calling :func:`drag_sums_exact` floe by floe: a branch-free
-    (vectorised) loop over all floes evaluates the one-sign case ``sigma W`` of
-    :func:`drag_integrals` and flags the floes with a root of ``w`` on them; only those are
-    then evaluated by :func:`drag_sums_exact` (at the benchmark state ~70 % of the floes
-    of 0.5 m need no root).
-    """
-    n = ck.shape[0]
-    h, ch, sh, scale, _n_x, K20, K22, K31, K33 = geom
-    long_floe = h >= math.pi
-    for i in range(n):
-        c = ck[i] * cwt + sk[i] * swt
-        s = sk[i] * cwt - ck[i] * swt
-        sc[0, i] = c
-        sc[1, i] = s
-        A = a[i] * u_amp
-        v = vs[i]
-        # as drag_integrals: A < 0 is |A| with theta + pi
-        neg = A < 0.0
-        A = abs(A)
-        c = -c if neg else c
-        s = -s if neg else s
-        X = A * c
-        A2 = A * A
-        v2 = v * v
-        K1X = 2.0 * sh * X
-        C2 = K20 * A2 + K22 * X * X
-        W2 = C2 - 2.0 * v * K1X + 2.0 * h * v2
-        Q2 = (A - v) * (A + v)
-        Q = math.sqrt(max(Q2, 0.0))
-        vc = v * c
-        Ach = A * ch
-        root = Q2 > 0.0 and (long_floe or vc + Q * s >= Ach or vc - Q * s >= Ach)
-        wc = X - v
-        sig = 1.0 if wc > 0.0 or (wc == 0.0 and v < 0.0) else -1.0
-        sc[2, i] = scale * (sig * W2)
-        if accumulate:
-            W3 = X * (K31 * A2 + K33 * X * X) - 3.0 * v * C2 + 3.0 * v2 * K1X \
-                - 2.0 * h * v2 * v
-            sc[3, i] = scale * (sig * W3 if defer and root else max(sig * W3, 0.0))
-        if defer:
-            sc[SIG_ROW, i] = sig
-        sc[4, i] = 1.0 if root else 0.0
-    m = general_floes(sc[4, :n], idx, h <= _H_POINT)
-    if defer:
-        return m
-    for t in range(m):
-        i = idx[t]
-        s2, s3 = drag_sums_exact(a[i] * u_amp, sc[0, i], sc[1, i], vs[i], geom)
-        sc[2, i] = s2
-        if accumulate:
-            sc[3, i] = s3
-    return m

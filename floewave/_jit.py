@@ -25,7 +25,7 @@ Without the value-changing fast-math flags every copy of a function computes the
 of its source, so it does not matter which copy runs. What fast-math bought (vectorised cell
 sums, a reduction that needs re-association) is won back explicitly: the cell sums are
 vectorised *across floes and replicas* instead, and the sums of floes with a root on them
-are closed forms (``floewave._kernels.prefix_sums``) rather than re-associated loops.
+are closed forms (``floewave._prefix.prefix_sums``) rather than re-associated loops.
 """
 from __future__ import annotations
 
@@ -62,8 +62,11 @@ import warnings  # noqa: E402
 
 from numba.core import caching as _caching  # noqa: E402
 
-#: the files whose jitted functions call each other (and these flags)
-KERNEL_SOURCES = ("_jit.py", "_exact.py", "_kernels.py", "_march.py")
+#: the files whose jitted functions call each other (and these flags), and the file of the
+#: constants they read (numba freezes a module global into the compiled code). Every file of
+#: floewave that imports this module is one (tests/floewave/test_kernel_sources.py).
+KERNEL_SOURCES = ("_jit.py", "_layout.py", "_contact.py", "_prefix.py", "_drag.py",
+                  "_exact.py", "_exact_pass.py", "_kernels.py", "_march.py")
 _HERE = os.path.dirname(os.path.abspath(__file__))
 
 

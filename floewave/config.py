@@ -20,6 +20,7 @@ import math
 from dataclasses import dataclass, fields
 from typing import Any
 
+from ._validate import coerce, require, require_integral
 from .dispersion import G, solve_dispersion
 from .errors import ConfigError, FloewaveError, InvalidPointError
 
@@ -229,41 +230,41 @@ class ModelConfig:
     def __post_init__(self) -> None:
         for f in fields(self):
             value = getattr(self, f.name)
-            object.__setattr__(self, f.name, _coerce(f.name, f.type, value))
+            object.__setattr__(self, f.name, coerce(f.name, f.type, value))
         positive = ("L_x", "T", "a0", "L_sheet", "h", "L_y", "h_i", "rho_i", "rho_w",
                     "dt", "dx", "delta", "gap_threshold")
         for name in positive:
-            _require(self, name, getattr(self, name) > 0, "must be > 0")
+            require(self, name, getattr(self, name) > 0, "must be > 0")
         non_negative = ("C_sd", "d_f", "E", "k_s", "C_m", "c_ow", "s_min",
                         "compact_min_length", "fit_min_length")
         for name in non_negative:
-            _require(self, name, getattr(self, name) >= 0, "must be >= 0")
-        _require(self, "eps", 0 < self.eps <= 1, "must be in (0, 1]")
-        _require(self, "nu", 0 <= self.nu < 0.5, "must be in [0, 0.5)")
-        _require(self, "relax", 0 < self.relax <= 1, "must be in (0, 1]")
-        _require(self, "n0", self.n0 >= 0, "must be >= 0")
-        _require(self, "drag_every", 1 <= self.drag_every <= 100, "must be in [1, 100]")
-        _require(self, "nT", self.nT >= 1, "must be >= 1")
-        _require(self, "max_iterations", self.max_iterations >= 1, "must be >= 1")
-        _require(self, "noise_window", self.noise_window >= 0, "must be >= 0")
-        _require(self, "n_average", self.n_average >= 2, "must be >= 2")
-        _require(self, "n0_warm", self.n0_warm >= 0, "must be >= 0")
-        _require(self, "transient_min", self.transient_min >= 0, "must be >= 0")
-        _require(self, "transient_drag_times", 0 <= self.transient_drag_times <= 1000,
+            require(self, name, getattr(self, name) >= 0, "must be >= 0")
+        require(self, "eps", 0 < self.eps <= 1, "must be in (0, 1]")
+        require(self, "nu", 0 <= self.nu < 0.5, "must be in [0, 0.5)")
+        require(self, "relax", 0 < self.relax <= 1, "must be in (0, 1]")
+        require(self, "n0", self.n0 >= 0, "must be >= 0")
+        require(self, "drag_every", 1 <= self.drag_every <= 100, "must be in [1, 100]")
+        require(self, "nT", self.nT >= 1, "must be >= 1")
+        require(self, "max_iterations", self.max_iterations >= 1, "must be >= 1")
+        require(self, "noise_window", self.noise_window >= 0, "must be >= 0")
+        require(self, "n_average", self.n_average >= 2, "must be >= 2")
+        require(self, "n0_warm", self.n0_warm >= 0, "must be >= 0")
+        require(self, "transient_min", self.transient_min >= 0, "must be >= 0")
+        require(self, "transient_drag_times", 0 <= self.transient_drag_times <= 1000,
                  "must be in [0, 1000]")
         # counts that would make a point run for ever (or overflow the cost): refused here
         for name in ("n0", "nT", "n0_warm", "max_iterations", "noise_window", "n_average",
                      "transient_min"):
-            _require(self, name, getattr(self, name) <= 1_000_000, "must be <= 1000000")
-        _require(self, "replicas", 1 <= self.replicas <= 4096, "must be in [1, 4096]")
-        _require(self, "seed", 0 <= self.seed < 2**63, "must be in [0, 2**63)")
-        _require(self, "compact_min_pairs", self.compact_min_pairs >= 1, "must be >= 1")
-        _require(self, "compact_bridge", self.compact_bridge >= 0, "must be >= 0")
-        _require(self, "compact_bridge_gap", self.compact_bridge_gap > 0, "must be > 0")
-        _require(self, "fit_min_floes", self.fit_min_floes >= 3, "must be >= 3")
-        _require(self, "target_stderr", 0 <= self.target_stderr < 1, "must be in [0, 1)")
-        _require(self, "target_W_c_stderr", self.target_W_c_stderr >= 0, "must be >= 0")
-        _require(self, "rho_i", self.rho_i < self.rho_w or self.rho_i == self.rho_w,
+            require(self, name, getattr(self, name) <= 1_000_000, "must be <= 1000000")
+        require(self, "replicas", 1 <= self.replicas <= 4096, "must be in [1, 4096]")
+        require(self, "seed", 0 <= self.seed < 2**63, "must be in [0, 2**63)")
+        require(self, "compact_min_pairs", self.compact_min_pairs >= 1, "must be >= 1")
+        require(self, "compact_bridge", self.compact_bridge >= 0, "must be >= 0")
+        require(self, "compact_bridge_gap", self.compact_bridge_gap > 0, "must be > 0")
+        require(self, "fit_min_floes", self.fit_min_floes >= 3, "must be >= 3")
+        require(self, "target_stderr", 0 <= self.target_stderr < 1, "must be in [0, 1)")
+        require(self, "target_W_c_stderr", self.target_W_c_stderr >= 0, "must be >= 0")
+        require(self, "rho_i", self.rho_i < self.rho_w or self.rho_i == self.rho_w,
                  "must not exceed rho_w (floes float)")
         for name, allowed in (("dispersion", DISPERSIONS), ("contact", CONTACTS),
                               ("damping", DAMPINGS), ("drag_integration", DRAG_INTEGRATIONS),
@@ -271,7 +272,7 @@ class ModelConfig:
                               ("coupling", COUPLINGS),
                               ("protocol", PROTOCOLS),
                               ("stationarity", STATIONARITY)):
-            _require(self, name, getattr(self, name) in allowed, f"must be one of {allowed}")
+            require(self, name, getattr(self, name) in allowed, f"must be one of {allowed}")
 
     # ------------------------------------------------------------------ derived
     @property
@@ -355,8 +356,8 @@ class ModelConfig:
         ``confined``), at least two floes, and (via the dispersion solver) that eq. 6 has an
         admissible root (``ml`` below its cutoff).
         """
-        _require_integral("T", self.T, self.dt, "dt")
-        _require_integral("L_x", self.L_x, self.dx, "dx")
+        require_integral("T", self.T, self.dt, "dt")
+        require_integral("L_x", self.L_x, self.dx, "dx")
         if not self.confined and self.n_t % self.drag_every:     # (confined: no drag loop)
             fits = max(d for d in range(1, self.drag_every) if self.n_t % d == 0)
             raise InvalidPointError(
@@ -420,50 +421,3 @@ _FIELD_NAMES = tuple(f.name for f in fields(ModelConfig))
 #: fields whose validity does not depend on another field (__post_init__ relates only rho_i
 #: and rho_w)
 _SINGLE_FIELD_RULES = frozenset(_FIELD_NAMES) - {"rho_i", "rho_w"}
-
-
-def _require(cfg: ModelConfig, name: str, ok: bool, what: str) -> None:
-    if not ok:
-        raise ConfigError(f"ModelConfig.{name} = {getattr(cfg, name)!r} {what}", field=name,
-                          problem=what)
-
-
-def _require_integral(name: str, value: float, step: float, step_name: str) -> None:
-    n = value / step
-    if round(n) < 1 or abs(n - round(n)) > 1e-9 * max(1.0, abs(n)):
-        raise InvalidPointError(
-            f"{name} / {step_name} = {value!r} / {step!r} = {n!r} is not an integer",
-            field=name)
-
-
-def _coerce(name: str, type_name: Any, value: Any) -> Any:
-    """Check one field's type; ints are accepted for floats (1 == 1.0)."""
-    type_name = type_name if isinstance(type_name, str) else type_name.__name__
-
-    def bad() -> ConfigError:      # built only when raised (this runs for every field)
-        return ConfigError(f"ModelConfig.{name} = {value!r}: expected {type_name}",
-                           field=name, problem=f"expected {type_name}")
-
-    if type_name == "float":
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise bad()
-        value = float(value)
-        if not math.isfinite(value):
-            raise ConfigError(f"ModelConfig.{name} = {value!r}: must be finite", field=name,
-                              problem="must be finite")
-        return value
-    if type_name == "int":
-        if isinstance(value, bool) or not isinstance(value, int):
-            if isinstance(value, float) and value.is_integer():
-                return int(value)
-            raise bad()
-        return int(value)
-    if type_name == "bool":
-        if not isinstance(value, bool):
-            raise bad()
-        return value
-    if type_name == "str":
-        if not isinstance(value, str):
-            raise bad()
-        return value
-    raise TypeError(f"unhandled field type {type_name!r}")

@@ -152,22 +152,22 @@ CALLEE_SCRIPT = textwrap.dedent("""
     k, _ = solve_dispersion(cfg)
     P = K.kernel_params(cfg, k)
     x = 0.3 + 0.55 * np.arange(4)
-    vs = np.full(4, 1.0)              # |v| > A: no root, the closed form of _exact.py
-    sc, idx = K.new_scratch(4), np.zeros(4, np.int64)
-    K.exact_pass(np.cos(k * x), np.sin(k * x), 1.0, 0.0, np.full(4, cfg.a0), vs, P,
-                 K.exact_tables(P.geom), False, sc, idx)
-    hits = sum(K.exact_pass.stats.cache_hits.values())
-    print(json.dumps(dict(file=floewave.__file__, s2=sc[K.SC_S2, :4].tolist(), hits=hits)))
+    c, s = np.cos(k * x), np.sin(k * x)
+    cells = np.zeros(1)                # (the cell tables: unused by the exact drag)
+    s2 = [K.floe_drag(cfg.a0 * P.u_amp, c[i], s[i], 1.0, True, P, cells, cells)[0]
+          for i in range(4)]           # |v| > A: no root, the closed form of _exact.py
+    hits = sum(K.floe_drag.stats.cache_hits.values())
+    print(json.dumps(dict(file=floewave.__file__, s2=s2, hits=hits)))
 """)
 
 
 def test_a_change_in_a_callee_file_recompiles_the_cached_callers(tmp_path):
-    """``exact_pass`` (``_kernels.py``) calls ``drag_pass_exact`` (``_exact.py``). numba
+    """``floe_drag`` (``_kernels.py``) calls ``drag_sums_exact`` (``_exact.py``). numba
     keys a cached function by its own file only, so a changed ``_exact.py`` left the cached
-    ``exact_pass`` running the old callee in a warm process and the new one in a cold
+    ``floe_drag`` running the old callee in a warm process and the new one in a cold
     process (two results for one configuration): every kernel file's functions are keyed by
     all kernel files (:class:`floewave._jit.KernelSourcesLocator`). Here the callee's
-    closed-form drag is doubled in a copy of the package, whose cache a first run filled."""
+    exact drag is doubled in a copy of the package, whose cache a first run filled."""
     import shutil
     from pathlib import Path
 
@@ -190,9 +190,9 @@ def test_a_change_in_a_callee_file_recompiles_the_cached_callers(tmp_path):
     assert warm["s2"] == cold["s2"]
     exact = pkg / "_exact.py"
     text = exact.read_text()
-    old = "sc[2, i] = scale * (sig * W2)"
+    old = "return geom[3] * I2, geom[3] * max(I3, 0.0)"
     assert text.count(old) == 1
-    exact.write_text(text.replace(old, "sc[2, i] = 2.0 * (scale * (sig * W2))"))
+    exact.write_text(text.replace(old, "return 2.0 * (geom[3] * I2), geom[3] * max(I3, 0.0)"))
     changed = run()
     assert changed["hits"] == 0                          # recompiled, not loaded
     assert changed["s2"] == [2.0 * v for v in cold["s2"]]

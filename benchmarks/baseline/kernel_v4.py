@@ -25,9 +25,11 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from floewave._exact import drag_force_exact, drag_pass_exact, drag_sums_exact, general_floes
+from floewave._exact import drag_force_exact, drag_sums_exact
+from floewave._exact_pass import drag_pass_exact
 from floewave._jit import JIT as _JIT
 from floewave._jit import JITN as _JITN
+from floewave._prefix import general_floes
 
 # not cached on disk: this file calls floewave/_exact.py but is not one of the kernel files
 # whose cache key covers all of them (floewave._jit.KernelSourcesLocator), so a cached copy
