@@ -75,7 +75,9 @@ def runners_v4(cfg: ModelConfig) -> tuple:
     kernel (compiled, spun up); each advances ``n`` floes per step."""
     k, _ = solve_dispersion(cfg)
     ch = FloeChain(cfg, k)
-    P = K4.KernelParams(*ch.P)
+    o = ch.opts
+    P = K4.KernelParams(**ch.P._asdict(), contact=o.contact, damping=o.damping, clip=o.clip,
+                        integrator=o.integrator, drag=o.drag)
     n = cfg.n_floes
     x, u, acc = ch.x0.copy(), np.zeros(n), np.zeros(n)
     ic = np.zeros(n, np.int8)

@@ -49,7 +49,8 @@ def bench(cfg: ModelConfig, steps: int, repeat: int,
     t_acc = _best(lambda: chain.run(a, steps, stats), repeat)
     x, u, acc = chain.x.copy(), chain.u.copy(), chain.acc.copy()
     best_np = _best(lambda: ref.advance(x, u, acc, a, chain.x0, chain.istep, numpy_steps,
-                                        chain.P, chain.cxi, chain.sxi), max(1, repeat // 2))
+                                        chain.P, chain.opts, chain.cxi, chain.sxi),
+                         max(1, repeat // 2))
     fs = steps * cfg.n_floes
     return fs / t_spin, fs / t_acc, numpy_steps * cfg.n_floes / best_np
 

@@ -84,7 +84,7 @@ def parts(cfg: ModelConfig, R: int, repeat: int, nstates: int, ncalls: int = 200
     restore()
     states = []
     every = cfg.n_t // nstates
-    half = ch.P.integrator == K.INTEG_HALF_STEP
+    half = ch.opts.integrator == K.INTEG_HALF_STEP
     for _ in range(nstates):
         ch.run(a, every - 1)
         dt = cfg.dt
@@ -95,7 +95,7 @@ def parts(cfg: ModelConfig, R: int, repeat: int, nstates: int, ncalls: int = 200
                        vstar.ravel().copy()))
         ch.run(a, 1)
     sc, idx = K.new_scratch(n), np.zeros(n, np.int64)
-    exact = ch.P.drag == K.DRAG_EXACT
+    exact = ch.opts.drag == K.DRAG_EXACT
     af = a.ravel().copy()
     fast_v = np.full(n, 1e3)
     drag = closed = share = 0.0

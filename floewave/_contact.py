@@ -12,7 +12,7 @@ from numba import njit
 from ._jit import JITN
 from ._layout import CONTACT_LINEAR, DAMPING_LIGGGHTS
 
-__all__ = ["contact_law", "contact_stiffness", "contact_force"]
+__all__ = ["contact_law", "contact_stiffness"]
 
 
 @njit(**JITN)
@@ -47,12 +47,7 @@ def _stiffness(delta, P, contact):
 
 
 @njit(**JITN)
-def contact_stiffness(delta, P):
-    """k_n for overlap ``delta`` [N m^-1] (the stiffness of :func:`contact_law`)."""
-    return _stiffness(delta, P, P.contact)
-
-
-@njit(**JITN)
-def contact_force(delta, v_n, P):
-    """:func:`contact_law` with the options of ``P``."""
-    return contact_law(delta, v_n, P, P.contact, P.damping, P.clip)
+def contact_stiffness(delta, P, contact):
+    """k_n for overlap ``delta`` [N m^-1] (the stiffness of :func:`contact_law`) under the
+    contact law ``contact`` (``CONTACT_*``)."""
+    return _stiffness(delta, P, contact)

@@ -16,10 +16,12 @@ is computed by the same operations on the same inputs whatever R is (tested bit 
 :class:`KernelOptions` (contact law, damping, clipping, integrator, drag mode, accumulate or
 not) and caches it, as PyMPDATA's ``make_step_impl`` does: the options are constants of the
 compiled code, so no option is tested inside the time loop, and the force evaluation is
-written once. The built function is a closure over plain numbers only, so numba's on-disk
-cache keys it by those numbers and loads it in a new process (a closure over another
-*jitted* function would not be: numba pickles a dispatcher with a per-process id, and every
-process would compile again). Helpers it calls are module-level functions.
+written once (:func:`make_confined_window` likewise, for the drag mode of fixed floes);
+:class:`KernelParams` holds numbers only. The built function is a closure over plain
+numbers only, so numba's on-disk cache keys it by those numbers and loads it in a new
+process (a closure over another *jitted* function would not be: numba pickles a dispatcher
+with a per-process id, and every process would compile again). Helpers it calls are
+module-level functions.
 
 Time integration (velocity Verlet, docs/model.md §3), per step n -> n+1::
 
@@ -47,8 +49,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-# (contact_force, contact_stiffness, cell_sums, drag_tables, exact_tables: re-exported)
-from ._contact import contact_force, contact_law, contact_stiffness  # noqa: F401
+# (contact_stiffness, cell_sums, drag_tables, exact_tables: re-exported)
+from ._contact import contact_law, contact_stiffness  # noqa: F401
 from ._drag import cell_sums, drag_pass, drag_sums, drag_tables  # noqa: F401
 from ._exact import drag_sums_exact, exact_geometry
 from ._exact_pass import exact_pass, exact_tables  # noqa: F401
@@ -100,7 +102,8 @@ N_WORK = W_SC + N_SC
 
 
 class KernelParams(NamedTuple):
-    """Numbers the time loop needs, SI units (built by :func:`kernel_params`)."""
+    """Numbers the time loop needs, SI units (built by :func:`kernel_params`); the choices
+    it is built for are :class:`KernelOptions`, constants of the compiled code."""
 
     dt: float          # time step [s]
     n_t: int           # steps per period [-]
@@ -118,13 +121,7 @@ class KernelParams(NamedTuple):
     kn_lin: float      # linear contact stiffness Y* L_y h_i / L_x [N m^-1]
     kn_disk: float     # hertz_disk prefactor pi Y* h_i [N m^-1]
     s_scale: float     # s = delta * s_scale, s_scale = R* / (2 h_i^2) [m^-1]
-    contact: int       # CONTACT_*
-    damping: int       # DAMPING_*
-    clip: int          # 1: clip contact force at 0
-    integrator: int    # INTEG_*
-    drag: int          # DRAG_*: quadrature on the dx grid or the exact (dx -> 0) integrals
-    drag_every: int    # steps between evaluations of the drag and dissipation sums [-]
-    geom: tuple        # floewave._exact.exact_geometry(k L_x, n_x) (used when drag = EXACT)
+    geom: tuple        # floewave._exact.exact_geometry(k L_x, n_x) (the exact drag's)
 
 
 def kernel_params(cfg: ModelConfig, k: float) -> KernelParams:
@@ -148,12 +145,6 @@ def kernel_params(cfg: ModelConfig, k: float) -> KernelParams:
         kn_lin=Ystar * cfg.L_y * cfg.h_i / cfg.L_x,
         kn_disk=math.pi * Ystar * cfg.h_i,
         s_scale=(r / 2.0) / (2.0 * cfg.h_i**2),
-        contact=CONTACT_HERTZ_DISK if cfg.contact == "hertz_disk" else CONTACT_LINEAR,
-        damping=DAMPING_LIGGGHTS if cfg.damping == "liggghts" else DAMPING_EXACT,
-        clip=1 if cfg.clip_attraction else 0,
-        integrator=INTEG_PREDICTOR if cfg.integrator == "predictor" else INTEG_HALF_STEP,
-        drag=DRAG_QUADRATURE if cfg.drag_integration == "quadrature" else DRAG_EXACT,
-        drag_every=cfg.drag_every,
         geom=exact_geometry(k * cfg.L_x, float(cfg.n_x)),
     )
 
@@ -170,17 +161,23 @@ class KernelOptions(NamedTuple):
     accumulate: bool   # add every step to the window statistics
 
 
-def kernel_options(P: KernelParams, accumulate: bool) -> KernelOptions:
-    """The options of ``P`` (its option codes) for a spin-up or an averaging loop."""
-    return KernelOptions(int(P.contact), int(P.damping), int(P.clip), int(P.integrator),
-                         int(P.drag), int(P.drag_every), bool(accumulate))
+def kernel_options(cfg: ModelConfig, accumulate: bool) -> KernelOptions:
+    """The options (codes) of ``cfg`` for a spin-up or an averaging loop."""
+    return KernelOptions(
+        contact=CONTACT_HERTZ_DISK if cfg.contact == "hertz_disk" else CONTACT_LINEAR,
+        damping=DAMPING_LIGGGHTS if cfg.damping == "liggghts" else DAMPING_EXACT,
+        clip=1 if cfg.clip_attraction else 0,
+        integrator=INTEG_PREDICTOR if cfg.integrator == "predictor" else INTEG_HALF_STEP,
+        drag=DRAG_QUADRATURE if cfg.drag_integration == "quadrature" else DRAG_EXACT,
+        drag_every=int(cfg.drag_every),
+        accumulate=bool(accumulate))
 
 
 @njit(**JITN)
-def floe_drag(A, c, s, v, accumulate, P, cxi, sxi):
-    """(s2, s3): drag sums of one floe, by quadrature or exactly; s3 = 0 unless
-    ``accumulate`` (the |u_rel|^3 sum is only needed in averaging windows)."""
-    if P.drag == DRAG_EXACT:
+def floe_drag(A, c, s, v, accumulate, drag, P, cxi, sxi):
+    """(s2, s3): drag sums of one floe, by quadrature or exactly (``drag``: ``DRAG_*``);
+    s3 = 0 unless ``accumulate`` (the |u_rel|^3 sum is only needed in averaging windows)."""
+    if drag == DRAG_EXACT:
         s2, s3 = drag_sums_exact(A, c, s, v, P.geom)
     else:
         s2, s3 = drag_sums(A, c, s, v, cxi, sxi)
@@ -364,30 +361,43 @@ def make_advance(opts: KernelOptions):
     return advance
 
 
-@njit(**JIT)
-def confined_window(x0, a, nsteps, P, cxi, sxi, stats):
-    """Floes held fixed (u = 0, docs/model.md §5): accumulate ``stats`` over ``nsteps`` steps.
+@functools.cache
+def make_confined_window(drag: int):
+    """The confined window for drag mode ``drag`` (``DRAG_*``), compiled once per process
+    (cached on disk by numba; the mode is a constant of the compiled code, as the options of
+    :func:`make_advance` are).
 
-    Only the wave-side rows (S3, X, FW, FD) are filled; gaps are constant.
+    ``confined_window(x0, a, nsteps, P, cxi, sxi, stats)``: floes held fixed (u = 0,
+    docs/model.md §5) at ``x0``, amplitudes ``a``: accumulate ``stats`` over ``nsteps``
+    steps. Only the wave-side rows (S3, X, FW, FD) are filled; gaps are constant.
     """
-    n = x0.shape[0]
-    two_pi_nt = 2.0 * math.pi / P.n_t
-    ck = np.cos(P.k * x0)
-    sk = np.sin(P.k * x0)
-    for istep in range(nsteps):
-        wt = two_pi_nt * (istep % P.n_t)
-        cwt = math.cos(wt)
-        swt = math.sin(wt)
-        for i in range(n):
-            c = ck[i] * cwt + sk[i] * swt
-            s = sk[i] * cwt - ck[i] * swt
-            s2, s3 = floe_drag(a[i] * P.u_amp, c, s, 0.0, True, P, cxi, sxi)
-            Fw = P.c_wave * a[i] * s
-            Fd = P.c_drag * s2
-            stats[ST_S3, i] += s3
-            stats[ST_X, i] += x0[i]
-            stats[ST_FW, i] += abs(Fw)
-            stats[ST_FD, i] += abs(Fd)
+    drag = int(drag)
+
+    @njit(**JIT)
+    def confined_window(x0, a, nsteps, P, cxi, sxi, stats):
+        n = x0.shape[0]
+        two_pi_nt = 2.0 * math.pi / P.n_t
+        ck = np.cos(P.k * x0)
+        sk = np.sin(P.k * x0)
+        for istep in range(nsteps):
+            wt = two_pi_nt * (istep % P.n_t)
+            cwt = math.cos(wt)
+            swt = math.sin(wt)
+            for i in range(n):
+                c = ck[i] * cwt + sk[i] * swt
+                s = sk[i] * cwt - ck[i] * swt
+                if drag == DRAG_EXACT:
+                    s2, s3 = drag_sums_exact(a[i] * P.u_amp, c, s, 0.0, P.geom)
+                else:
+                    s2, s3 = drag_sums(a[i] * P.u_amp, c, s, 0.0, cxi, sxi)
+                Fw = P.c_wave * a[i] * s
+                Fd = P.c_drag * s2
+                stats[ST_S3, i] += s3
+                stats[ST_X, i] += x0[i]
+                stats[ST_FW, i] += abs(Fw)
+                stats[ST_FD, i] += abs(Fd)
+
+    return confined_window
 
 
 def new_scratch(n: int) -> np.ndarray:

@@ -13,22 +13,23 @@ import numpy as np
 from . import _kernels as K
 
 
-def pair_contact(x: np.ndarray, v: np.ndarray, P: K.KernelParams) -> np.ndarray:
+def pair_contact(x: np.ndarray, v: np.ndarray, P: K.KernelParams,
+                 opts: K.KernelOptions) -> np.ndarray:
     """Contact force between floes i and i + 1 (N_f - 1 values, > 0 pushes them apart) [N]:
-    the contact law of :mod:`._kernels` (stiffness, damping, optional clipping)."""
+    the contact law of :mod:`._contact` (stiffness, damping, optional clipping: ``opts``)."""
     delta = -(x[1:] - x[:-1] - P.L_x)
     touch = delta > 0
     d = np.where(touch, delta, 0.0)
-    if P.contact == K.CONTACT_LINEAR:
+    if opts.contact == K.CONTACT_LINEAR:
         kn = np.full_like(d, P.kn_lin)
     else:
         sv = d * P.s_scale
         kn = P.kn_disk * (0.9117 * sv**2 + 0.2722 * sv + 0.003324) / (sv**2 + 1.524 * sv
                                                                         + 0.03159)
-    coef = math.sqrt(5.0) if P.damping == K.DAMPING_LIGGGHTS else 2.0
+    coef = math.sqrt(5.0) if opts.damping == K.DAMPING_LIGGGHTS else 2.0
     gamma = -P.beta * coef * np.sqrt(kn * P.m_star)
     Fc = np.where(touch, kn * d - gamma * (v[1:] - v[:-1]), 0.0)
-    if P.clip:
+    if opts.clip:
         Fc = np.maximum(Fc, 0.0)
     return Fc
 
@@ -44,7 +45,7 @@ def drag(x: np.ndarray, v: np.ndarray, a: np.ndarray, wt: float, P: K.KernelPara
 
 
 def forces(x: np.ndarray, v: np.ndarray, a: np.ndarray, x0: np.ndarray, wt: float,
-           P: K.KernelParams, cxi: np.ndarray, sxi: np.ndarray,
+           P: K.KernelParams, opts: K.KernelOptions, cxi: np.ndarray, sxi: np.ndarray,
            Fd: np.ndarray | None = None) -> np.ndarray:
     """(1 + C_m) F_w + F_d + F_c + F_s on every floe [N] (eq. 8, left-hand-side scaled);
     ``Fd`` a held drag (else evaluated here)."""
@@ -52,7 +53,7 @@ def forces(x: np.ndarray, v: np.ndarray, a: np.ndarray, x0: np.ndarray, wt: floa
     if Fd is None:
         Fd = drag(x, v, a, wt, P, cxi, sxi)
     F = P.one_cm * Fw + Fd
-    Fc = pair_contact(x, v, P)
+    Fc = pair_contact(x, v, P, opts)
     F[:-1] -= Fc
     F[1:] += Fc
     F[0] -= P.k_s * (x[0] - x0[0])
@@ -60,32 +61,32 @@ def forces(x: np.ndarray, v: np.ndarray, a: np.ndarray, x0: np.ndarray, wt: floa
     return F
 
 
-def advance(x, u, acc, a, x0, istep, nsteps, P, cxi, sxi, held=None):
+def advance(x, u, acc, a, x0, istep, nsteps, P, opts, cxi, sxi, held=None):
     """Numpy twin of the time loop :func:`floewave._kernels.make_advance` builds, for one
     chain (``x[1:] - x[:-1]`` pairs every neighbour; no statistics); returns istep.
 
-    ``P.drag_every`` = K > 1: the drag is evaluated on the steps istep = 0 mod K at the
+    ``opts.drag_every`` = K > 1: the drag is evaluated on the steps istep = 0 mod K at the
     centre of the K steps it is then held for, (K - 1) / 2 steps ahead: the wave phase of
     that time, the floe moved on by its force velocity and that velocity moved on by acc;
     ``held`` is the drag [N] held when the loop starts (the kernel's, for a start inside a
     hold)."""
     dt = P.dt
-    n_hold = int(P.drag_every)
+    n_hold = int(opts.drag_every)
     h = 0.5 * (n_hold - 1) * dt
     Fd = held
     for _ in range(nsteps):
         istep += 1
         uh = u + 0.5 * dt * acc
-        vs = u + dt * acc if P.integrator == K.INTEG_PREDICTOR else uh
+        vs = u + dt * acc if opts.integrator == K.INTEG_PREDICTOR else uh
         x += dt * uh
         wt = 2.0 * math.pi / P.n_t * (istep % P.n_t)
         if n_hold == 1:
-            F = forces(x, vs, a, x0, wt, P, cxi, sxi)
+            F = forces(x, vs, a, x0, wt, P, opts, cxi, sxi)
         else:
             if istep % n_hold == 0 or Fd is None:
                 wc = 2.0 * math.pi / P.n_t * ((istep % P.n_t) + 0.5 * (n_hold - 1))
                 Fd = drag(x + h * vs, vs + h * acc, a, wc, P, cxi, sxi)
-            F = forces(x, vs, a, x0, wt, P, cxi, sxi, Fd)
+            F = forces(x, vs, a, x0, wt, P, opts, cxi, sxi, Fd)
         acc[:] = F * P.inv_mass
         u[:] = uh + 0.5 * dt * acc
     return istep

@@ -58,11 +58,12 @@ class FloeChain:
         self.replicas = self.x0.size // self.n
         self.work = K.new_work(self.x0.size)
         # the tables' moments for the drag mode the loop runs (prefix_sums reads either)
-        self.mom = (K.exact_tables(self.P.geom) if self.P.drag == K.DRAG_EXACT
+        self.opts = K.kernel_options(cfg, False)
+        self.mom = (K.exact_tables(self.P.geom) if self.opts.drag == K.DRAG_EXACT
                     else K.drag_tables(self.cxi, self.sxi, self.P))
         self.idx = np.zeros(self.x0.size, np.int64)
-        self._spin = K.make_advance(K.kernel_options(self.P, False))
-        self._average = K.make_advance(K.kernel_options(self.P, True))
+        self._spin = K.make_advance(self.opts)
+        self._average = K.make_advance(K.kernel_options(cfg, True))
         self.reset()
 
     def reset(self) -> None:

@@ -89,7 +89,7 @@ def instantaneous(x: np.ndarray, u: np.ndarray, a: np.ndarray, wt: float, P: K.K
     th = P.k * (x[:, None] + xi[None, :]) - wt
     u_rel = (a * P.u_amp)[:, None] * np.cos(th) - u[:, None]
     S_sd = -cfg.rho_w * cfg.C_sd * np.mean(np.abs(u_rel) ** 3, axis=1)
-    pair = pair_contact(x, u, P)
+    pair = pair_contact(x, u, P, K.kernel_options(cfg, False))
     F_c = np.zeros_like(x)
     F_c[:-1] -= pair
     F_c[1:] += pair

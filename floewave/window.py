@@ -54,9 +54,10 @@ def run_window(cfg: ModelConfig, chain, x0s: np.ndarray, a: np.ndarray,
     R, n = a.shape
     stats = np.zeros((K.N_STATS, R, n))
     if cfg.confined:
+        confined_window = K.make_confined_window(chain.opts.drag)
         for r in range(R):
-            K.confined_window(x0s[r], a[r], cfg.nT * n_t, chain.P, chain.cxi, chain.sxi,
-                              stats[:, r, :])
+            confined_window(x0s[r], a[r], cfg.nT * n_t, chain.P, chain.cxi, chain.sxi,
+                            stats[:, r, :])
     else:
         if not cfg.warm_start:
             chain.reset()

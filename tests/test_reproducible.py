@@ -154,7 +154,8 @@ CALLEE_SCRIPT = textwrap.dedent("""
     x = 0.3 + 0.55 * np.arange(4)
     c, s = np.cos(k * x), np.sin(k * x)
     cells = np.zeros(1)                # (the cell tables: unused by the exact drag)
-    s2 = [K.floe_drag(cfg.a0 * P.u_amp, c[i], s[i], 1.0, True, P, cells, cells)[0]
+    s2 = [K.floe_drag(cfg.a0 * P.u_amp, c[i], s[i], 1.0, True, K.DRAG_EXACT, P, cells,
+                      cells)[0]
           for i in range(4)]           # |v| > A: no root, the closed form of _exact.py
     hits = sum(K.floe_drag.stats.cache_hits.values())
     print(json.dumps(dict(file=floewave.__file__, s2=s2, hits=hits)))

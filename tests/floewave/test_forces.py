@@ -121,7 +121,8 @@ def test_kernel_params_are_the_formulas():
     assert P.kn_lin == pytest.approx(Ystar * cfg.L_y * cfg.h_i / cfg.L_x)
     assert P.kn_disk == pytest.approx(math.pi * Ystar * cfg.h_i)
     assert P.beta == pytest.approx(math.log(0.6) / math.sqrt(math.log(0.6) ** 2 + math.pi**2))
-    assert K.contact_stiffness(1e-3, P) == P.kn_lin
+    assert K.contact_stiffness(1e-3, P, K.CONTACT_LINEAR) == P.kn_lin
     # hertz_disk f(s) at s -> 0 is 0.003324 / 0.03159
     Ph = kernel_params(cfg.replace(contact="hertz_disk"), k)
-    assert K.contact_stiffness(0.0, Ph) == pytest.approx(Ph.kn_disk * 0.003324 / 0.03159)
+    assert K.contact_stiffness(0.0, Ph, K.CONTACT_HERTZ_DISK) == pytest.approx(
+        Ph.kn_disk * 0.003324 / 0.03159)

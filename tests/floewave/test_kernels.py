@@ -29,7 +29,7 @@ def test_numba_kernel_equals_numpy_twin(opts):
     istep = chain.istep
     held = chain.P.c_drag * chain._held_drag().copy()
     chain.run(a, 2000)
-    ref.advance(x, u, acc, a, chain.x0, istep, 2000, chain.P, chain.cxi, chain.sxi,
+    ref.advance(x, u, acc, a, chain.x0, istep, 2000, chain.P, chain.opts, chain.cxi, chain.sxi,
                 held=held)
     assert np.any(np.diff(x) - cfg.L_x < 0), "no contact exercised"
     np.testing.assert_allclose(chain.x, x, rtol=0, atol=1e-12)

@@ -53,7 +53,8 @@ def test_contact_force_is_the_reference_steps_contact_term():
     u = rng.normal(0, 0.05, cfg.n_floes)
     a = np.zeros(cfg.n_floes)
     _, F_c = instantaneous(x, u, a, 0.3, chain.P, cfg, cell_offsets(cfg))
-    ref = reference_forces(x, u, a, chain.x0, 0.3, chain.P, chain.cxi, chain.sxi)
+    ref = reference_forces(x, u, a, chain.x0, 0.3, chain.P, chain.opts, chain.cxi,
+                           chain.sxi)
     assert np.count_nonzero(F_c) > 0
     np.testing.assert_allclose(F_c, ref, rtol=1e-12, atol=1e-9)
 
