@@ -1,6 +1,7 @@
 """Every number quoted in the docs (README.md, docs/*.md) about results, regenerated.
 
     python benchmarks/docs_numbers.py [--out DIR] [--skip-runs] [--record docs/numbers.txt]
+                                      [--timings]
 
 Runs the shipped campaigns the docs quote (``configs/demo.toml`` under ``mpiexec -n 3``
 when a launcher is available, else in-process; ``fig2``, ``fig5``, ``fig6a``, ``fig6b``,
@@ -12,7 +13,13 @@ records) and prints, labelled as in the docs:
 - the demo's ``collision_stats`` table and the periods' ``alpha_omega`` tables;
 - W_c, layout and alpha_inner / alpha_c of the Fig. 2 points.
 
-- the ``sweep paper-check`` table on those stores.
+- the ``sweep paper-check`` table on those stores;
+- with ``--timings`` (what ``docs/numbers.txt`` is made with), the other timings
+  docs/performance.md quotes, so that one record holds them all with the machine named: the
+  CPU (``/proc/cpuinfo``'s model name and vector width), the kernels' compile with an empty
+  numba cache (``floewave run``'s ``kernels ready in`` line), the cost projection
+  (``benchmarks/plan_check.py --n 32 --seed 7`` against model version 6's numerics in the
+  same run) and ``sweep paper-check --run --seeds 0 1`` (about 6 minutes more).
 
 ``--record FILE`` also writes the output to FILE under a header naming the model version
 and the SHA-256 of the campaign files (:func:`stamp`). ``docs/numbers.txt`` is that record
@@ -78,11 +85,59 @@ def run(name: str, out: Path, launcher: list[str]) -> float:
     return time.perf_counter() - t
 
 
+def machine() -> str:
+    """The CPU this record was made on: model name, vector width, cores."""
+    import os
+    info = Path("/proc/cpuinfo").read_text() if Path("/proc/cpuinfo").exists() else ""
+    name = next((line.split(":", 1)[1].strip() for line in info.splitlines()
+                 if line.startswith("model name")), "unknown CPU")
+    flags = next((line.split(":", 1)[1].split() for line in info.splitlines()
+                  if line.startswith("flags")), [])
+    width = ("AVX-512" if "avx512f" in flags else "AVX2" if "avx2" in flags
+             else "no AVX2")
+    return f"{name}, {width}, {os.cpu_count()} cores"
+
+
+def timings(out: Path) -> None:
+    """The compile, the cost projection and paper-check --run --seeds, timed (--timings)."""
+    import os
+    import re
+    with tempfile.TemporaryDirectory() as cache:
+        proc = subprocess.run([sys.executable, "-m", "floewave", "run", "--set",
+                               "max_iterations=1", "--set", "n0=1", "--set", "nT=1"],
+                              capture_output=True, text=True,
+                              env=dict(os.environ, NUMBA_CACHE_DIR=cache))
+    m = re.search(r"kernels ready in ([0-9.]+) s", proc.stdout + proc.stderr)
+    print(f"[timing] kernels' compile with an empty numba cache (floewave run):"
+          f" {m.group(1) if m else '?'} s")
+    proc = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "plan_check.py"),
+                           "--n", "32", "--seed", "7", "--baseline", "drag_every=1",
+                           "--baseline", "n_average=8"], capture_output=True, text=True,
+                          cwd=ROOT)
+    print("[timing] python benchmarks/plan_check.py --n 32 --seed 7 --baseline drag_every=1"
+          " --baseline n_average=8 (CPU time; baseline: model version 6's numerics)")
+    for line in (proc.stdout + proc.stderr).splitlines():
+        if not re.match(r"^\s*(this|baseline)\s+[0-9]", line) and not line.startswith(
+                "     case"):
+            print("  " + line)
+    seeds = out / "paper-seeds"
+    t = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-m", "sweep", "paper-check", "--stores",
+                           str(seeds), "--run", "--seeds", "0", "1"], capture_output=True,
+                          text=True)
+    t = time.perf_counter() - t
+    tail = [line for line in proc.stdout.splitlines() if line.startswith("across seeds")]
+    print(f"[timing] sweep paper-check --stores DIR --run --seeds 0 1: {t:.0f} s;"
+          f" {tail[0] if tail else proc.stderr.strip()[-200:]}")
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=None)
     ap.add_argument("--skip-runs", action="store_true")
     ap.add_argument("--record", type=Path, default=None, metavar="FILE")
+    ap.add_argument("--timings", action="store_true",
+                    help="also time the compile, the cost projection and paper-check --seeds")
     args = ap.parse_args()
     if args.record is not None:
         record = open(args.record, "w", encoding="utf-8")  # noqa: SIM115 - closed at exit
@@ -90,6 +145,7 @@ def main() -> int:
         sys.stdout = _Tee(sys.__stdout__, record)
     out = args.out or Path(tempfile.mkdtemp(prefix="docs_numbers-"))
     out.mkdir(parents=True, exist_ok=True)
+    print(f"[machine] {machine()}")
     import pandas as pd
 
     import sweep
@@ -156,6 +212,8 @@ def main() -> int:
     proc = subprocess.run([sys.executable, "-m", "sweep", "paper-check", "--stores", str(out)],
                           capture_output=True, text=True)
     print(proc.stdout + proc.stderr)
+    if args.timings:
+        timings(out)
     return 0
 
 
