@@ -1,4 +1,15 @@
-"""Fixtures shared by the test modules.
+"""Fixtures shared by the test modules, the two tiers, and the kernels compiled once.
+
+**Tiers.** ``python -m pytest -q -n 2`` runs the fast tier: every test not marked ``slow``.
+``-m slow`` runs the slow tier (fresh interpreters, Slurm, MPI torture, docs walks with a
+launcher, paper campaigns, long physics runs), ``--all`` both; any ``-m`` expression, or a
+test named by its node id, overrides the default. Every behaviour a slow test proves is also
+proven in the fast tier, by a smaller configuration (see each slow test's marker comment).
+
+**Kernels compiled once.** Under xdist (``-n N``) the controller compiles the numba kernels
+the tests use into the on-disk cache before it starts the workers
+(:func:`pytest_sessionstart`), so that the workers load them instead of each compiling the
+same kernels at the same time.
 
 ``campaign``: the module's ``TOML`` parsed as a campaign (file name ``CAMPAIGN_FILE`` of the
 module, default ``t.toml``). ``power_store``: a store of a campaign computed by the hand-set
@@ -7,7 +18,9 @@ command-line ``main(argv)`` run in-process as a subprocess would run it.
 """
 from __future__ import annotations
 
+import os
 import subprocess
+import time
 from pathlib import Path
 
 import pytest
@@ -95,8 +108,34 @@ def pytest_xdist_make_scheduler(config, log):
     return Scheduling(config, log)
 
 
+# ------------------------------------------------------------------------------- the tiers
+def pytest_addoption(parser):
+    parser.addoption("--all", action="store_true", dest="all_tiers",
+                     help="run both tiers (default: the fast tier only; -m slow: the slow one)")
+
+
+def _deselect_slow(config, items) -> None:
+    """The fast tier by default: ``slow`` tests are deselected unless ``--all``, a ``-m``
+    expression, or the test's own node id on the command line selects them."""
+    if config.getoption("all_tiers") or config.getoption("markexpr"):
+        return
+    named = [a for a in config.args if "::" in a]
+    keep, slow = [], []
+    for item in items:
+        if item.get_closest_marker("slow") and not any(item.nodeid.startswith(a)
+                                                        for a in named):
+            slow.append(item)
+        else:
+            keep.append(item)
+    if slow:
+        config.hook.pytest_deselected(items=slow)
+        items[:] = keep
+
+
 def pytest_collection_modifyitems(config, items):
-    """In an xdist worker: :data:`FIRST` first (a plain run keeps pytest's order)."""
+    """The fast tier unless told otherwise (:func:`_deselect_slow`); in an xdist worker
+    :data:`FIRST` first (a plain run keeps pytest's order)."""
+    _deselect_slow(config, items)
     if not hasattr(config, "workerinput"):
         return
 
@@ -122,6 +161,47 @@ def pytest_terminal_summary(terminalreporter):
         terminalreporter.write_line("")
         for line in lines:
             terminalreporter.write_line(line)
+
+
+# ------------------------------------------------------------- kernels compiled once per run
+#: Option sets (over :data:`_WARM_BASE`) whose kernels the controller compiles before the
+#: workers start: every ``floewave.model.kernel_mode`` (drag integration x integrator,
+#: confined) and the contact-law options of tests/floewave/test_kernels.py and
+#: test_forces.py; a run of each compiles its time loops (spin-up and averaging), drag
+#: passes and march.
+WARM = ({}, {"drag_integration": "exact"}, {"integrator": "half_step"},
+        {"drag_integration": "exact", "integrator": "half_step"}, {"confined": True},
+        {"contact": "linear"}, {"damping": "exact"}, {"clip_attraction": True})
+_WARM_BASE = dict(L_x=3.0, L_sheet=12.0, n0=1, n0_warm=0, nT=1, max_iterations=1,
+                  replicas=1)
+
+
+def compile_kernels() -> float:
+    """Run one tiny point per :data:`WARM` option set in this process (compiling the
+    kernels into the numba cache, or loading them from it); returns the seconds taken."""
+    t0 = time.perf_counter()
+    from floewave import ModelConfig, run_point
+
+    for options in WARM:
+        run_point(ModelConfig(**_WARM_BASE, **options))
+    return time.perf_counter() - t0
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_sessionstart(session):
+    """Under xdist, in the controller only (before xdist's own ``pytest_sessionstart``
+    starts the workers): :func:`compile_kernels`, unless no test will be run
+    (``--collect-only``) or the JIT is off (``NUMBA_DISABLE_JIT=1``)."""
+    config = session.config
+    if (hasattr(config, "workerinput") or not config.pluginmanager.hasplugin("dsession")
+            or config.option.collectonly or os.environ.get("NUMBA_DISABLE_JIT") == "1"):
+        return
+    seconds = compile_kernels()
+    config._floewave_compile_seconds = seconds
+    reporter = config.pluginmanager.get_plugin("terminalreporter")
+    if reporter is not None:
+        reporter.write_line(f"numba kernels compiled (or loaded from the cache) before the"
+                            f" workers start: {seconds:.1f} s")
 
 
 @pytest.fixture(scope="session")
