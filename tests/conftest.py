@@ -84,12 +84,15 @@ GROUPED = ("tests/test_slurm.py",  # one Slurm cluster and one reference job per
 #: The longest tests and modules, handed out first under xdist so that no long one is left
 #: alone at the end (longest first); the rest keep pytest's order.
 FIRST = ("tests/test_slurm.py",
-         "tests/test_reproducible.py::test_campaign_bits_in_process_mpi_and_after_kill_and_resume",
+         "tests/test_reproducible.py::test_point_bits_do_not_depend_on_the_jit_cache",
          "tests/sweep/test_torture.py::test_kill_9_whole_mpi_campaign_torture",
-         "tests/test_docs.py::test_every_code_block_runs[docs/guide.md]",
-         "tests/test_docs.py::test_every_code_block_runs[README.md]",
-         "tests/paper/test_herman2019_qualitative.py",
-         "tests/test_reproducible.py::test_point_bits_do_not_depend_on_the_jit_cache")
+         "tests/test_docs.py::test_every_code_block_runs[docs/guide.md-launcher]",
+         "tests/test_docs.py::test_every_code_block_runs[README.md-launcher]",
+         "tests/test_reproducible.py::test_a_change_in_a_callee_file_recompiles_the_cached_callers",
+         "tests/test_docs.py::test_every_code_block_runs[docs/guide.md-in-process]",
+         "tests/test_docs.py::test_every_code_block_runs[README.md-in-process]",
+         "tests/sweep/test_mpi.py::test_mpiexec_3_real_points_equal_one_rank",
+         "tests/paper/test_herman2019_qualitative.py")
 
 
 def pytest_xdist_make_scheduler(config, log):
@@ -191,10 +194,12 @@ def compile_kernels() -> float:
 def pytest_sessionstart(session):
     """Under xdist, in the controller only (before xdist's own ``pytest_sessionstart``
     starts the workers): :func:`compile_kernels`, unless no test will be run
-    (``--collect-only``) or the JIT is off (``NUMBA_DISABLE_JIT=1``)."""
+    (``--collect-only``), the JIT is off (``NUMBA_DISABLE_JIT=1``) or
+    ``FLOEWAVE_TEST_COMPILE_FIRST=0`` (to measure what it saves)."""
     config = session.config
     if (hasattr(config, "workerinput") or not config.pluginmanager.hasplugin("dsession")
-            or config.option.collectonly or os.environ.get("NUMBA_DISABLE_JIT") == "1"):
+            or config.option.collectonly or os.environ.get("NUMBA_DISABLE_JIT") == "1"
+            or os.environ.get("FLOEWAVE_TEST_COMPILE_FIRST") == "0"):
         return
     seconds = compile_kernels()
     config._floewave_compile_seconds = seconds

@@ -88,7 +88,9 @@ def test_kill_9_during_rebuild_never_ruins_the_store(tmp_path):
     assert sweep.validate(path) == []
 
 
-@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGUSR1, signal.SIGINT])
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGUSR1,
+                                 pytest.param(signal.SIGINT, marks=pytest.mark.slow)])
+# SIGINT: slow tier (fast: SIGTERM and SIGUSR1 here; SIGINT in test_store_holes.py)
 def test_stop_signal_during_rebuild_is_deferred_then_exit_6(tmp_path, sig):
     cfg, path = _big(tmp_path)
     ref = table(path)
