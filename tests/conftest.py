@@ -81,6 +81,11 @@ GROUPED = ("tests/test_slurm.py",  # one Slurm cluster and one reference job per
            "tests/sweep/test_papercheck.py", "tests/sweep/test_ensemble_store.py",
            "tests/sweep/test_config.py", "tests/sweep/test_stats.py",
            "tests/sweep/test_figures.py")
+#: Modules that call jitted kernels directly (not through ``run_point``, whose kernels the
+#: controller compiles first: :func:`pytest_sessionstart`): numba compiles each such entry
+#: point for its own signature, so they run on one worker, which compiles each once.
+KERNEL_CALLERS = ("tests/floewave/test_kernels.py", "tests/floewave/test_drag.py",
+                  "tests/floewave/test_forces.py", "tests/floewave/test_exact_drag.py")
 #: The longest tests and modules, handed out first under xdist so that no long one is left
 #: alone at the end (longest first); the rest keep pytest's order.
 FIRST = ("tests/test_slurm.py",
@@ -97,7 +102,8 @@ FIRST = ("tests/test_slurm.py",
 
 def pytest_xdist_make_scheduler(config, log):
     """``pytest -n N``: tests are handed out one by one (xdist's ``load``), except that each
-    module of :data:`GROUPED` goes whole to one worker, in the order of the collection
+    module of :data:`GROUPED` goes whole to one worker, and so do all of
+    :data:`KERNEL_CALLERS` together, in the order of the collection
     (:data:`FIRST` first). (xdist's own ``--dist loadgroup`` cannot be used: its
     ``xdist_group`` marks do not reach the scheduler under pytest 9.)"""
     from xdist.scheduler import LoadScopeScheduling
@@ -105,6 +111,8 @@ def pytest_xdist_make_scheduler(config, log):
     class Scheduling(LoadScopeScheduling):
         def _split_scope(self, nodeid: str) -> str:
             module = nodeid.split("::")[0]
+            if module in KERNEL_CALLERS:
+                return "kernel callers"
             return module if module in GROUPED else nodeid
 
     config.option.loadscopereorder = False  # keep the order of the collection
@@ -168,45 +176,62 @@ def pytest_terminal_summary(terminalreporter):
 
 # ------------------------------------------------------------- kernels compiled once per run
 #: Option sets (over :data:`_WARM_BASE`) whose kernels the controller compiles before the
-#: workers start: every ``floewave.model.kernel_mode`` (drag integration x integrator,
-#: confined) and the contact-law options of tests/floewave/test_kernels.py and
-#: test_forces.py; a run of each compiles its time loops (spin-up and averaging), drag
-#: passes and march.
-WARM = ({}, {"drag_integration": "exact"}, {"integrator": "half_step"},
-        {"drag_integration": "exact", "integrator": "half_step"}, {"confined": True},
-        {"contact": "linear"}, {"damping": "exact"}, {"clip_attraction": True})
+#: workers start: the ones that tests on both workers, and the ``sweep run`` and ``mpiexec``
+#: subprocesses of the tests, would otherwise each compile: the default time loops (spin-up
+#: and averaging), the exact drag's, the confined window and the march of both couplings.
+#: (The contact-law and integrator options are compiled by the one worker that runs
+#: :data:`KERNEL_CALLERS`, where they are used.)
+WARM = ({}, {"drag_integration": "exact"}, {"confined": True},
+        {"coupling": "mean", "protocol": "noise_floor"})
 _WARM_BASE = dict(L_x=3.0, L_sheet=12.0, n0=1, n0_warm=0, nT=1, max_iterations=1,
                   replicas=1)
 
 
-def compile_kernels() -> float:
-    """Run one tiny point per :data:`WARM` option set in this process (compiling the
+def compile_kernels(options=WARM) -> float:
+    """Run one tiny point per option set of ``options`` in this process (compiling the
     kernels into the numba cache, or loading them from it); returns the seconds taken."""
     t0 = time.perf_counter()
     from floewave import ModelConfig, run_point
 
-    for options in WARM:
-        run_point(ModelConfig(**_WARM_BASE, **options))
+    for extra in options:
+        run_point(ModelConfig(**_WARM_BASE, **extra))
     return time.perf_counter() - t0
 
 
 @pytest.hookimpl(tryfirst=True)
 def pytest_sessionstart(session):
     """Under xdist, in the controller only (before xdist's own ``pytest_sessionstart``
-    starts the workers): :func:`compile_kernels`, unless no test will be run
-    (``--collect-only``), the JIT is off (``NUMBA_DISABLE_JIT=1``) or
-    ``FLOEWAVE_TEST_COMPILE_FIRST=0`` (to measure what it saves)."""
+    starts the workers): :func:`compile_kernels`, the exact drag's kernels in a second
+    interpreter at the same time as the rest here (numba compiles on one core), unless no test will
+    be run (``--collect-only``), the JIT is off (``NUMBA_DISABLE_JIT=1``) or
+    ``FLOEWAVE_TEST_COMPILE_FIRST=0`` (to measure what it saves). A failure is reported,
+    not raised: the workers then compile what they need, and the tests say what fails."""
+    import sys
+
     config = session.config
     if (hasattr(config, "workerinput") or not config.pluginmanager.hasplugin("dsession")
             or config.option.collectonly or os.environ.get("NUMBA_DISABLE_JIT") == "1"
             or os.environ.get("FLOEWAVE_TEST_COMPILE_FIRST") == "0"):
         return
-    seconds = compile_kernels()
-    config._floewave_compile_seconds = seconds
+    t0 = time.perf_counter()
+    other = subprocess.Popen(    # the exact drag (the longest after the default)
+        [sys.executable, "-c", "import tests.conftest as c; c.compile_kernels(c.WARM[1:2])"],
+        cwd=Path(__file__).resolve().parent.parent, stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE, text=True)
+    problem = ""
+    try:
+        compile_kernels(WARM[:1] + WARM[2:])
+    except Exception as exc:  # noqa: BLE001 - reported; the tests will say what fails
+        problem = f"{type(exc).__name__}: {exc}"
+    err = other.communicate()[1]
+    if other.returncode != 0:
+        problem = problem or err.strip().splitlines()[-1]
+    seconds = time.perf_counter() - t0
     reporter = config.pluginmanager.get_plugin("terminalreporter")
     if reporter is not None:
         reporter.write_line(f"numba kernels compiled (or loaded from the cache) before the"
-                            f" workers start: {seconds:.1f} s")
+                            f" workers start: {seconds:.1f} s"
+                            + (f"; FAILED: {problem}" if problem else ""))
 
 
 @pytest.fixture(scope="session")

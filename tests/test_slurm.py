@@ -8,8 +8,10 @@ uninterrupted run (the first test's job; ``compare`` of the torture test).
 The daemons are started by the session fixture :func:`slurm` (tests/slurm_cluster.py) and
 need Debian's ``slurm-wlm`` and ``munge`` and root. Without them these tests skip; with
 ``FLOEWAVE_REQUIRE_SLURM=1`` (set by ``.ci/run``, which installs both) a missing or
-unstartable Slurm is a failure. To run them here: ``apt-get install slurm-wlm munge`` as
-root, then ``FLOEWAVE_REQUIRE_SLURM=1 python -m pytest tests/test_slurm.py``.
+unstartable Slurm is a failure. They are the slow tier; to run them here: ``apt-get install
+slurm-wlm munge`` as root, then ``FLOEWAVE_REQUIRE_SLURM=1 python -m pytest -m slow
+tests/test_slurm.py``. The fast tier runs the scripts without Slurm
+(:func:`test_scripts_run_outside_slurm`).
 
 Slurm holds a requeued job for about two minutes (BeginTime); the tests start it at once
 (:meth:`SlurmCluster.release`). With ``pytest -s`` (and at the end of any run) each
