@@ -1,4 +1,4 @@
-"""Every number quoted in README.md and docs/guide.md about results, regenerated.
+"""Every number quoted in the docs (README.md, docs/*.md) about results, regenerated.
 
     python benchmarks/docs_numbers.py [--out DIR] [--skip-runs] [--record docs/numbers.txt]
 
@@ -18,13 +18,14 @@ records) and prints, labelled as in the docs:
 and the SHA-256 of the campaign files (:func:`stamp`). ``docs/numbers.txt`` is that record
 for the numbers the docs quote: ``tests/test_docs.py`` fails when it was made for another
 model version or other campaign files (rerun this script) or when a results table quoted
-in README.md or docs/guide.md is not in it (the docs drifted from their source).
+in the docs that tests/test_docs.py reads (its ``DOCS``) is not in it (the docs drifted from
+their source). It writes only the record: the docs quote from it by hand.
 
 Which numbers are *stochastic*: every result is an ensemble of chaotic floe trajectories
-(the default R = 8 replicas). On one machine it is reproduced bit for bit (README
-"Reproducibility"); another seed or a rounding-level change (another CPU, compiler, numba
+(the default R = 8 replicas). On one machine it is reproduced bit for bit
+(docs/reproducibility.md); another seed or a rounding-level change (another CPU, compiler, numba
 or glibc) gives other trajectories, and the numbers then move within their standard
-errors (README "Ensembles and error bars"). They are printed, and quoted, with them.
+errors (docs/convergence.md "Ensembles and error bars"). They are printed, and quoted, with them.
 """
 from __future__ import annotations
 
@@ -111,7 +112,7 @@ def main() -> int:
     else:       # the stores' own run records: when each campaign started and ended
         from datetime import datetime
 
-        from sweep.analysis import store_runs
+        from sweep.analysis.load import store_runs
 
         for name in ("demo", *CAMPAIGNS):
             run_ = store_runs(out / f"{name}.h5")[-1]

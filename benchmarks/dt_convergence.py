@@ -1,7 +1,7 @@
 """Is a larger time step as good as the paper's dt = 1e-4 s? The measurement behind the default.
 
-Two checks (MODEL.md §3 "A larger default dt is allowed where a convergence record ... shows
-no change beyond the error bars"):
+Two checks (docs/model.md §3: a larger default dt is allowed where a convergence record shows
+no change beyond the error bars):
 
 1. **Restitution.** The realised restitution of an isolated head-on collision of two lab-ice
    floes (L_x = 0.5 m, 0.05 m/s, no drag, springs or added mass) at every nominal eps and

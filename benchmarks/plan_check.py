@@ -17,7 +17,7 @@ import time
 from floewave import run_point
 from floewave.cli import config_from_sets
 from sweep.config import load_campaign
-from sweep.plan import calibrate, core_seconds, kernel_shape
+from sweep.run.plan import calibrate, core_seconds, kernel_shape
 
 
 def main() -> None:

@@ -40,7 +40,8 @@ import h5py  # noqa: E402
 import numpy as np  # noqa: E402
 
 import sweep  # noqa: E402
-from sweep.journal import decode, encode, journal_path  # noqa: E402
+from sweep.analysis.load import journal_points  # noqa: E402
+from sweep.store.journal import decode, encode, journal_path  # noqa: E402
 from sweep.testing import catches_signal  # noqa: E402
 
 PY = sys.executable
@@ -123,7 +124,7 @@ def judge(tally: Tally, phase: str, ref: Path, store: Path, rc: int, log: str,
 def _left(store: Path, total: int) -> float:
     """Share of the ``total`` points not yet in the store's journal."""
     try:
-        return 1 - sweep.analysis.journal_points(store) / total
+        return 1 - journal_points(store) / total
     except (TypeError, OSError):
         return 1.0
 
@@ -531,10 +532,10 @@ def _flip_byte(path: Path, dataset: str, rng: random.Random) -> None:
 
 _FULL_DISK = """
 import errno, os, sys
-import sweep.cli, sweep.lock
+import sweep.cli, sweep.store.lock
 def full(*a):
     raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
-sweep.lock.os.pwrite = full
+sweep.store.lock.os.pwrite = full
 sys.exit(sweep.cli.main(sys.argv[1:]))
 """
 

@@ -27,6 +27,7 @@ import sweep
 from floewave import ModelConfig
 from floewave.ensemble import zone_of
 from floewave.results import _runs
+from sweep.analysis.stats import RESULT_STATUSES
 
 
 def main(paths: list[str]) -> int:
@@ -35,7 +36,7 @@ def main(paths: list[str]) -> int:
     interruptions, transitions, runs, layouts = [], [], [], Counter()
     for path in paths:
         df = sweep.load(path)
-        for _, row in df[df["status"].isin(sweep.stats.RESULT_STATUSES)].iterrows():
+        for _, row in df[df["status"].isin(RESULT_STATUSES)].iterrows():
             p = sweep.load_profile(path, row["hash"])
             x, g = p["x_mean"].values, p["gap_mean"].values
             gaps = g[:-1]

@@ -12,10 +12,10 @@ from floewave import SWEPT_FIELDS, ModelConfig
 
 HERE = Path(__file__).resolve().parent
 GROUPS = [
-    ("geometry and material (MODEL.md §1, §7: LS-WICE-like tank; documented assumptions)",
+    ("geometry and material (docs/model.md §1, §7: LS-WICE-like tank; documented assumptions)",
      ["L_sheet", "h", "L_y", "h_i", "rho_i", "rho_w", "E", "nu", "k_s", "C_m"]),
     ("contact law (§3)", ["contact", "damping", "clip_attraction"]),
-    ("ensemble (MODEL.md §4 'Ensembles'; README 'Ensembles and error bars')",
+    ("ensemble (docs/model.md §4 'Ensembles'; docs/convergence.md 'Ensembles and error bars')",
      ["replicas", "seed", "placement", "coupling"]),
     ("numerics (§3, §4)", []),  # every field not named elsewhere
     ("diagnostics (§6)", ["gap_threshold"]),
@@ -47,7 +47,7 @@ def render(header: str, sweep: dict, run: str, over: dict | None = None) -> str:
 
 CONFIGS = {
     "herman2019": dict(header="""
-# The paper's campaign (Herman, Cheng & Shen 2019, §4.1; MODEL.md §7):
+# The paper's campaign (Herman, Cheng & Shen 2019, §4.1; docs/model.md §7):
 # 3 x 7 x 4 x 6 x 4 x 4 x 3 = 24,192 points. Every model and numerics parameter is written
 # out with floewave.ModelConfig's default, so this file states the whole configuration.
 # Cost: see `sweep plan configs/herman2019.toml`.

@@ -1,4 +1,4 @@
-"""Closed-form ("exact") floe-bottom integrals of the quadratic ice-water drag (MODEL.md §3).
+"""Closed-form ("exact") floe-bottom integrals of the quadratic ice-water drag (docs/model.md §3).
 
 The quadrature mode (:func:`floewave._kernels.drag_sums`) sums over the ``n_x = L_x / dx``
 cells of a floe, at the cell midpoints ``xi_j``,

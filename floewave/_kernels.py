@@ -5,7 +5,7 @@ Everything here is nopython, cached, without fast-math (flags and why:
 :mod:`floewave._jit`). The kernels see only numpy arrays and a :class:`KernelParams` named
 tuple of numbers built once per point from the frozen :class:`~floewave.config.ModelConfig`.
 
-**One kernel for R replicas.** The R chains of an ensemble (MODEL.md §4 'Ensembles') run in
+**One kernel for R replicas.** The R chains of an ensemble (docs/model.md §4 'Ensembles') run in
 lockstep: their states are rows of (R, N_f) arrays, and the kernel loops over the flattened
 index ``j = r N_f + i``. Every per-floe loop (drift, drag, wave force, kick) has no
 neighbour dependency and is vectorised across floes *and* replicas; the contact loop runs
@@ -21,7 +21,7 @@ cache keys it by those numbers and loads it in a new process (a closure over ano
 *jitted* function would not be: numba pickles a dispatcher with a per-process id, and every
 process would compile again). Helpers it calls are module-level functions.
 
-Time integration (velocity Verlet, MODEL.md §3), per step n -> n+1::
+Time integration (velocity Verlet, docs/model.md §3), per step n -> n+1::
 
     u_half = u_n + dt/2 acc_n
     x_{n+1} = x_n + dt u_half
@@ -107,7 +107,10 @@ W_F = 2          # force,
 W_CK = 3         # cos(k x), sin(k x),
 W_SK = 4
 W_FC = 5         # contact force of pair (j, j+1),
-W_SC = 6         # then the drag scratch sc (N_SC rows)
+W_VC = 6         # velocity and cos, sin(k x) at the centre of a held drag's steps
+W_CKC = 7        # (drag_every > 1),
+W_SKC = 8
+W_SC = 9         # then the drag scratch sc (N_SC rows)
 N_WORK = W_SC + N_SC
 LANES = 16       # gathered floes are padded to a multiple of this (vector body)
 
@@ -136,6 +139,7 @@ class KernelParams(NamedTuple):
     clip: int          # 1: clip contact force at 0
     integrator: int    # INTEG_*
     drag: int          # DRAG_*: quadrature on the dx grid or the exact (dx -> 0) integrals
+    drag_every: int    # steps between evaluations of the drag and dissipation sums [-]
     geom: tuple        # floewave._exact.exact_geometry(k L_x, n_x) (used when drag = EXACT)
 
 
@@ -165,6 +169,7 @@ def kernel_params(cfg: ModelConfig, k: float) -> KernelParams:
         clip=1 if cfg.clip_attraction else 0,
         integrator=INTEG_PREDICTOR if cfg.integrator == "predictor" else INTEG_HALF_STEP,
         drag=DRAG_QUADRATURE if cfg.drag_integration == "quadrature" else DRAG_EXACT,
+        drag_every=cfg.drag_every,
         geom=exact_geometry(k * cfg.L_x, float(cfg.n_x)),
     )
 
@@ -177,13 +182,14 @@ class KernelOptions(NamedTuple):
     clip: int
     integrator: int
     drag: int
+    drag_every: int    # evaluate the drag sums every this many steps (held in between)
     accumulate: bool   # add every step to the window statistics
 
 
 def kernel_options(P: KernelParams, accumulate: bool) -> KernelOptions:
     """The options of ``P`` (its option codes) for a spin-up or an averaging loop."""
     return KernelOptions(int(P.contact), int(P.damping), int(P.clip), int(P.integrator),
-                         int(P.drag), bool(accumulate))
+                         int(P.drag), int(P.drag_every), bool(accumulate))
 
 
 @njit(**JITN)
@@ -191,7 +197,7 @@ def contact_law(delta, v_n, P, contact, damping, clip):
     """Normal contact force [N] pushing a pair apart at overlap ``delta`` > 0:
     F = k_n delta - gamma_n v_n, ``v_n = u_{i+1} - u_i`` (positive while separating).
 
-    k_n: ``hertz_disk`` f(s) (MODEL.md §3) or ``linear``; gamma_n = -beta sqrt(5 k_n m*)
+    k_n: ``hertz_disk`` f(s) (docs/model.md §3) or ``linear``; gamma_n = -beta sqrt(5 k_n m*)
     (liggghts) or -2 beta sqrt(k_n m*) (exact); clipped at 0 if ``clip``. The option codes
     are arguments so that a caller with constant options (the built time loop) gets them
     folded away.
@@ -209,7 +215,7 @@ def contact_law(delta, v_n, P, contact, damping, clip):
 
 @njit(**JITN)
 def _stiffness(delta, P, contact):
-    """k_n [N m^-1] at overlap ``delta``: ``hertz_disk`` f(s) (MODEL.md §3) or ``linear``."""
+    """k_n [N m^-1] at overlap ``delta``: ``hertz_disk`` f(s) (docs/model.md §3) or ``linear``."""
     if contact == CONTACT_LINEAR:
         return P.kn_lin
     s = delta * P.s_scale
@@ -776,12 +782,14 @@ def make_advance(opts: KernelOptions):
     cos, sin(k x_j) are computed once per call and then rotated by k dx_j each step
     (Taylor series of the rotation to O((k dx)^4), k dx ~ 1e-5: exact to rounding).
     """
-    contact, damping, clip, integrator, drag, accumulate = opts
+    contact, damping, clip, integrator, drag, drag_every, accumulate = opts
     contact = int(contact)
     damping = int(damping)
     clip = int(clip)
     integrator = int(integrator)
     drag = int(drag)
+    drag_every = int(drag_every)
+    w_s3 = float(drag_every)
     accumulate = bool(accumulate)
 
     @njit(**JIT)
@@ -808,7 +816,15 @@ def make_advance(opts: KernelOptions):
         ck = work[W_CK, :nt]
         sk = work[W_SK, :nt]
         Fc = work[W_FC, :nt]
+        vc = work[W_VC, :nt]
+        ckc = work[W_CKC, :nt]
+        skc = work[W_SKC, :nt]
         sc = work[W_SC:]
+        # a held drag is evaluated at the centre of the steps it holds, (drag_every - 1) / 2
+        # steps ahead: the wave phase at that time, the floe moved on by v* and its velocity
+        # by acc (a midpoint rule: second order in the hold)
+        half = 0.5 * (drag_every - 1)
+        h_dt = half * dt
         for j in range(nt):
             ck[j] = math.cos(P.k * x[j])
             sk[j] = math.sin(P.k * x[j])
@@ -841,16 +857,45 @@ def make_advance(opts: KernelOptions):
             # --- forces of eq. 8, scaled to the left-hand side: (1 + C_m) F_w + F_d + F_c
             # + F_s. Wave (Froude-Krylov) and ice-water drag: the drag sums of all floes
             # first, then one loop over the floes
-            if drag == DRAG_EXACT:
-                exact_pass(ck, sk, cwt, swt, a, vs, P, mom, accumulate, sc, idx)
+            # (drag_every > 1: the drag sums are evaluated on the steps istep = 0 mod
+            # drag_every and at an ``init``, and held in ``sc`` on the steps between; the
+            # dissipation sum of an evaluation stands for the drag_every steps it holds)
+            fresh = drag_every == 1 or step < 0 or istep % drag_every == 0
+            if drag_every == 1 or step < 0:
+                if drag == DRAG_EXACT:
+                    exact_pass(ck, sk, cwt, swt, a, vs, P, mom, accumulate, sc, idx)
+                else:
+                    drag_pass(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc,
+                              idx)
             else:
-                drag_pass(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc, idx)
+                if fresh:
+                    wc = two_pi_nt * ((istep % P.n_t) + half)
+                    cwc = math.cos(wc)
+                    swc = math.sin(wc)
+                    for j in range(nt):
+                        vc[j] = vs[j] + h_dt * acc[j]
+                        e = P.k * h_dt * vs[j]
+                        e2 = e * e
+                        ce = 1.0 - 0.5 * e2 + e2 * e2 * (1.0 / 24.0)
+                        se = e * (1.0 - e2 * (1.0 / 6.0))
+                        ckc[j] = ck[j] * ce - sk[j] * se
+                        skc[j] = sk[j] * ce + ck[j] * se
+                    if drag == DRAG_EXACT:
+                        exact_pass(ckc, skc, cwc, swc, a, vc, P, mom, accumulate, sc, idx)
+                    else:
+                        drag_pass(ckc, skc, cwc, swc, a, vc, P, cxi, sxi, mom, accumulate,
+                                  sc, idx)
+                for j in range(nt):         # the wave phase of this step (wave force)
+                    sc[SC_S, j] = sk[j] * cwt - ck[j] * swt
             for j in range(nt):
                 Fw = P.c_wave * a[j] * sc[SC_S, j]
                 Fd = P.c_drag * sc[SC_S2, j]
                 F[j] = P.one_cm * Fw + Fd
                 if accumulate:
-                    stats[ST_S3, j] += sc[SC_S3, j]
+                    if drag_every == 1:
+                        stats[ST_S3, j] += sc[SC_S3, j]
+                    elif fresh:
+                        stats[ST_S3, j] += w_s3 * sc[SC_S3, j]
                     stats[ST_X, j] += x[j]
                     stats[ST_FW, j] += abs(Fw)
                     stats[ST_FD, j] += abs(Fd)
@@ -897,7 +942,7 @@ def make_advance(opts: KernelOptions):
 
 @njit(**JIT)
 def confined_window(x0, a, nsteps, P, cxi, sxi, stats):
-    """Floes held fixed (u = 0, MODEL.md §5): accumulate ``stats`` over ``nsteps`` steps.
+    """Floes held fixed (u = 0, docs/model.md §5): accumulate ``stats`` over ``nsteps`` steps.
 
     Only the wave-side rows (S3, X, FW, FD) are filled; gaps are constant.
     """

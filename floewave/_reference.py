@@ -33,15 +33,24 @@ def pair_contact(x: np.ndarray, v: np.ndarray, P: K.KernelParams) -> np.ndarray:
     return Fc
 
 
-def forces(x: np.ndarray, v: np.ndarray, a: np.ndarray, x0: np.ndarray, wt: float,
-           P: K.KernelParams, cxi: np.ndarray, sxi: np.ndarray) -> np.ndarray:
-    """(1 + C_m) F_w + F_d + F_c + F_s on every floe [N] (eq. 8, left-hand-side scaled)."""
+def drag(x: np.ndarray, v: np.ndarray, a: np.ndarray, wt: float, P: K.KernelParams,
+         cxi: np.ndarray, sxi: np.ndarray) -> np.ndarray:
+    """F_d on every floe [N] (eq. 15 summed over the drag cells), wave phase ``wt``."""
     th = P.k * x - wt
     s, c = np.sin(th), np.cos(th)
-    Fw = P.c_wave * a * s
     ur = (a * P.u_amp)[:, None] * (c[:, None] * cxi[None, :] - s[:, None] * sxi[None, :]) \
         - v[:, None]
-    Fd = P.c_drag * np.sum(np.abs(ur) * ur, axis=1)
+    return P.c_drag * np.sum(np.abs(ur) * ur, axis=1)
+
+
+def forces(x: np.ndarray, v: np.ndarray, a: np.ndarray, x0: np.ndarray, wt: float,
+           P: K.KernelParams, cxi: np.ndarray, sxi: np.ndarray,
+           Fd: np.ndarray | None = None) -> np.ndarray:
+    """(1 + C_m) F_w + F_d + F_c + F_s on every floe [N] (eq. 8, left-hand-side scaled);
+    ``Fd`` a held drag (else evaluated here)."""
+    Fw = P.c_wave * a * np.sin(P.k * x - wt)
+    if Fd is None:
+        Fd = drag(x, v, a, wt, P, cxi, sxi)
     F = P.one_cm * Fw + Fd
     Fc = pair_contact(x, v, P)
     F[:-1] -= Fc
@@ -51,16 +60,32 @@ def forces(x: np.ndarray, v: np.ndarray, a: np.ndarray, x0: np.ndarray, wt: floa
     return F
 
 
-def advance(x, u, acc, a, x0, istep, nsteps, P, cxi, sxi):
+def advance(x, u, acc, a, x0, istep, nsteps, P, cxi, sxi, held=None):
     """Numpy twin of the time loop :func:`floewave._kernels.make_advance` builds, for one
-    chain (``x[1:] - x[:-1]`` pairs every neighbour; no statistics); returns istep."""
+    chain (``x[1:] - x[:-1]`` pairs every neighbour; no statistics); returns istep.
+
+    ``P.drag_every`` = K > 1: the drag is evaluated on the steps istep = 0 mod K at the
+    centre of the K steps it is then held for, (K - 1) / 2 steps ahead: the wave phase of
+    that time, the floe moved on by its force velocity and that velocity moved on by acc;
+    ``held`` is the drag [N] held when the loop starts (the kernel's, for a start inside a
+    hold)."""
     dt = P.dt
+    n_hold = int(P.drag_every)
+    h = 0.5 * (n_hold - 1) * dt
+    Fd = held
     for _ in range(nsteps):
         istep += 1
         uh = u + 0.5 * dt * acc
         vs = u + dt * acc if P.integrator == K.INTEG_PREDICTOR else uh
         x += dt * uh
-        F = forces(x, vs, a, x0, 2.0 * math.pi / P.n_t * (istep % P.n_t), P, cxi, sxi)
+        wt = 2.0 * math.pi / P.n_t * (istep % P.n_t)
+        if n_hold == 1:
+            F = forces(x, vs, a, x0, wt, P, cxi, sxi)
+        else:
+            if istep % n_hold == 0 or Fd is None:
+                wc = 2.0 * math.pi / P.n_t * ((istep % P.n_t) + 0.5 * (n_hold - 1))
+                Fd = drag(x + h * vs, vs + h * acc, a, wc, P, cxi, sxi)
+            F = forces(x, vs, a, x0, wt, P, cxi, sxi, Fd)
         acc[:] = F * P.inv_mass
         u[:] = uh + 0.5 * dt * acc
     return istep

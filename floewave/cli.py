@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from dataclasses import fields
 from pathlib import Path
@@ -206,7 +207,7 @@ def main_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="cmd", required=True)
     run = sub.add_parser("run", help="run one model point and print a summary",
                          description="Run one model point (the attenuation iteration of"
-                         " MODEL.md §4) with the defaults below changed by --set, and print"
+                         " docs/model.md §4) with the defaults below changed by --set, and print"
                          " a summary.",
                          epilog=fields_help() + "\n\n" + EXIT_HELP,
                          formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -223,7 +224,7 @@ def main_parser() -> argparse.ArgumentParser:
                     help="trace the floes nearest to these distances from the ice edge [m],"
                          " e.g. 3,12,30 (the paper's)")
     tr.add_argument("--trace-every", type=int, default=10, metavar="STEPS",
-                    help="time steps between samples (default 10 = 1 ms at dt = 1e-4 s)")
+                    help="time steps between samples (default 10: 10 ms at dt = 1e-3 s)")
     tr.add_argument("--trace-periods", type=int, default=None, metavar="N",
                     help="recorded wave periods (default: nT)")
     tr.add_argument("--trace-plot", type=Path, metavar="PNG",
@@ -231,10 +232,43 @@ def main_parser() -> argparse.ArgumentParser:
     figs = sub.add_parser("figures", help="write the analytic figures (paper's Fig. 1)")
     figs.add_argument("--out", type=Path, required=True, metavar="DIR",
                       help="output directory (created if missing)")
+    for p in (parser, run, figs):  # `--jso out.json` is refused, not taken for `--json`
+        p.allow_abbrev = False
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``floewave`` console script; returns the exit status. A reader
+    that stops early (``floewave figures --out figs | head -1``) ends the output quietly,
+    with status 0: it has what it wanted."""
+    try:
+        status = _main(argv)
+        sys.stdout.flush()
+    except BrokenPipeError:
+        _quiet_stdout()
+        return EXIT_OK
+    return status
+
+
+def _say(text: str) -> None:
+    """Print a result line; when stdout's reader has gone, go on quietly (the point's
+    ``--json``/``--plot`` files are still written)."""
+    try:
+        print(text, flush=True)
+    except BrokenPipeError:
+        _quiet_stdout()
+
+
+def _quiet_stdout() -> None:
+    """Point stdout at /dev/null (its reader went away: no error at the exit's flush)."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass
+
+
+def _main(argv: list[str] | None) -> int:
     args = main_parser().parse_args(argv)
     if args.cmd == "figures":
         return figures_main(args.out)
@@ -265,7 +299,7 @@ def main(argv: list[str] | None = None) -> int:
     except FloewaveError as exc:
         print(f"floewave: point failed: {exc}", file=sys.stderr)
         return EXIT_FAILED
-    print(summary(cfg, r, compile_time))
+    _say(summary(cfg, r, compile_time))
     trace = None
     if args.trace is not None:
         from .trace import trace_point
@@ -277,7 +311,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"floewave: trace failed: {exc}", file=sys.stderr)
             _write_outputs(args, cfg, r, None)      # the point itself is kept
             return EXIT_FAILED
-        print(f"trace: floes {', '.join(str(int(i) + 1) for i in trace.floes)} at x ="
+        _say(f"trace: floes {', '.join(str(int(i) + 1) for i in trace.floes)} at x ="
               f" {', '.join(f'{d:.1f}' for d in trace.distance)} m, {len(trace.t)} samples"
               f" every {trace.every} steps; max |S_sd| ="
               f" {', '.join(f'{v:.3g}' for v in np.abs(trace.S_sd).max(axis=0))} W m-2")
@@ -328,11 +362,11 @@ def figures_main(out: Path) -> int:
         print(f"floewave: error: cannot write {str(path)!r}: {exc.strerror or exc}",
               file=sys.stderr)
         return EXIT_BAD_INPUT
-    print(path)
-    print("high-frequency tail exponents m of omega^3/(c_g tanh^3 kh) = c omega^m"
-          " (paper: ep lab 1.994, field 2.397):")
+    _say(str(path))
+    _say("high-frequency tail exponents m of omega^3/(c_g tanh^3 kh) = c omega^m"
+         " (paper: ep lab 1.994, field 2.397):")
     for (case, disp), (m, _c, fmin, fmax) in fits.items():
-        print(f"  {case:5s} {disp}: m = {m:.3f}  (fit {fmin:.4g}-{fmax:.4g} Hz)")
+        _say(f"  {case:5s} {disp}: m = {m:.3f}  (fit {fmin:.4g}-{fmax:.4g} Hz)")
     return EXIT_OK
 
 

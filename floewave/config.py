@@ -1,4 +1,5 @@
-"""Model configuration: every parameter of MODEL.md in one frozen, validated dataclass.
+"""Model configuration: every parameter of the model (docs/model.md) in one frozen,
+validated dataclass.
 
 ``ModelConfig`` is the single source of truth for a model point. It is frozen and
 hashable, validated in one place (``__post_init__``), and round-trips exactly through
@@ -33,7 +34,7 @@ __all__ = [
 
 # (G: gravity, defined with the dispersion relations it belongs to; re-exported here)
 
-#: The seven swept dimensions of the paper's campaign (MODEL.md §7), in grid order.
+#: The seven swept dimensions of the paper's campaign (docs/model.md §7), in grid order.
 SWEPT_FIELDS = ("L_x", "T", "a0", "C_sd", "eps", "d_f", "dispersion")
 
 DISPERSIONS = ("ep", "ml", "ow")
@@ -54,7 +55,7 @@ STATIONARITY = ("mser", "fixed")
 
 @dataclass(frozen=True)
 class ModelConfig:
-    """All parameters of one model point (SI units; MODEL.md section in brackets).
+    """All parameters of one model point (SI units; docs/model.md section in brackets).
 
     Swept dimensions (paper §4.1)
     ----------------------------
@@ -87,6 +88,11 @@ class ModelConfig:
     dx : drag/dissipation quadrature spacing along the floe bottom [m]; L_x/dx integer
     drag_integration : ``"quadrature"`` (the paper's dx grid, default) or ``"exact"``
         (closed-form floe-bottom integrals, the limit dx -> 0; floewave._exact)
+    drag_every : evaluate the ice-water drag and dissipation sums (eqs. 15, 19) every this
+        many time steps, at the centre of the steps they are held for (multiple time
+        stepping: the floe-bottom sums cost most of a step, the contacts need every step;
+        second order in the hold); n_t must be a multiple of it; 1 evaluates them every
+        step as the paper does; default 4 by measurement (docs/convergence.md)
     integrator : ``"predictor"`` (velocity Verlet, velocity-dependent forces at the
         predicted end-of-step velocity u + dt*a: second order) or ``"half_step"``
         (forces at the half-step velocity as LIGGGHTS does: first order in the damping)
@@ -125,7 +131,7 @@ class ModelConfig:
         one chain whatever ``replicas``, uniform placement)
     overwash : include overwash dissipation (eqs. 17, 18, 21); c_ow [-], s_min [-]
 
-    Ensemble (MODEL.md §4 "Ensembles"; README "Ensembles and error bars")
+    Ensemble (docs/model.md §4 "Ensembles"; docs/convergence.md "Ensembles and error bars")
     -------------------------------------------------------------------
     replicas : R, independent floe chains per point (1: a single trajectory)
     seed : ensemble seed; replica r's arrangement derives from (the configuration without
@@ -153,7 +159,7 @@ class ModelConfig:
     fit_min_floes, fit_min_length : alpha_edge and alpha_inner are fitted only over a zone
         of at least this many floes spanning at least this many metres [-], [m]
     (the rule and how its defaults were chosen: :func:`floewave.results.compact_zones`,
-    README "The collision-zone width W_c")
+    docs/model.md §6 "The compact-zone rule")
     """
 
     # --- swept (paper §4.1) ---
@@ -183,6 +189,7 @@ class ModelConfig:
     dt: float = 1.0e-3
     dx: float = 0.01
     drag_integration: str = "quadrature"
+    drag_every: int = 4
     integrator: str = "predictor"
     protocol: str = "stationary"
     n0: int = 5
@@ -235,6 +242,7 @@ class ModelConfig:
         _require(self, "nu", 0 <= self.nu < 0.5, "must be in [0, 0.5)")
         _require(self, "relax", 0 < self.relax <= 1, "must be in (0, 1]")
         _require(self, "n0", self.n0 >= 0, "must be >= 0")
+        _require(self, "drag_every", 1 <= self.drag_every <= 100, "must be in [1, 100]")
         _require(self, "nT", self.nT >= 1, "must be >= 1")
         _require(self, "max_iterations", self.max_iterations >= 1, "must be >= 1")
         _require(self, "noise_window", self.noise_window >= 0, "must be >= 0")
@@ -268,7 +276,7 @@ class ModelConfig:
     # ------------------------------------------------------------------ derived
     @property
     def n_floes(self) -> int:
-        """N_f = round(L_sheet / L_x) (MODEL.md §1)."""
+        """N_f = round(L_sheet / L_x) (docs/model.md §1)."""
         return int(round(self.L_sheet / self.L_x))
 
     @property
@@ -308,7 +316,7 @@ class ModelConfig:
         return self.replicas
 
     def floe_steps_per_iteration(self) -> int:
-        """(n0 + nT) n_t N_f: the cost unit of MODEL.md §4 for the first iteration."""
+        """(n0 + nT) n_t N_f: the cost unit of docs/model.md §4 for the first iteration."""
         return self.floe_steps_of(1)
 
     def floe_steps_of(self, iterations: int) -> int:
@@ -325,7 +333,7 @@ class ModelConfig:
         """Time steps in the shortest binary contact the contact law allows: the half period
         pi sqrt(m* / k_n) of an undamped contact at the stiffest k_n (``linear``: Y* L_y h_i
         / L_x; ``hertz_disk``: pi Y* h_i 0.9117, the limit of f(s)), with the added-mass
-        reduced mass m* = (1 + C_m) m / 2 (MODEL.md §3). A lower bound of the steps a real
+        reduced mass m* = (1 + C_m) m / 2 (docs/model.md §3). A lower bound of the steps a real
         contact takes (measured at 0.05 m/s, lab ice, dt 1e-3: 51-62 steps for
         ``hertz_disk`` where this gives 22; ``benchmarks/dt_convergence.py``)."""
         y_star = self.E / (2.0 * (1.0 - self.nu**2))
@@ -342,13 +350,20 @@ class ModelConfig:
         """Raise :class:`InvalidPointError` if this point cannot be simulated; else return
         the wavenumber k and group velocity c_g it solved for (eqs. 6, 7).
 
-        Checks: T/dt and L_x/dx integral, a binary contact resolved in at least
+        Checks: T/dt and L_x/dx integral, n_t a multiple of ``drag_every``, a binary contact resolved in at least
         :data:`MIN_CONTACT_STEPS` steps (:meth:`contact_steps`; not for ``confined``), at least
         two floes, and (via the dispersion
         solver) that eq. 6 has an admissible root (``ml`` below its cutoff).
         """
         _require_integral("T", self.T, self.dt, "dt")
         _require_integral("L_x", self.L_x, self.dx, "dx")
+        if self.n_t % self.drag_every:
+            fits = max(d for d in range(1, self.drag_every) if self.n_t % d == 0)
+            raise InvalidPointError(
+                f"T / dt = {self.n_t} time steps per period is not a multiple of drag_every ="
+                f" {self.drag_every} (the drag is evaluated every drag_every steps): set"
+                f" drag_every = {fits}, or a T that is a multiple of"
+                f" {self.drag_every * self.dt:g} s", field="drag_every")
         steps = self.contact_steps()
         if not self.confined and steps < MIN_CONTACT_STEPS:
             raise InvalidPointError(

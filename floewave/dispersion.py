@@ -12,7 +12,7 @@ from .errors import DispersionError
 if TYPE_CHECKING:       # the formulas read a ModelConfig's fields; they import no module of
     from .config import ModelConfig  # floewave but errors (config imports this one)
 
-G = 9.81  # [m s^-2] acceleration due to gravity (MODEL.md: g = 9.81)
+G = 9.81  # [m s^-2] acceleration due to gravity (docs/model.md §2)
 
 __all__ = ["G", "coefficients", "dispersion_residual", "omega_of_k", "group_velocity",
            "solve_dispersion", "alpha_confined", "confined_rate_factor", "DispersionError"]

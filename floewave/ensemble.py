@@ -1,4 +1,4 @@
-"""Ensembles of floe chains (MODEL.md §4 "Ensembles"): initial arrangements, replica
+"""Ensembles of floe chains (docs/model.md §4 "Ensembles"): initial arrangements, replica
 seeds, and the estimators with their jackknife standard errors.
 
 A point runs R = ``cfg.replicas`` chains. Replica r starts from its own arrangement
@@ -15,8 +15,8 @@ for a mean it is exactly the standard error of the mean). ``W_c`` is a property 
 averaging window (the paper's: where the window's mean gaps drop below 1e-4 m): it is found
 in every window of every replica, averaged over each replica's windows, then over the
 replicas that have a compact zone, with the standard error of that mean.
-``benchmarks/honesty.py`` checks these error bars against independent ensembles (README
-"Ensembles and error bars").
+``benchmarks/honesty.py`` checks these error bars against independent ensembles
+(docs/convergence.md "Ensembles and error bars").
 """
 from __future__ import annotations
 
@@ -105,7 +105,7 @@ def march_rows(cfg: ModelConfig, S_sd: np.ndarray, c_g: float, k: float) -> np.n
 
 def residual(a_old: np.ndarray, a_new: np.ndarray) -> float:
     """max_i |a_new - a_old| / a_old over floes with a_old > 0 (0 if there are none): the
-    iteration's residual (MODEL.md §4 step 6)."""
+    iteration's residual (docs/model.md §4 step 6)."""
     ok = a_old > 0
     if not ok.any():
         return 0.0

@@ -15,16 +15,16 @@ Parameter sets
 --------------
 ``LAB``: the LS-WICE-like defaults of :class:`ModelConfig` (h = 2.5 m, h_i = 0.03 m,
 E = 3e7 Pa, rho_i = 910, rho_w = 1000, nu = 0.3). The paper does not give the series-3000
-ice properties, so these are documented assumptions (MODEL.md §7) and the lab exponents
+ice properties, so these are documented assumptions (docs/model.md §7) and the lab exponents
 need not match the paper's. ``FIELD``: the paper's field example (Fig. 1 caption):
-h = 1000 m, rho_w = 1025, rho_i = 910, E = 6e9 Pa, h_i = 1.5 m, nu = 0.3 (MODEL.md §7).
+h = 1000 m, rho_w = 1025, rho_i = 910, E = 6e9 Pa, h_i = 1.5 m, nu = 0.3 (docs/model.md §7).
 
 Frequency range and fit rule (one rule for every curve)
 -------------------------------------------------------
 Both cases are drawn on one frequency axis, ``F_RANGE`` = 0.02-2 Hz, as in the paper
 (whose caption notes that the lab and field open-water curves overlap for f > 0.5 Hz, so
 the field curves extend beyond 0.5 Hz). The LS-WICE wave periods T = 1.1-2.0 s
-(f = 0.5-0.91 Hz, MODEL.md §7) are shaded.
+(f = 0.5-0.91 Hz, docs/model.md §7) are shaded.
 
 The exponent m of R = c omega^m is a least-squares line in (log omega, log R) over the
 top ``TAIL_OCTAVES`` = 2 octaves of the curve's admissible range, i.e. over
@@ -57,14 +57,14 @@ __all__ = ["LAB", "FIELD", "F_RANGE", "LSWICE_F", "TAIL_OCTAVES", "ML_CUTOFF_FRA
            "fit_power_law", "tail_exponent", "tail_exponents", "figure1", "FIG1_NAME",
            "figure4", "FIG4_NAME"]
 
-#: Thin laboratory ice: the LS-WICE-like ModelConfig defaults (assumptions, MODEL.md §7).
+#: Thin laboratory ice: the LS-WICE-like ModelConfig defaults (assumptions, docs/model.md §7).
 LAB = ModelConfig()
-#: Field-scale ice of the paper's Fig. 1 caption (nu = 0.3 as in MODEL.md §7).
+#: Field-scale ice of the paper's Fig. 1 caption (nu = 0.3 as in docs/model.md §7).
 FIELD = ModelConfig(h=1000.0, rho_w=1025.0, rho_i=910.0, E=6.0e9, h_i=1.5, nu=0.3)
 
 #: Frequency axis of Fig. 1 [Hz] (both cases), log-spaced.
 F_RANGE = (0.02, 2.0)
-#: LS-WICE wave frequencies [Hz]: periods T = 2.0 s to 1.1 s (MODEL.md §7).
+#: LS-WICE wave frequencies [Hz]: periods T = 2.0 s to 1.1 s (docs/model.md §7).
 LSWICE_F = (1.0 / 2.0, 1.0 / 1.1)
 #: The fit tail is [f_top / 2**TAIL_OCTAVES, f_top].
 TAIL_OCTAVES = 2

@@ -1,4 +1,4 @@
-"""Floe forces of eq. 8 as small formulas (MODEL.md §3); the kernels use their coefficients.
+"""Floe forces of eq. 8 as small formulas (docs/model.md §3); the kernels use their coefficients.
 
 Each function states its equation. This module imports no kernel:
 :func:`floewave._kernels.kernel_params` collects the coefficients the numba time loop

@@ -1,4 +1,4 @@
-"""The coupled DEM-wave attenuation iteration (MODEL.md §4, paper §2.4) and ``run_point``."""
+"""The coupled DEM-wave attenuation iteration (docs/model.md §4, paper §2.4) and ``run_point``."""
 from __future__ import annotations
 
 import math
@@ -30,7 +30,7 @@ __all__ = ["FloeChain", "NumericalError", "march_amplitude", "dissipation", "res
 
 
 class FloeChain:
-    """State of the 1-D floe chain (MODEL.md §1), or of R chains in lockstep (an ensemble:
+    """State of the 1-D floe chain (docs/model.md §1), or of R chains in lockstep (an ensemble:
     one row of ``x0`` per replica), and the compiled time loop around it.
 
     The R chains share every coefficient and differ only in state; one call of the kernel
@@ -100,8 +100,11 @@ class FloeChain:
             keep = (np.all(a == self._acc_a, axis=-1) if self._acc_ready
                     else np.zeros(a.shape[:-1], dtype=bool))
             saved = self.acc.copy()
+            # the drag sums held between evaluations (``drag_every`` > 1), likewise
+            held = self._held_drag().copy()
             self._loop(self._spin, a, 0, np.zeros((K.N_STATS, 0)), True)
             self.acc[keep] = saved[keep]
+            self._held_drag()[keep] = held[keep]
             self._acc_a = a.copy()
             self._acc_ready = True
         if stats is None:
@@ -111,6 +114,10 @@ class FloeChain:
             if not np.shares_memory(flat, stats):
                 raise ValueError("stats must be a contiguous (N_STATS, ...) array")
             self._loop(self._average, a, nsteps, flat, False)
+
+    def _held_drag(self) -> np.ndarray:
+        """The drag sums the time loop holds between evaluations, (R, N_f) view."""
+        return self.work[K.W_SC + K.SC_S2, :self.x0.size].reshape(self.x0.shape)
 
     def check(self) -> None:
         """Raise :class:`NumericalError` on a non-finite state or floes out of order."""
@@ -160,7 +167,7 @@ def kernel_mode(cfg: ModelConfig) -> str:
 
 def run_point(cfg: ModelConfig,
               progress: Callable[[int, float, str], None] | None = None) -> PointResult:
-    """Run the attenuation iteration for one point (MODEL.md §4) and fit the results (§6).
+    """Run the attenuation iteration for one point (docs/model.md §4) and fit the results (§6).
 
     Iteration: start with a_i = a0; per iteration run n0 periods (spin-up, DEM state carried
     over when ``warm_start``) and nT periods accumulating eq. 19; march eq. 20; relax

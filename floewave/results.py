@@ -1,4 +1,4 @@
-"""Per-point results (MODEL.md §6): profiles, collision-zone width and attenuation fits."""
+"""Per-point results (docs/model.md §6): profiles, collision-zone width and attenuation fits."""
 from __future__ import annotations
 
 import dataclasses
@@ -170,7 +170,7 @@ def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
 def compact_zones(x_mean: np.ndarray, gap_mean: np.ndarray, L_x: float, *,
                   gap_threshold: float, min_pairs: int, min_length: float, bridge: int,
                   bridge_gap: float) -> Zones:
-    """The compact zone(s) of a chain from its phase-averaged gaps (MODEL.md §6).
+    """The compact zone(s) of a chain from its phase-averaged gaps (docs/model.md §6).
 
     The paper's dots (Figs. 2, 3a) mark where the phase-averaged floe-floe distance drops
     below ``gap_threshold`` (1e-4 m): the boundary between the collisional zone at the ice
@@ -249,7 +249,7 @@ def compact_zones(x_mean: np.ndarray, gap_mean: np.ndarray, L_x: float, *,
 def zone_fits(x: np.ndarray, a: np.ndarray, a0: float, zones: Zones, *, min_floes: int,
               min_length: float) -> tuple[float, float, float, float]:
     """(alpha_edge, its residual, alpha_inner, its residual): 1/a fits of the collisional
-    zone at the ice edge and of the compact zone (MODEL.md §6, the paper's dashed lines).
+    zone at the ice edge and of the compact zone (docs/model.md §6, the paper's dashed lines).
 
     Edge zone: the floes whose centres lie before W_c (floes 0 ... i0 for the first
     compact zone's pairs [i0, i1); W_c is the right end of floe i0); with no compact zone,

@@ -4,16 +4,16 @@ skin-drag dissipation S_sd and contact force, recorded every ``every`` time step
 Opt-in and separate from :func:`floewave.run_point`, which it does not touch (off by
 default, free when off). A trace runs a :class:`floewave.model.FloeChain` with a *fixed*
 amplitude profile a(x) taken from a converged :class:`~floewave.PointResult` (the
-converged state of the attenuation iteration; MODEL.md §4): from the initial state it
+converged state of the attenuation iteration; docs/model.md §4): from the initial state it
 spins up ``spin_up`` periods (default ``cfg.n0``), then records ``periods`` periods
 (default ``cfg.nT``, the length of the final averaging window) in chunks of ``every``
 steps (``chain.run(a, every)``), and evaluates at each recorded state, in numpy:
 
 - S_sd,i(t) = -rho_w C_sd (1/n_x) sum_j |u_rel,ij|^3  [W m^-2] — eq. 19 without its
   time mean, on the floe's n_x drag cells, with
-  u_rel,ij = a_i (omega / tanh kh) cos(k (x_i + xi_j) - omega t) - u_i (MODEL.md §2, §3);
+  u_rel,ij = a_i (omega / tanh kh) cos(k (x_i + xi_j) - omega t) - u_i (docs/model.md §2, §3);
 - F_c,i(t): the net contact force on floe i [N] (positive towards +x), from the
-  contact law of MODEL.md §3 with the pair's overlap and relative velocity.
+  contact law of docs/model.md §3 with the pair's overlap and relative velocity.
 
 The velocity is the end-of-step state velocity u_i; the kernel's own statistics use the
 predicted velocity u + dt acc (``integrator = "predictor"``), which differs by O(dt acc):

@@ -1,4 +1,4 @@
-"""One averaging window of the attenuation iteration (MODEL.md §4 steps 2-3): running it on
+"""One averaging window of the attenuation iteration (docs/model.md §4 steps 2-3): running it on
 the R chains and its statistics per floe (§6), from the kernel's accumulators."""
 from __future__ import annotations
 

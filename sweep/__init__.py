@@ -7,8 +7,8 @@
 - :func:`load`, :func:`load_xarray`, :func:`load_profile` — read a store
 - :func:`validate` — check a store against ``results_schema/``
 - :func:`collision_stats`, :func:`alpha_omega` — collision-zone statistics and alpha(omega)
-  power laws across a campaign (:mod:`sweep.stats`)
-- :mod:`sweep.papercheck` — the paper's qualitative claims checked on the stores of the
+  power laws across a campaign (:mod:`sweep.analysis.stats`)
+- :mod:`sweep.paper.check` — the paper's qualitative claims checked on the stores of the
   shipped paper campaigns (``sweep paper-check``)
 
 The command line is ``sweep`` (:mod:`sweep.cli`); user docs are in ``sweep/README.md``.
@@ -16,7 +16,7 @@ The command line is ``sweep`` (:mod:`sweep.cli`); user docs are in ``sweep/READM
 import importlib
 from typing import Any
 
-from .errors import (
+from sweep.errors import (
                      CampaignMismatchError,
                      ConfigError,
                      Interrupted,
@@ -33,20 +33,19 @@ from .errors import (
 #: Imported on first use (``import sweep`` stays light, so the ``sweep`` command can
 #: catch stop signals from its first instants): name -> module.
 _LAZY = {
-    "load": "analysis", "load_profile": "analysis", "load_profiles": "analysis",
-    "load_xarray": "analysis",
+    "load": "analysis.load", "load_profile": "analysis.load", "load_profiles": "analysis.load",
+    "load_xarray": "analysis.load",
     "Campaign": "config", "Point": "config", "RunOptions": "config",
     "load_campaign": "config", "parse_campaign": "config",
-    "run_campaign": "executor",
+    "run_campaign": "run.launch",
     "canonical_json": "identity", "point_hash": "identity", "short_hash": "identity",
-    "SCHEMA_VERSION": "schema", "validate": "schema",
-    "alpha_omega": "stats", "collision_stats": "stats", "derived": "stats",
+    "SCHEMA_VERSION": "store.schema", "validate": "store.validate",
+    "alpha_omega": "analysis.stats", "collision_stats": "analysis.stats",
+    "derived": "analysis.stats",
 }
-_MODULES = {"analysis", "cli", "config", "errors", "executor", "figures", "identity",
-            "journal", "lock", "merge", "papercheck", "plan", "progress", "provenance",
-            "reader", "record", "schema", "stats", "store", "testing", "writer",
-            "campaign_check", "master", "signals", "transport", "worker", "guard",
-            "verify"}
+#: Subpackages and modules reachable as attributes of ``sweep`` (imported on first use).
+_MODULES = {"analysis", "arguments", "cli", "config", "errors", "identity", "paper",
+            "protocol", "provenance", "report", "run", "store", "system", "testing"}
 
 
 def __getattr__(name: str) -> Any:

@@ -1,6 +1,6 @@
 """``python -m sweep``: the same as the ``sweep`` command."""
 import sys
 
-from .cli import main
+from sweep.cli import main
 
 sys.exit(main())

@@ -16,67 +16,16 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from .errors import EXIT_INTERNAL, EXIT_OK, EXIT_STORE, ConfigError, Interrupted, SweepError
+from sweep.arguments import count, kind_list, plural, positive_number, seconds, shard
+from sweep.errors import EXIT_INTERNAL, EXIT_OK, EXIT_STORE, ConfigError, Interrupted, SweepError
 
 __all__ = ["main", "build_parser"]
-
-
-def plural(n: int, noun: str) -> str:
-    """``1 point``, ``2 points``."""
-    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
-
-
-def _kinds(text: str) -> list[str]:
-    """``--only fig2,fig3``: a comma-separated list (one argument, so that a store name
-    after ``--only`` is never taken for a kind)."""
-    return [k for k in (s.strip() for s in text.split(",")) if k]
-
-
-def _shard(text: str) -> tuple[int, int]:
-    try:
-        k, n = (int(x) for x in text.split("/"))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"--shard {text!r}: expected K/N, e.g. 3/40") from None
-    if not (n >= 1 and 0 <= k < n):
-        raise argparse.ArgumentTypeError(f"--shard {text!r}: need 0 <= K < N")
-    return k, n
-
-
-def _seconds(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected seconds") from None
-    if not (0 <= value <= 3.2e7):
-        raise argparse.ArgumentTypeError(f"{text!r}: expected 0 to 3.2e7 seconds")
-    return value
-
-
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected a number") from None
-    if not (value > 0 and value < float("inf")):
-        raise argparse.ArgumentTypeError(f"{text!r}: must be a positive number")
-    return value
-
-
-def _count(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected an integer") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"{text!r}: must be 0 or more")
-    return value
 
 
 def _version() -> str:
     """``sweep (floewave 0.1.0, model version 3, store schema 2)``."""
     import floewave
-
-    from .schema import SCHEMA_VERSION
+    from sweep.store.schema import SCHEMA_VERSION
 
     return (f"sweep (floewave {floewave.__version__}, model version {floewave.MODEL_VERSION},"
             f" store schema {SCHEMA_VERSION})")
@@ -84,7 +33,7 @@ def _version() -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (documented in sweep/README.md)."""
-    from .executor import DEFAULT_COMPUTE
+    from sweep.run.launch import DEFAULT_COMPUTE
 
     p = argparse.ArgumentParser(prog="sweep", description="Run and analyse floewave"
                                 " parameter campaigns (MPI master/worker, one HDF5 store).")
@@ -98,11 +47,11 @@ def build_parser() -> argparse.ArgumentParser:
                    " failed")
     r.add_argument("--extend", action="store_true", help="accept a store of this campaign"
                    " with fewer grid values (the new values are added)")
-    r.add_argument("--shard", type=_shard, metavar="K/N", help="compute only shard K of N"
+    r.add_argument("--shard", type=shard, metavar="K/N", help="compute only shard K of N"
                    " (points whose hash mod N is K), for Slurm job arrays")
     r.add_argument("--compute", default=DEFAULT_COMPUTE, metavar="MODULE:FUNC",
                    help="compute function (tests/benchmarks; default floewave:run_point)")
-    r.add_argument("--point-timeout", type=_seconds, metavar="SECONDS",
+    r.add_argument("--point-timeout", type=seconds, metavar="SECONDS",
                    help="store a point that runs longer as 'timeout' (overrides [run]"
                    " point_timeout; 0: no limit)")
     r.add_argument("--verify", action="store_true", help="on opening, compare the store"
@@ -114,14 +63,14 @@ def build_parser() -> argparse.ArgumentParser:
 
     pl = sub.add_parser("plan", help="count points and estimate the cost; writes nothing")
     pl.add_argument("config", type=Path)
-    pl.add_argument("--rate", type=_positive, metavar="FLOE_STEPS_PER_S",
+    pl.add_argument("--rate", type=positive_number, metavar="FLOE_STEPS_PER_S",
                     help="kernel speed to assume instead of a calibration run")
     pl.add_argument("--json", action="store_true", help="machine-readable output")
 
     s = sub.add_parser("status", help="counts by status, failures, slowest points")
     s.add_argument("store", type=Path)
     s.add_argument("--json", action="store_true", help="machine-readable output")
-    s.add_argument("--slowest", type=_count, default=5, metavar="N")
+    s.add_argument("--slowest", type=count, default=5, metavar="N")
 
     e = sub.add_parser("export", help="write the per-point table as CSV or Parquet")
     e.add_argument("store", type=Path)
@@ -140,7 +89,7 @@ def build_parser() -> argparse.ArgumentParser:
     fg.add_argument("--max", type=int, default=20, metavar="N",
                     help="at most N figures per kind (default 20; groups closest to the "
                          "paper's setup first)")
-    fg.add_argument("--only", type=_kinds, action="extend", metavar="KIND[,KIND]",
+    fg.add_argument("--only", type=kind_list, action="extend", metavar="KIND[,KIND]",
                     default=None, help="only these kinds, comma-separated or repeated:"
                     " fig2,fig3,fig5,fig6,summary (default all)")
 
@@ -173,6 +122,8 @@ def build_parser() -> argparse.ArgumentParser:
     m = sub.add_parser("merge", help="combine shard stores of one campaign (dedup by hash)")
     m.add_argument("output", type=Path, help="merged store (created or extended)")
     m.add_argument("inputs", type=Path, nargs="+", help="shard stores")
+    for parser in (p, *sub.choices.values()):  # `--stor x.h5` is refused, not `--store`
+        parser.allow_abbrev = False
     return p
 
 
@@ -190,7 +141,7 @@ _LATE_STOP: list[int] = []  # stop signals after the campaign's own handlers wer
 
 
 def _stop_during_start_up(signum: int, frame: Any) -> None:
-    from . import signals
+    from sweep.run import signals
 
     if signals.campaign_over:  # nothing left to stop: the command ends as it would
         _LATE_STOP.append(signum)
@@ -203,32 +154,28 @@ def _stop_during_start_up(signum: int, frame: Any) -> None:
                       " the same command again")
 
 
-#: Variables an MPI launcher sets (used by :func:`sweep.executor.mpi_world`; kept here
-#: so that the check needs no heavy import).
-_LAUNCHER_VARS = ("PMI_RANK", "PMI_SIZE", "PMIX_RANK", "OMPI_COMM_WORLD_SIZE",
-                  "MPI_LOCALNRANKS", "HYDRA_CONTROL_FD", "PMI_FD")
-
-
 def _catch_stops_at_start_up(argv: Sequence[str]) -> None:
     """``run`` and ``merge``: a stop signal before the store is opened ends the command
     with status 6 (nothing was changed). Not under an MPI launcher: there rank 0 alone
     leaving would leave the workers waiting; the default action ends the job."""
     if not argv or argv[0] not in ("run", "merge"):
         return
-    from . import signals
+    from sweep.run import signals
+    from sweep.run.mpi import launched
 
     signals.campaign_over = False  # a new command: its stops stop it
     _START_UP_STOP.clear()
     _LATE_STOP.clear()
-    if any(v in os.environ for v in _LAUNCHER_VARS):
+    if launched():
         return
     for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1):
         signal.signal(sig, _stop_during_start_up)
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    from .config import load_campaign
-    from .executor import check_launch, mpi_world, run_campaign
+    from sweep.config import load_campaign
+    from sweep.run.launch import run_campaign
+    from sweep.run.mpi import check_launch, mpi_world
 
     comm = mpi_world()
     rank = comm.Get_rank() if comm is not None else 0
@@ -263,8 +210,8 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
-    from .config import DEFAULT_EXPECTED_ITERATIONS, EXTRA_WINDOWS, load_campaign
-    from .plan import plan
+    from sweep.config import DEFAULT_EXPECTED_ITERATIONS, EXTRA_WINDOWS, load_campaign
+    from sweep.run.plan import plan
 
     campaign = load_campaign(args.config)  # a SweepError is reported by main
     points = campaign.points()
@@ -289,137 +236,28 @@ def cmd_plan(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _swept(row: Any, dims: Sequence[str]) -> dict[str, Any]:
-    """A point's swept values as plain Python values (for text and JSON)."""
-    out = {}
-    for k in dims:
-        v = getattr(row, k)
-        out[k] = v if isinstance(v, str) else float(v)
-    return out
-
-
-def _swept_text(swept: dict[str, Any]) -> str:
-    return " ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}"
-                    for k, v in swept.items())
-
-
-def status_report(path: Path, slowest: int = 5) -> dict[str, Any]:
-    """The data behind ``sweep status``: counts, the points that did not converge or
-    failed (with their swept values), the slowest points, and one line per run."""
-    from .analysis import journal_points, load, store_attrs, store_runs
-
-    df = load(path)
-    journaled = journal_points(path)
-    attrs = store_attrs(path)
-    campaign = json.loads(attrs["campaign_json"])
-    dims = list(campaign["sweep"])
-    total = 1
-    for values in campaign["sweep"].values():
-        total *= len(values)
-    counts = {str(k): int(v) for k, v in df["status"].value_counts().items() if v}
-    failures = [{"hash": r.hash[:12], "status": str(r.status), "swept": _swept(r, dims),
-                 "message": r.message.splitlines()[0] if r.message else ""}
-                for r in df[df["status"].isin(["failed", "invalid", "crashed",
-                                               "timeout"])].itertuples()]
-    not_converged = [{"hash": r.hash[:12], "swept": _swept(r, dims),
-                      "iterations": int(r.iterations), "residual": float(r.residual)}
-                     for r in df[df["status"] == "not_converged"].itertuples()]
-    slow = df.sort_values("wall_time", ascending=False).head(slowest)
-    runs = [{"index": int(r["index"]), "started": str(r.get("started", "")),
-             "ended": str(r.get("ended", "")), "outcome": str(r.get("outcome", "")),
-             "mpi_size": int(r.get("mpi_size", 1)), "host": str(r.get("host", "")),
-             "stored": int((df["run"] == r["index"]).sum())} for r in store_runs(path)]
-    return {"store": str(path), "grid_points": total, "stored": len(df),
-            "journaled": journaled,
-            "remaining": max(total - len(df), 0), "counts": counts, "failures": failures,
-            "not_converged": not_converged,
-            "slowest": [{"hash": r.hash[:12], "wall_time": float(r.wall_time),
-                         "status": str(r.status), "host": r.host, "rank": int(r.rank),
-                         "swept": _swept(r, dims)}
-                        for r in slow.itertuples()],
-            "runs": runs,
-            "total_wall_time": float(df["wall_time"].sum()) if len(df) else 0.0}
-
-
 def cmd_status(args: argparse.Namespace) -> int:
+    from sweep.analysis.status import status_report, status_text
+
     rep = status_report(args.store, args.slowest)
-    if args.json:
-        print(json.dumps(rep, indent=2, default=str))
-        return EXIT_OK
-    print(f"{rep['store']}: {rep['stored']}/{rep['grid_points']} points stored,"
-          f" {rep['remaining']} remaining; point wall time {rep['total_wall_time']:.1f} s")
-    if rep["journaled"] is not None and rep["journaled"] > rep["stored"]:
-        print(f"  the journal holds {rep['journaled']} points: {rep['journaled'] - rep['stored']}"
-              " more than the file (a live run mid-commit, or a killed one: its next run"
-              " writes them)")
-    for k, v in sorted(rep["counts"].items()):
-        print(f"  {k:16s} {v}")
-    if rep["failures"]:
-        print("failed / invalid:")
-        for f in rep["failures"]:
-            print(f"  {f['hash']} {f['status']:8s} {_swept_text(f['swept'])}: {f['message']}")
-    if rep["not_converged"]:
-        print("not converged (max_iterations reached; the estimate so far is stored, with"
-              " its error bars):")
-        for f in rep["not_converged"]:
-            print(f"  {f['hash']} {_swept_text(f['swept'])}: {f['iterations']} iterations,"
-                  f" residual {f['residual']:.3g}")
-    if rep["slowest"]:
-        print("slowest:")
-        for s in rep["slowest"]:
-            print(f"  {s['hash']} {s['wall_time']:9.2f} s  {s['status']}  rank {s['rank']}"
-                  f" on {s['host']}  {_swept_text(s['swept'])}")
-    if rep["runs"]:
-        print("runs:")
-        for r in rep["runs"]:
-            print(f"  {r['index']}: {r['started'][:19]} to {r['ended'][:19] or '(running)'},"
-                  f" {r['mpi_size']} rank(s) on {r['host']}, {plural(r['stored'], 'point')}"
-                  f" stored: {r['outcome']}")
+    print(json.dumps(rep, indent=2, default=str) if args.json else status_text(rep))
     return EXIT_OK
 
 
 def cmd_export(args: argparse.Namespace) -> int:
-    from .analysis import load
+    from sweep.analysis.export import export_table
 
-    suffix = args.output.suffix.lower()
-    if suffix not in (".csv", ".parquet"):
-        raise ConfigError(f"--output {args.output}: expected a .csv or .parquet file name")
-    from floewave._paths import output_file_problem
-
-    problem = output_file_problem(args.output, "--output")
-    if problem:
-        raise ConfigError(problem)
-    if suffix == ".parquet" and not _parquet_engine():
-        raise ConfigError(f"--output {args.output}: Parquet needs pyarrow:"
-                          " pip install 'floewave[parquet]' (or write .csv)")
-    df = load(args.store)
-    try:
-        if suffix == ".csv":
-            df.to_csv(args.output, index=False)
-        else:
-            df.to_parquet(args.output, index=False)
-    except OSError as exc:  # a full disk (/dev/full), an I/O error
-        from .errors import StoreError
-
-        raise StoreError(f"--output {args.output}: cannot be written:"
-                         f" {exc.strerror or exc}") from None
-    print(f"sweep: wrote {plural(len(df), 'row')} to {args.output}")
+    n = export_table(args.store, args.output)
+    print(f"sweep: wrote {plural(n, 'row')} to {args.output}")
     return EXIT_OK
 
 
-def _parquet_engine() -> bool:
-    """Whether pandas can write Parquet (pyarrow or fastparquet importable)."""
-    import importlib.util
-
-    return any(importlib.util.find_spec(m) is not None for m in ("pyarrow", "fastparquet"))
-
-
 def cmd_validate(args: argparse.Namespace) -> int:
-    from .schema import validate
+    from sweep.store.validate import validate
 
     problems = validate(args.store)
     if args.deep and not any("not a readable HDF5 file" in p for p in problems):
-        from .verify import compare_with_journal
+        from sweep.store.verify import compare_with_journal
 
         try:
             deep = compare_with_journal(args.store)
@@ -441,7 +279,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
 
 
 def cmd_merge(args: argparse.Namespace) -> int:
-    from .merge import merge
+    from sweep.store.merge import merge
 
     report = merge(args.output, args.inputs)  # a SweepError is reported by main
     print(f"sweep: {report}")
@@ -449,7 +287,7 @@ def cmd_merge(args: argparse.Namespace) -> int:
 
 
 def cmd_figures(args: argparse.Namespace) -> int:
-    from .figures import KINDS, make_figures
+    from sweep.analysis.figures import KINDS, make_figures
 
     if args.max < 1:
         raise ConfigError(f"--max {args.max}: must be at least 1")
@@ -471,13 +309,13 @@ def cmd_figures(args: argparse.Namespace) -> int:
 def cmd_paper_check(args: argparse.Namespace) -> int:
     """Exit status 0 whatever the verdicts; 3 if a store is missing or unreadable (the
     table is printed all the same, those claims inconclusive)."""
-    from .papercheck import check_stores, format_table
+    from sweep.paper.check import check_stores, format_table
 
     def log(msg: str) -> None:
         print(f"sweep: {msg}", file=sys.stderr)
 
     if args.seeds:
-        from .paperseeds import across_seeds, check_seeds, format_seed_table
+        from sweep.paper.seeds import across_seeds, check_seeds, format_seed_table
 
         reports = check_seeds(args.stores, args.seeds, run=args.run, configs=args.configs,
                               compute=args.compute, log=log)
@@ -502,7 +340,7 @@ def cmd_paper_check(args: argparse.Namespace) -> int:
 
 
 def cmd_report(args: argparse.Namespace) -> int:
-    from .report import command
+    from sweep.report import command
 
     return command(args)
 
@@ -516,9 +354,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``sweep`` console script; returns the exit status.
 
     From the command line (``argv`` None), ``sweep run`` runs under its guard
-    (:mod:`sweep.guard`): a parent process that turns an exit with status 0 before the
+    (:mod:`sweep.run.guard`): a parent process that turns an exit with status 0 before the
     campaign finished (``exit(0)`` in a compute function) into status 6."""
-    from . import guard
+    from sweep.run import guard
 
     args_ = list(sys.argv[1:] if argv is None else argv)
     _catch_stops_at_start_up(args_)  # first: a stop from the first instants is status 6

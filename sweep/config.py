@@ -27,9 +27,8 @@ import floewave
 from floewave import ModelConfig, solve_dispersion
 from floewave._help import did_you_mean
 from floewave.transient import transient_windows
-
-from .errors import ConfigError
-from .identity import canonical_json, point_hash, sha256_hex
+from sweep.errors import ConfigError
+from sweep.identity import canonical_json, point_hash, sha256_hex
 
 __all__ = ["Campaign", "Point", "RunOptions", "load_campaign", "parse_campaign",
            "DEFAULT_EXPECTED_ITERATIONS"]
@@ -86,7 +85,7 @@ class RunOptions:
 class Point:
     """One grid point: its position, resolved configuration, identity and cost.
 
-    ``cost`` is the floe-steps of the expected number of iterations (MODEL.md §4;
+    ``cost`` is the floe-steps of the expected number of iterations (docs/model.md §4;
     ``ModelConfig.floe_steps_of``: the first iteration spins up n0 periods, later ones n0_warm),
     ``invalid`` the reason the point is physically impossible (``""`` when it is not).
     """

@@ -24,8 +24,10 @@ from __future__ import annotations
 
 __all__ = ["SweepError", "ConfigError", "StoreError", "StoreLockedError",
            "SchemaVersionError", "CampaignMismatchError", "LaunchError", "WorkerError",
-           "Interrupted", "PointNotFoundError", "EXIT_OK", "EXIT_INTERNAL", "EXIT_CONFIG",
-           "EXIT_STORE", "EXIT_LAUNCH", "EXIT_WORKER", "EXIT_INTERRUPTED"]
+           "Interrupted", "PointNotFoundError", "StoreCorruptedError", "StoreUnreadableError",
+           "UnstorableError", "BadJournalLineError", "NothingToDrawError", "EXIT_OK",
+           "EXIT_INTERNAL", "EXIT_CONFIG", "EXIT_STORE", "EXIT_LAUNCH", "EXIT_WORKER",
+           "EXIT_INTERRUPTED"]
 
 EXIT_OK = 0
 EXIT_INTERNAL = 1
@@ -111,3 +113,25 @@ class Interrupted(SweepError, RuntimeError):
     """The campaign stopped on a signal; what finished is stored and it is resumable."""
 
     exit_status = EXIT_INTERRUPTED
+
+
+class StoreUnreadableError(StoreError):
+    """A store file exists but HDF5 cannot open it (perhaps caught in the middle of a
+    rebuild's rename: readers retry it)."""
+
+
+class UnstorableError(SweepError, ValueError):
+    """A record holds a value the schema cannot store; the message says which."""
+
+
+class BadJournalLineError(SweepError, ValueError):
+    """A journal line that cannot be trusted; the message is the reason."""
+
+
+class NothingToDrawError(ConfigError):
+    """No figure of the asked kinds can be drawn from the store's grid (exit status 2, as
+    any input that cannot give what was asked); ``reasons`` maps each figure to why."""
+
+    def __init__(self, message: str, reasons: dict[str, str]) -> None:
+        super().__init__(message)
+        self.reasons = dict(reasons)

@@ -10,13 +10,13 @@ decoded). In order it shows:
    start and last end, and the core-hours of the stored points (sum of their wall times);
 2. the status counts, and every point that did not converge or has no result, with its
    swept values and its reason (the error message, or iterations and residual);
-3. the paper's figures that the grid allows (:func:`sweep.figures.make_figures`, at most
+3. the paper's figures that the grid allows (:func:`sweep.analysis.figures.make_figures`, at most
    ``--max`` per kind) and, for those it does not allow, why;
 4. the collision-zone statistics per floe size, dispersion relation and eps
    (:func:`sweep.collision_stats`: mean ± standard deviation over the pooled points and,
    for ensembles, ± the propagated standard error);
 5. with ``--paper-check DIR``: the table of ``sweep paper-check --stores DIR``
-   (:func:`sweep.papercheck.check_stores`).
+   (:func:`sweep.paper.check.check_stores`).
 """
 from __future__ import annotations
 
@@ -217,8 +217,8 @@ def _img(png: Path) -> str:
 
 
 def _figures(path: Path, max_figures: int) -> str:
-    from .errors import ConfigError
-    from .figures import make_figures
+    from sweep.analysis.figures import make_figures
+    from sweep.errors import ConfigError
 
     notes: list[str] = []
     with tempfile.TemporaryDirectory(prefix="sweep-report-") as tmp:
@@ -243,7 +243,7 @@ def _pm(mean: Any, spread: Any) -> str:
 
 
 def _collision(df: pd.DataFrame) -> str:
-    from .stats import collision_stats
+    from sweep.analysis.stats import collision_stats
 
     by = [k for k in ("L_x", "dispersion", "eps") if k in df.columns]
     st = collision_stats(df, by=by)
@@ -271,7 +271,7 @@ def _collision(df: pd.DataFrame) -> str:
 
 
 def _paper_check(stores: Path) -> str:
-    from .papercheck import check_stores
+    from sweep.paper.check import check_stores
 
     report = check_stores(stores)
     verdict_cls = {"holds": "ok", "fails": "bad"}
@@ -300,7 +300,7 @@ def build_report(store: str | Path, *, paper_stores: str | Path | None = None,
     paper_stores : directory of the paper campaigns' stores; adds the paper-check table.
     max_figures : at most this many figures per kind (groups closest to the paper first).
     """
-    from .analysis import journal_points, load, store_attrs, store_runs
+    from sweep.analysis.load import journal_points, load, store_attrs, store_runs
 
     path = Path(store)
     if not path.exists():
@@ -343,7 +343,7 @@ def write_report(store: str | Path, out: str | Path, *, paper_stores: str | Path
 def command(args: Any) -> int:
     """``sweep report STORE --out FILE [--paper-check DIR] [--max N]`` (status 0; 2 for a
     bad argument, 3 for a missing or unreadable store)."""
-    from .errors import EXIT_OK, ConfigError
+    from sweep.errors import EXIT_OK, ConfigError
 
     if args.max < 1:
         raise ConfigError(f"--max {args.max}: must be at least 1")

@@ -32,7 +32,8 @@ import h5py
 import pytest
 
 import sweep
-from sweep.store import journal_path, read_journal
+from sweep.store.journal import journal_path
+from sweep.store.reader import read_journal
 from sweep.testing import SMALL_REAL_BASE
 from tests.slurm_cluster import SlurmCluster, SlurmError, missing_programs
 from tests.sweep.test_torture import compare

@@ -6,7 +6,7 @@ Everything here is nopython, cached, without fast-math (flags and why:
 :class:`~floewave.config.ModelConfig`; option switches are small integers fixed for the
 whole call (loop-invariant branches, no Python objects in the time loop).
 
-Time integration (velocity Verlet, MODEL.md §3), per step n -> n+1::
+Time integration (velocity Verlet, docs/model.md §3), per step n -> n+1::
 
     u_half = u_n + dt/2 acc_n
     x_{n+1} = x_n + dt u_half
@@ -101,7 +101,7 @@ class KernelParams(NamedTuple):
 
 @njit(**JITN)
 def contact_stiffness(delta, P):
-    """k_n for overlap ``delta`` [N m^-1] (MODEL.md §3: hertz_disk f(s) or linear)."""
+    """k_n for overlap ``delta`` [N m^-1] (docs/model.md §3: hertz_disk f(s) or linear)."""
     if P.contact == CONTACT_LINEAR:
         return P.kn_lin
     s = delta * P.s_scale
@@ -606,7 +606,7 @@ def advance(x, u, acc, a, x0, in_contact, istep, nsteps, accumulate, P, cxi, sxi
 
 @njit(**JIT)
 def confined_window(x0, a, nsteps, P, cxi, sxi, stats):
-    """Floes held fixed (u = 0, MODEL.md §5): accumulate ``stats`` over ``nsteps`` steps.
+    """Floes held fixed (u = 0, docs/model.md §5): accumulate ``stats`` over ``nsteps`` steps.
 
     Only the wave-side rows (S3, X, FW, FD) are filled; gaps are constant.
     """

@@ -8,7 +8,7 @@ from floewave.model import FloeChain
 
 
 def collision_config(**kw) -> ModelConfig:
-    """Two free lab-ice floes (MODEL.md §7) with no waves, drag, springs or added mass."""
+    """Two free lab-ice floes (docs/model.md §7) with no waves, drag, springs or added mass."""
     base = dict(L_x=0.5, L_sheet=1.0, a0=0.0125, C_sd=0.0, k_s=0.0, C_m=0.0, d_f=0.001,
                 dispersion="ow")
     base.update(kw)

@@ -1,4 +1,4 @@
-"""Confined ice (MODEL.md §5, paper §3): the iteration reproduces eqs. 22-25."""
+"""Confined ice (docs/model.md §5, paper §3): the iteration reproduces eqs. 22-25."""
 import math
 
 import numpy as np

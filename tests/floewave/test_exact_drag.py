@@ -1,6 +1,6 @@
 """Closed-form ("exact") floe-bottom drag integrals (floewave._exact) against quadrature.
 
-MODEL.md §3: the exact mode must agree with the quadrature mode as dx -> 0. Units: the exact
+docs/model.md §3: the exact mode must agree with the quadrature mode as dx -> 0. Units: the exact
 sums are the quadrature sums' limit in the same units, s = n_x / (kL) * int f(phi) dphi over
 [theta - kL/2, theta + kL/2], f = |w| w (s2) or |w|^3 (s3), w = A cos(phi) - v.
 

@@ -1,4 +1,4 @@
-"""Floe forces (MODEL.md §3): Froude-Krylov force, contact law, time integration."""
+"""Floe forces (docs/model.md §3): Froude-Krylov force, contact law, time integration."""
 import math
 
 import numpy as np
@@ -24,7 +24,7 @@ def test_wave_force_equals_slope_force_for_thin_floe(T):
         assert abs(fw - fs) <= 1e-3 * amp
 
 
-TABLE = {  # MODEL.md §3, realised restitution at nominal eps 0.2, 0.4, 0.6, 0.8
+TABLE = {  # docs/model.md §3, realised restitution at nominal eps 0.2, 0.4, 0.6, 0.8
     ("linear", "exact", False): (0.200, 0.400, 0.600, 0.800),
     ("linear", "liggghts", False): (0.155, 0.355, 0.564, 0.779),
     ("hertz_disk", "liggghts", False): (0.166, 0.368, 0.575, 0.786),

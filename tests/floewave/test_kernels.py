@@ -12,8 +12,12 @@ from floewave.model import FloeChain
     dict(contact="linear", damping="exact"),
     dict(clip_attraction=True, integrator="half_step", eps=0.2),
     dict(dispersion="ep", L_x=1.5, d_f=0.0),
+    dict(drag_every=1),
+    dict(drag_every=4, L_x=3.0, integrator="half_step"),
 ])
 def test_numba_kernel_equals_numpy_twin(opts):
+    """(The default holds the drag over drag_every = 4 steps; the twin holds it alike, from
+    the drag the kernel holds when the twin takes over.)"""
     # the paper's dt: 5000 steps of 1e-4 s stay short of chaos amplifying rounding (and
     # resolve the linear law's contacts)
     cfg = ModelConfig(**{"dt": 1e-4, **opts})
@@ -23,8 +27,10 @@ def test_numba_kernel_equals_numpy_twin(opts):
     chain.run(a, 3000)                   # develop contacts first
     x, u, acc = chain.x.copy(), chain.u.copy(), chain.acc.copy()
     istep = chain.istep
+    held = chain.P.c_drag * chain._held_drag().copy()
     chain.run(a, 2000)
-    ref.advance(x, u, acc, a, chain.x0, istep, 2000, chain.P, chain.cxi, chain.sxi)
+    ref.advance(x, u, acc, a, chain.x0, istep, 2000, chain.P, chain.cxi, chain.sxi,
+                held=held)
     assert np.any(np.diff(x) - cfg.L_x < 0), "no contact exercised"
     np.testing.assert_allclose(chain.x, x, rtol=0, atol=1e-12)
     np.testing.assert_allclose(chain.u, u, rtol=0, atol=1e-10)

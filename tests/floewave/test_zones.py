@@ -1,4 +1,4 @@
-"""The collision-zone width W_c and the compact-zone layout (MODEL.md §6, issue *trust*).
+"""The collision-zone width W_c and the compact-zone layout (docs/model.md §6, issue *trust*).
 
 Hand-built gap profiles for every layout, the failure modes of the old rule (W_c = the
 first pair below the threshold), and gap profiles measured on the paper's Fig. 2, 5 and 6

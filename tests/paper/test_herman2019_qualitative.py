@@ -1,4 +1,4 @@
-"""Paper §4 qualitative results (MODEL.md §8) on small, reduced-numerics points.
+"""Paper §4 qualitative results (docs/model.md §8) on small, reduced-numerics points.
 
 Reduced: L_x = 1.5 m (28 floes; 0.5 m, 84 floes, for the floe-size and W_c checks), n0 = 3,
 nT = 2 periods per iteration, ensembles of 4 replicas averaged over 6 iterations (8 for

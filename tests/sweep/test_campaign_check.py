@@ -1,4 +1,4 @@
-"""sweep.campaign_check: a campaign against the definition a store holds (--extend)."""
+"""sweep.store.campaign_check: a campaign against the definition a store holds (--extend)."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -6,8 +6,8 @@ from pathlib import Path
 import pytest
 
 from sweep import parse_campaign
-from sweep.campaign_check import check_campaign, check_legacy_journal
 from sweep.errors import CampaignMismatchError
+from sweep.store.campaign_check import check_campaign, check_legacy_journal
 
 TOML = "[base]\nL_sheet = 6.0\n[sweep]\neps = [0.2, 0.4]\n"
 PATH = Path("s.h5")

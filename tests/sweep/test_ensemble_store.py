@@ -9,7 +9,7 @@ import pytest
 
 import sweep
 from sweep import parse_campaign, run_campaign
-from sweep.schema import REPLICA_VARS, SCHEMA_VERSION, profile_path
+from sweep.store.schema import REPLICA_VARS, SCHEMA_VERSION, profile_path
 
 TOML = """
 [base]
@@ -83,7 +83,7 @@ def test_schema_2_store_read_as_single_trajectories_and_migrated(store, tmp_path
     import shutil
     path = tmp_path / "v2.h5"
     shutil.copy(store, path)
-    new_cols = [n for n, v in sweep.schema.ADDED_IN.items() if v == 3]
+    new_cols = [n for n, v in sweep.store.schema.ADDED_IN.items() if v == 3]
     with h5py.File(path, "r+") as f:
         f.attrs["schema_version"] = 2
         for name in new_cols:

@@ -86,7 +86,8 @@ def test_compact_ice_line_and_zone_dot_follow_eq_25():
     import matplotlib.pyplot as plt
     import pandas as pd
 
-    from sweep.figures import _amplitude, _confined
+    from sweep.analysis.plotting import draw_amplitude as _amplitude
+    from sweep.analysis.plotting import draw_confined as _confined
 
     x = np.linspace(0.25, 9.75, 20)
     a = 0.01 / (1 + 3.0 * x)
@@ -166,7 +167,7 @@ def test_not_converged_curves_are_marked():
     import matplotlib.pyplot as plt
     import pandas as pd
 
-    from sweep.figures import _amplitude
+    from sweep.analysis.plotting import draw_amplitude as _amplitude
 
     x = np.linspace(0.25, 9.75, 20)
     prof = {"x": x, "a": 0.01 / (1 + x), "a_stderr": 1e-4 + 0 * x}
@@ -259,7 +260,7 @@ def _rings(fig):
 def test_fig2_legend_comes_from_every_panel(mixed_figures):
     """Issue 25: panel (a) (ML) has no not-converged curve, panel (b) (EP) has two; their
     crosses are explained in the legend all the same."""
-    from sweep.figures import NOT_CONVERGED
+    from sweep.analysis.plotting import NOT_CONVERGED
 
     fig = _one(mixed_figures[0], "fig2_")
     ml, ep = fig.axes
@@ -292,7 +293,7 @@ def test_fig3_gap_axis_is_logarithmic_with_the_W_c_threshold(mixed_figures):
     assert sorted(x for ln in ticks for x in ln.get_xdata()) == pytest.approx(
         [0.8, 1.2, 3.2, 4.8])
     assert all(set(ln.get_ydata()) == {1e-4} for ln in ticks)
-    from sweep.figures import REPLICA_W_C
+    from sweep.analysis.figures import REPLICA_W_C
 
     assert REPLICA_W_C in texts
 
@@ -307,7 +308,7 @@ def test_fig5_and_fig6_mark_and_explain_not_converged_curves(kind, fake_store, t
 
     from matplotlib.figure import Figure
 
-    from sweep.figures import NOT_CONVERGED
+    from sweep.analysis.plotting import NOT_CONVERGED
 
     seen = {}
     original = Figure.savefig
@@ -333,7 +334,7 @@ def test_fig5_and_fig6_mark_and_explain_not_converged_curves(kind, fake_store, t
 
 
 def test_collision_zone_curves_are_distinguishable_and_status_marked(mixed_figures):
-    from sweep.figures import NOT_CONVERGED_RING
+    from sweep.analysis.plotting import NOT_CONVERGED_RING
 
     figures, df = mixed_figures
     fig = figures["collision_zone.png"]
@@ -351,7 +352,7 @@ def test_collision_zone_curves_are_distinguishable_and_status_marked(mixed_figur
 
 
 def test_collision_stats_markers_and_rings(mixed_figures):
-    from sweep.figures import NOT_CONVERGED_RING
+    from sweep.analysis.plotting import NOT_CONVERGED_RING
 
     fig = mixed_figures[0]["collision_stats.png"]
     ax1 = fig.axes[0]
@@ -364,7 +365,7 @@ def test_collision_stats_markers_and_rings(mixed_figures):
 
 
 def test_alpha_omega_marks_not_converged_points(mixed_figures):
-    from sweep.figures import NOT_CONVERGED_RING
+    from sweep.analysis.plotting import NOT_CONVERGED_RING
 
     fig = mixed_figures[0]["alpha_omega.png"]
     assert _rings(fig)

@@ -15,9 +15,10 @@ from sweep.identity import canonical_json, point_hash, short_hash
 # the amplitudes change, the robust compact-zone rule and its six new fields. Model
 # version 4 (issue *ensemble*): replicas. Model version 5 (issue *SIMD*): the quadrature
 # drag of floes with a root by closed-form prefix sums (equal to the cell loop to rounding:
-# other trajectories).
+# other trajectories). Model version 6 (issue *protocol*): the stationary protocol, dt 1e-3.
+# Model version 7: the drag held over drag_every = 4 steps (a new field).
 KNOWN = {
-    "default": "1b7df1d1c9f2b159f28b77a685800a521a5feab6331b8a02438243eeef866f9e",
+    "default": "9af45f891dfa949af53b1acbca675690742949060634cded5cedebe41522deab",
 }
 
 
@@ -27,7 +28,7 @@ UPDATE = ("ModelConfig's fields or defaults, or MODEL_VERSION, changed: every po
 
 
 def test_known_hash_of_default_config():
-    assert floewave.MODEL_VERSION == "6"
+    assert floewave.MODEL_VERSION == "7"
     assert point_hash(ModelConfig()) == KNOWN["default"], UPDATE
 
 
@@ -53,8 +54,8 @@ def test_known_hashes(changes, expected):
 
 
 PINNED = {
-    "KNOWN_1": "f4e0cbf48d5ec5969033f41238dcfc12cdc48b382b065670acee03dd10da6383",
-    "KNOWN_2": "16f0a8accd248672156b336d5f073e8741e675eb95720b640fffe7046baab4cf",
+    "KNOWN_1": "710f592470273283066678a15edab67ed18d7c24ea3a4e660e4d7acecec09aaa",
+    "KNOWN_2": "5044b1d9f3b657e4e03b6557b6f112270429c89d0539522db092041a956bbf09",
 }
 
 

@@ -179,23 +179,23 @@ def test_grace_expiry_aborts_but_store_consistent(tmp_path):
 
 _RANK0_FAILS = """
 import errno, sys
-import sweep.cli, sweep.executor
+import sweep.cli, sweep.run.launch
 from mpi4py import MPI
 if MPI.COMM_WORLD.Get_rank() == 0 and sys.argv[1] == "open":
     class Broken:
         def __init__(self, *a, **k):
             raise RuntimeError("Unable to get group info (addr overflow)")  # as h5py
-    sweep.executor.Store = Broken
+    sweep.run.launch.Store = Broken
 if MPI.COMM_WORLD.Get_rank() == 0 and sys.argv[1] == "full":
-    import sweep.journal
-    real = sweep.journal.Journal.append
+    import sweep.store.journal
+    real = sweep.store.journal.Journal.append
     calls = []
     def append(self, lines, sync=True):  # the disk fills up at the third point commit
         calls.append(sync and any(b'"row"' in line for line in lines))
         if sum(calls) == 3:
             raise OSError(errno.ENOSPC, "No space left on device")
         return real(self, lines, sync)
-    sweep.journal.Journal.append = append
+    sweep.store.journal.Journal.append = append
 sys.exit(sweep.cli.main(sys.argv[2:]))
 """
 

@@ -1,4 +1,4 @@
-"""sweep.papercheck: each rule's three verdicts on hand-built inputs, the claims on
+"""sweep.paper.check: each rule's three verdicts on hand-built inputs, the claims on
 hand-built tables (with and without the ensemble's *_stderr columns), and ``sweep
 paper-check`` end to end on stores of the shipped paper campaigns computed by a stand-in."""
 import json
@@ -8,9 +8,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from sweep import papercheck as pc
 from sweep.cli import main
-from sweep.papercheck import FAILS, HOLDS, INCONCLUSIVE, Estimate
+from sweep.paper import check as pc
+from sweep.paper import claims, estimates
+from sweep.paper.estimates import FAILS, HOLDS, INCONCLUSIVE, Estimate
 
 
 def E(value, se=0.01, label="p"):
@@ -19,14 +20,14 @@ def E(value, se=0.01, label="p"):
 
 # ---------------------------------------------------------------------- ordering (chain)
 def test_ordering_holds_when_every_step_has_the_sign_and_the_ends_differ():
-    verdict, evidence = pc.ordering([E(0.9), E(0.85), E(0.8), E(0.7)], increasing=False)
+    verdict, evidence = estimates.ordering([E(0.9), E(0.85), E(0.8), E(0.7)], increasing=False)
     assert verdict == HOLDS, evidence
     # a step of the right sign but within its error bar does not stop it
-    assert pc.ordering([E(0.9), E(0.895), E(0.7)], increasing=False)[0] == HOLDS
+    assert estimates.ordering([E(0.9), E(0.895), E(0.7)], increasing=False)[0] == HOLDS
 
 
 def test_ordering_fails_on_one_significant_wrong_step():
-    verdict, evidence = pc.ordering([E(0.9), E(0.8), E(0.86), E(0.5)], increasing=False)
+    verdict, evidence = estimates.ordering([E(0.9), E(0.8), E(0.86), E(0.5)], increasing=False)
     assert verdict == FAILS, evidence
     assert "+7.1, -4.2, +25.5" in evidence
 
@@ -34,20 +35,20 @@ def test_ordering_fails_on_one_significant_wrong_step():
 def test_ordering_fails_when_the_ends_are_significantly_reversed():
     # every step slightly wrong (|z| < 2), the ends clearly wrong
     steps = [E(0.80 + 0.015 * i) for i in range(5)]
-    verdict, evidence = pc.ordering(steps, increasing=False)
+    verdict, evidence = estimates.ordering(steps, increasing=False)
     assert verdict == FAILS, evidence
 
 
 def test_ordering_inconclusive_cases():
     # right signs, ends within 2 combined SE
-    assert pc.ordering([E(0.8), E(0.81), E(0.82)], increasing=True)[0] == INCONCLUSIVE
+    assert estimates.ordering([E(0.8), E(0.81), E(0.82)], increasing=True)[0] == INCONCLUSIVE
     # ends clear but one step the wrong way (not significantly)
-    assert pc.ordering([E(0.9), E(0.91), E(0.7)], increasing=False)[0] == INCONCLUSIVE
+    assert estimates.ordering([E(0.9), E(0.91), E(0.7)], increasing=False)[0] == INCONCLUSIVE
     # no error bar and no floor: never decided, however large the effect
-    verdict, evidence = pc.ordering([E(10.0, math.nan), E(0.0, math.nan)], increasing=False)
+    verdict, evidence = estimates.ordering([E(10.0, math.nan), E(0.0, math.nan)], increasing=False)
     assert verdict == INCONCLUSIVE and "no error bar" in evidence
     # points without a value are left out; one left is not an ordering
-    verdict, evidence = pc.ordering([E(math.nan, label="a"), E(0.5, label="b")],
+    verdict, evidence = estimates.ordering([E(math.nan, label="a"), E(0.5, label="b")],
                                     increasing=True)
     assert verdict == INCONCLUSIVE and "left out (no value): a" in evidence
 
@@ -57,51 +58,51 @@ def test_floor_decides_only_large_effects():
         return [Estimate(f"p{i}", v).floored(4.0) for i, v in enumerate(values)]
 
     assert all(e.source == "floor" and e.se == 4.0 for e in floored([1.0]))
-    assert pc.ordering(floored([30.0, 15.0]), increasing=False)[0] == HOLDS      # z = 2.65
-    assert pc.ordering(floored([30.0, 25.0]), increasing=False)[0] == INCONCLUSIVE  # 0.9
-    assert pc.ordering(floored([15.0, 30.0]), increasing=False)[0] == FAILS
+    assert estimates.ordering(floored([30.0, 15.0]), increasing=False)[0] == HOLDS      # z = 2.65
+    assert estimates.ordering(floored([30.0, 25.0]), increasing=False)[0] == INCONCLUSIVE  # 0.9
+    assert estimates.ordering(floored([15.0, 30.0]), increasing=False)[0] == FAILS
     # a stored SE is kept, not replaced by the floor
     assert E(1.0, 0.5).floored(4.0).se == 0.5
 
 
 # ---------------------------------------------------------------------- pairs
 def test_pairs_three_verdicts_and_stouffer():
-    assert pc.pairs([(E(0.7), E(0.8)), (E(0.6), E(0.75))])[0] == HOLDS
-    assert pc.pairs([(E(0.7), E(0.8)), (E(0.75), E(0.6))])[0] == FAILS
-    assert pc.pairs([(E(0.7), E(0.71))])[0] == INCONCLUSIVE
+    assert estimates.pairs([(E(0.7), E(0.8)), (E(0.6), E(0.75))])[0] == HOLDS
+    assert estimates.pairs([(E(0.7), E(0.8)), (E(0.75), E(0.6))])[0] == FAILS
+    assert estimates.pairs([(E(0.7), E(0.71))])[0] == INCONCLUSIVE
     # each pair z = 1.5 alone is inconclusive; two independent ones combine to 2.1
     one = (E(0.0, 0.1), E(0.15 * math.sqrt(2), 0.1))
-    assert pc.pairs([one])[0] == INCONCLUSIVE
-    verdict, evidence = pc.pairs([one, one])
+    assert estimates.pairs([one])[0] == INCONCLUSIVE
+    verdict, evidence = estimates.pairs([one, one])
     assert verdict == HOLDS and "combined z = +2.1" in evidence
     # significantly wrong in combination although no single pair is
     bad = (one[1], one[0])
-    assert pc.pairs([bad, bad])[0] == FAILS
-    assert pc.pairs([(E(math.nan), E(1.0))])[0] == INCONCLUSIVE
+    assert estimates.pairs([bad, bad])[0] == FAILS
+    assert estimates.pairs([(E(math.nan), E(1.0))])[0] == INCONCLUSIVE
 
 
 # ---------------------------------------------------------------------- ranges
 def test_in_range_three_verdicts():
-    assert pc.in_range([E(1.0, 0.05)], 0.8, 1.25)[0] == HOLDS
-    assert pc.in_range([E(1.5, 0.05)], 0.8, 1.25)[0] == FAILS
-    assert pc.in_range([E(1.2, 0.05)], 0.8, 1.25)[0] == INCONCLUSIVE
+    assert estimates.in_range([E(1.0, 0.05)], 0.8, 1.25)[0] == HOLDS
+    assert estimates.in_range([E(1.5, 0.05)], 0.8, 1.25)[0] == FAILS
+    assert estimates.in_range([E(1.2, 0.05)], 0.8, 1.25)[0] == INCONCLUSIVE
     # over several points: one failing point fails the claim, one undecided leaves it open
-    assert pc.in_range([E(1.0, 0.05), E(0.5, 0.05)], 0.8, 1.25)[0] == FAILS
-    assert pc.in_range([E(1.0, 0.05), E(1.2, 0.05)], 0.8, 1.25)[0] == INCONCLUSIVE
+    assert estimates.in_range([E(1.0, 0.05), E(0.5, 0.05)], 0.8, 1.25)[0] == FAILS
+    assert estimates.in_range([E(1.0, 0.05), E(1.2, 0.05)], 0.8, 1.25)[0] == INCONCLUSIVE
     # open-ended and exact values
-    assert pc.in_range([E(5.0, 0.1)], 4.0, math.inf)[0] == HOLDS
-    assert pc.in_range([E(3.0, 0.0)], 3.5, 4.5)[0] == FAILS
-    assert pc.in_range([E(4.0, math.nan)], 3.5, 4.5)[0] == INCONCLUSIVE
+    assert estimates.in_range([E(5.0, 0.1)], 4.0, math.inf)[0] == HOLDS
+    assert estimates.in_range([E(3.0, 0.0)], 3.5, 4.5)[0] == FAILS
+    assert estimates.in_range([E(4.0, math.nan)], 3.5, 4.5)[0] == INCONCLUSIVE
 
 
 def test_z_critical_uses_student_t_for_fitted_errors():
-    assert pc.z_critical(math.inf) == 2.0
-    assert pc.z_critical(2) == pytest.approx(4.53, abs=0.01)
-    assert pc.z_critical(1000) == pytest.approx(2.0, abs=0.01)
+    assert estimates.z_critical(math.inf) == 2.0
+    assert estimates.z_critical(2) == pytest.approx(4.53, abs=0.01)
+    assert estimates.z_critical(1000) == pytest.approx(2.0, abs=0.01)
     # a fitted SE with 2 degrees of freedom needs |z| >= 4.5
     fitted = Estimate("m", 4.0 + 3.0 * 0.1, 0.1, "fit", 2)
-    assert pc.in_range([fitted], 3.5, 4.3)[0] == INCONCLUSIVE
-    assert pc.in_range([replace_dof(fitted, math.inf)], 4.5, 5.0)[0] == FAILS
+    assert estimates.in_range([fitted], 3.5, 4.3)[0] == INCONCLUSIVE
+    assert estimates.in_range([replace_dof(fitted, math.inf)], 4.5, 5.0)[0] == FAILS
 
 
 def replace_dof(e, dof):
@@ -115,23 +116,23 @@ def test_power_exponent_weighted_unweighted_and_too_few_periods():
     al = 0.3 * om ** 2.2
     rng = np.random.default_rng(1)
     noisy = al * np.exp(rng.normal(0.0, 0.01, al.size))
-    m = pc.power_exponent(om, noisy, 0.01 * noisy)
+    m = estimates.power_exponent(om, noisy, 0.01 * noisy)
     assert m.source == "fit" and abs(m.value - 2.2) < 4 * m.se
     assert m.se == pytest.approx(0.01 / math.sqrt(((np.log(om) - np.log(om).mean()) ** 2)
                                                   .sum()), rel=0.5)
     # without SEs: the residuals' SE, n - 2 degrees of freedom
-    u = pc.power_exponent(om, noisy)
+    u = estimates.power_exponent(om, noisy)
     assert u.dof == 2 and math.isfinite(u.se)
     # SEs too small for the scatter: inflated by sqrt(chi^2/dof) (the Birge ratio), still a
     # known SE: one critical value (2) whatever chi^2/dof, so a verdict does not jump
     # between z_c 2 and 4.5 with the seed
-    s = pc.power_exponent(om, noisy, 1e-4 * noisy)
+    s = estimates.power_exponent(om, noisy, 1e-4 * noisy)
     naive = 1e-4 / math.sqrt(((np.log(om) - np.log(om).mean()) ** 2).sum())
     assert s.dof == math.inf and s.se > 5 * naive
     assert m.dof == math.inf
-    assert math.isnan(pc.power_exponent(om[:2], al[:2]).value)
+    assert math.isnan(estimates.power_exponent(om[:2], al[:2]).value)
     # NaN and non-positive rates are left out
-    assert math.isnan(pc.power_exponent(om, np.array([1.0, np.nan, -1.0, 2.0])).value)
+    assert math.isnan(estimates.power_exponent(om, np.array([1.0, np.nan, -1.0, 2.0])).value)
 
 
 # ---------------------------------------------------------------------- claims on tables
@@ -167,7 +168,7 @@ def _by(checks, claim, campaign=None):
 
 
 def test_claims_use_the_ensemble_columns():
-    checks = pc.paper_checks({"fig2": _fig2([30.0, 25.0, 20.0, 15.0])})
+    checks = claims.paper_checks({"fig2": _fig2([30.0, 25.0, 20.0, 15.0])})
     w = _by(checks, "higher eps -> narrower collisional zone W_c (ml)")[0]
     assert w.verdict == HOLDS, w.evidence
     assert all(e.source == "replicas" and e.se == 0.5 for e in w.estimates)
@@ -183,7 +184,7 @@ def test_claims_use_the_ensemble_columns():
 
 
 def test_claims_fail_when_the_data_contradict_them():
-    checks = pc.paper_checks({"fig2": _fig2([15.0, 20.0, 25.0, 30.0],
+    checks = claims.paper_checks({"fig2": _fig2([15.0, 20.0, 25.0, 30.0],
                                             a_end=[0.008, 0.009, 0.010, 0.011])})
     assert _by(checks, "higher eps -> narrower collisional zone W_c (ml)")[0].verdict == FAILS
     assert _by(checks, "higher eps -> lower a/a0 (ep)")[0].verdict == FAILS
@@ -196,7 +197,7 @@ def test_without_ensemble_columns_the_floors_and_profiles_decide():
                 "F_w_mean": np.full(84, 100.0),
                 "F_d_mean": np.where(np.arange(84) * 0.505 < 20.0, 10.0, 1.0)}
             for h in t["hash"]}
-    checks = pc.paper_checks({"fig2": t}, lambda name, h: prof[h])
+    checks = claims.paper_checks({"fig2": t}, lambda name, h: prof[h])
     w = _by(checks, "higher eps -> narrower collisional zone W_c (ml)")[0]
     assert w.verdict == INCONCLUSIVE and all(e.source == "floor" for e in w.estimates)
     a = _by(checks, "higher eps -> lower a/a0 (ml)")[0]
@@ -208,7 +209,7 @@ def test_without_ensemble_columns_the_floors_and_profiles_decide():
     near = _by(checks, "Fig. 3: drag a larger part")[0]
     assert near.verdict == HOLDS, near.evidence          # 1 decade vs 2 decades
     # profiles unavailable: the force claims cannot be decided
-    bare = pc.paper_checks({"fig2": t})
+    bare = claims.paper_checks({"fig2": t})
     assert _by(bare, "Fig. 3: drag about two orders")[0].verdict == INCONCLUSIVE
 
 
@@ -226,7 +227,7 @@ def test_fig6a_reversal_and_near_edge():
     prof = {r["hash"]: {"x_mean": np.arange(84) * 0.5, "a_stderr": np.full(84, 1e-5),
                         "a": np.full(84, 0.012 + 0.0005 * (i % 4))}
             for i, r in enumerate(rows)}
-    checks = pc.paper_checks({"fig6a": t}, lambda name, h: prof[h])
+    checks = claims.paper_checks({"fig6a": t}, lambda name, h: prof[h])
     near = _by(checks, "smaller d_f attenuates more near the edge")
     assert [c.verdict for c in near] == [HOLDS, HOLDS]
     assert _by(checks, "Fig. 6a reversal")[0].verdict == HOLDS
@@ -234,7 +235,7 @@ def test_fig6a_reversal_and_near_edge():
     # no reversal at the short period: the reversal claim fails, it is not hidden
     t2 = t.copy()
     t2.loc[t2["T"] == 1.2, "a_end"] = [0.010, 0.011, 0.012, 0.013]
-    assert _by(pc.paper_checks({"fig6a": t2}, lambda n, h: prof[h]),
+    assert _by(claims.paper_checks({"fig6a": t2}, lambda n, h: prof[h]),
                "Fig. 6a reversal")[0].verdict == FAILS
 
 
@@ -245,7 +246,7 @@ def test_exponents_from_the_periods_table():
             om = 2 * np.pi / T
             rows.append(_row(f"{disp}{T}", T=T, dispersion=disp, alpha_c=1e-3 * om ** m,
                              alpha_inner=1.1e-3 * om ** m, alpha_inner_stderr=1e-5 * om ** m))
-    checks = pc.paper_checks({"periods": pd.DataFrame(rows)})
+    checks = claims.paper_checks({"periods": pd.DataFrame(rows)})
     verdicts = {c.claim: c.verdict for c in checks if c.campaign == "periods"}
     assert set(verdicts.values()) == {HOLDS}, verdicts
     m = _by(checks, "alpha_inner (DEM) ~ omega^m")[0].estimates[0]
@@ -253,16 +254,16 @@ def test_exponents_from_the_periods_table():
 
 
 def test_missing_tables_are_inconclusive_not_hidden():
-    checks = pc.paper_checks({}, missing={"fig2": "no store x.h5"})
+    checks = claims.paper_checks({}, missing={"fig2": "no store x.h5"})
     assert checks and {c.verdict for c in checks} == {INCONCLUSIVE}
-    assert {c.campaign for c in checks} == set(pc.PAPER_CAMPAIGNS)
+    assert {c.campaign for c in checks} == set(claims.PAPER_CAMPAIGNS)
     assert any("no store x.h5" in c.evidence for c in checks)
     assert "0 hold, 0 fail" in pc.format_table(checks)
 
 
 def test_table_marks_failures_in_its_count_line():
-    c = pc.Check("c", "§4", "fig2", "pts", "q", "range", (E(1.5, 0.05),),
-                 *pc.in_range([E(1.5, 0.05)], 0.8, 1.25))
+    c = claims.Check("c", "§4", "fig2", "pts", "q", "range", (E(1.5, 0.05),),
+                 *estimates.in_range([E(1.5, 0.05)], 0.8, 1.25))
     table = pc.format_table([c, c])
     assert table.count("| fails |") == 2 and "0 hold, 2 fail (#1, #2)" in table
 
@@ -278,7 +279,7 @@ def stores(tmp_path_factory):
 
 
 def test_cli_runs_and_checks_the_paper_campaigns(stores, capsys):
-    for name in pc.PAPER_CAMPAIGNS:
+    for name in claims.PAPER_CAMPAIGNS:
         assert (stores / f"{name}.h5").exists()
     assert main(["paper-check", "--stores", str(stores), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
@@ -321,9 +322,9 @@ def test_cli_unreadable_store_exits_3(tmp_path, capsys):
 def test_fill_values_are_not_read_as_replica_counts():
     """-1 in replicas / W_c_n is the store's 'unknown' (failed points, older schemas)."""
     row = pd.Series({"replicas": -1, "W_c_n": -1, "W_c": 3.0, "W_c_stderr": np.nan})
-    assert math.isnan(pc._col(row, "replicas")) and math.isnan(pc._col(row, "W_c_n"))
-    assert "R=" not in pc._label(row, "eps", 0.4)
-    assert "n=" not in pc._W_c(row, "eps=0.4").label
+    assert math.isnan(claims._col(row, "replicas")) and math.isnan(claims._col(row, "W_c_n"))
+    assert "R=" not in claims._label(row, "eps", 0.4)
+    assert "n=" not in claims._W_c(row, "eps=0.4").label
 
 
 def test_a_partial_fig6a_store_is_not_compared_with_itself():
@@ -334,7 +335,7 @@ def test_a_partial_fig6a_store_is_not_compared_with_itself():
                       "compact_zone": "none", "alpha_inner": np.nan, "alpha_c": 0.4,
                       "alpha_edge": np.nan, "alpha_all": 0.5, "alpha_exp": 0.01,
                       "alpha_all_resid": 0.01, "alpha_exp_resid": 0.02})
-    checks = [c for c in pc.paper_checks({"fig6a": t}) if "Fig. 6a" in c.claim
+    checks = [c for c in claims.paper_checks({"fig6a": t}) if "Fig. 6a" in c.claim
               and "reversal" in c.claim]
     short = [c for c in checks if "1.2" in c.points]
     assert short and short[0].verdict == INCONCLUSIVE
@@ -343,7 +344,7 @@ def test_a_partial_fig6a_store_is_not_compared_with_itself():
 
 # ---------------------------------------------------------------------- --seeds
 def test_a_verdict_across_seeds_stands_only_where_every_seed_gives_it():
-    from sweep.paperseeds import SEED_DEPENDENT, across_seeds
+    from sweep.paper.seeds import SEED_DEPENDENT, across_seeds
 
     assert across_seeds([HOLDS, HOLDS]) == HOLDS
     assert across_seeds([FAILS, FAILS, FAILS]) == FAILS
@@ -353,17 +354,17 @@ def test_a_verdict_across_seeds_stands_only_where_every_seed_gives_it():
 
 def test_seeded_campaign_files_differ_only_in_their_seed(tmp_path):
     from sweep.config import load_campaign
-    from sweep.paperseeds import seeded_configs
+    from sweep.paper.seeds import seeded_configs
 
     out = seeded_configs(pc.default_configs(), 7, tmp_path / "c")
-    for name in pc.PAPER_CAMPAIGNS:
+    for name in claims.PAPER_CAMPAIGNS:
         old = load_campaign(pc.default_configs() / f"{name}.toml")
         new = load_campaign(out / f"{name}.toml")
         assert new.base.seed == 7 and old.base.seed == 0
         assert new.base.replace(seed=0) == old.base and new.sweep == old.sweep
     bad = tmp_path / "bad"
     bad.mkdir()
-    for name in pc.PAPER_CAMPAIGNS:
+    for name in claims.PAPER_CAMPAIGNS:
         (bad / f"{name}.toml").write_text("[base]\n[sweep]\neps = [0.2]\n")
     with pytest.raises(ValueError, match="seed = N"):
         seeded_configs(bad, 1, tmp_path / "c2")
@@ -375,7 +376,7 @@ def test_cli_seeds_runs_each_seed_into_its_own_stores(tmp_path, capsys):
                  "--compute", "sweep.testing:fake_point"]) == 0
     table = capsys.readouterr().out
     for seed in (0, 1):
-        for name in pc.PAPER_CAMPAIGNS:
+        for name in claims.PAPER_CAMPAIGNS:
             assert (d / f"seed{seed}" / f"{name}.h5").exists()
     lines = table.splitlines()
     assert lines[0].startswith("| # | claim") and "seed 0 | seed 1 | across seeds" in lines[0]

@@ -1,10 +1,10 @@
-"""sweep.plan: kernel shapes, the projection at given rates, and the plan of a campaign."""
+"""sweep.run.plan: kernel shapes, the projection at given rates, and the plan of a campaign."""
 import math
 
 import pytest
 
 from sweep import parse_campaign
-from sweep.plan import core_seconds, given_rate, kernel_shape, plan
+from sweep.run.plan import core_seconds, given_rate, kernel_shape, plan
 
 # two floe counts (L_sheet / L_x), each twice (two eps), drag by quadrature (cells count)
 TOML = """\
@@ -26,7 +26,7 @@ def test_kernel_shape_is_floes_drag_cells_mode_confinement_and_chains():
         cfg = p.config
         n_x = cfg.n_x if cfg.drag_integration == "quadrature" else 0
         assert kernel_shape(cfg) == (cfg.n_floes, n_x, cfg.drag_integration, cfg.confined,
-                                     cfg.n_chains)
+                                     cfg.n_chains, cfg.drag_every)
     cfg = c.points()[0].config
     assert kernel_shape(cfg.replace(confined=True))[3] is True
     assert kernel_shape(cfg.replace(confined=True))[4] == 1      # confined: one chain
@@ -34,6 +34,8 @@ def test_kernel_shape_is_floes_drag_cells_mode_confinement_and_chains():
     # the ensemble kernel's speed per replica-floe-step depends on R
     assert kernel_shape(cfg.replace(replicas=4))[4] == 4
     assert kernel_shape(cfg.replace(replicas=1))[4] == 1
+    # and on how often the drag is evaluated (drag_every: the drag is most of a step)
+    assert kernel_shape(cfg.replace(drag_every=2))[5] == 2
 
 
 def test_projection_is_cost_over_rate_of_each_shape():

@@ -1,4 +1,4 @@
-"""sweep.progress: the master's progress lines (counts, rate, ETA) and the tqdm bar."""
+"""sweep.run.progress: the master's progress lines (counts, rate, ETA) and the tqdm bar."""
 from __future__ import annotations
 
 import io
@@ -7,8 +7,8 @@ import types
 
 import pytest
 
-from sweep import progress as progress_mod
-from sweep.progress import Progress, format_duration, log_line
+from sweep.run import progress as progress_mod
+from sweep.run.progress import Progress, format_duration, log_line
 
 LINE = re.compile(r"^\[sweep \d{4}-\d\d-\d\d \d\d:\d\d:\d\d\] (.*)$")
 
@@ -29,7 +29,7 @@ def test_log_line_is_stamped():
 
 @pytest.fixture
 def clock(monkeypatch):
-    """A hand-moved clock for sweep.progress (``clock.now`` seconds)."""
+    """A hand-moved clock for sweep.run.progress (``clock.now`` seconds)."""
     fake = types.SimpleNamespace(now=100.0)
     monkeypatch.setattr(progress_mod, "time", types.SimpleNamespace(
         monotonic=lambda: fake.now, strftime=lambda fmt: "2026-01-01 00:00:00"))

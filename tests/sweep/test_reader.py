@@ -1,4 +1,4 @@
-"""sweep.reader: one parser of the stored layout; a row whose config_json no longer
+"""sweep.store.reader: one parser of the stored layout; a row whose config_json no longer
 hashes to its hash is caught by load, merge and validate."""
 from __future__ import annotations
 
@@ -7,9 +7,10 @@ import numpy as np
 import pytest
 
 import sweep
-from sweep import reader
 from sweep.errors import StoreCorruptedError, StoreError
-from sweep.merge import merge
+from sweep.store import reader
+from sweep.store.cells import text as stored_text
+from sweep.store.merge import merge
 
 TOML = "[base]\nL_sheet = 6.0\n[sweep]\neps = [0.2, 0.4, 0.6]\n"
 
@@ -25,16 +26,16 @@ def corrupt(path, row=1):
     """Alter one stored row's config_json (eps 0.4 -> 0.45) in place; return its hash."""
     with h5py.File(path, "r+", locking=False) as f:
         table = f["table"]
-        text = reader.text(table["config_json"][row])
+        text = stored_text(table["config_json"][row])
         assert '"eps":0.4' in text
         table["config_json"][row] = text.replace('"eps":0.4', '"eps":0.45')
-        return reader.text(table["hash"][row])
+        return stored_text(table["hash"][row])
 
 
 def test_reader_parses_the_layout(store, campaign):
     with reader.open_file(store) as f:
         cols = reader.table_columns(f)
-        assert reader.n_rows(f) == 3 and set(cols) == {c.name for c in sweep.schema.COLUMNS}
+        assert reader.n_rows(f) == 3 and set(cols) == {c.name for c in sweep.store.schema.COLUMNS}
         assert all(isinstance(h, str) for h in cols["hash"])
         assert reader.model_version(f) == campaign.definition()["model_version"]
         records = list(reader.iter_records(f))
@@ -44,7 +45,7 @@ def test_reader_parses_the_layout(store, campaign):
         assert history.size and reader.profile_group(f, "0" * 64) is None
         assert reader.hash_mismatches(cols["hash"], cols["config_json"],
                                       reader.model_version(f)) == []
-    assert reader.text(b"caf\xc3\xa9") == "café" and reader.text("x") == "x"
+    assert stored_text(b"caf\xc3\xa9") == "café" and stored_text("x") == "x"
 
 
 def test_load_refuses_a_row_that_no_longer_hashes(store):
@@ -93,7 +94,7 @@ def test_an_altered_swept_column_is_caught(store, tmp_path):
     with h5py.File(store, "r+", locking=False) as f:
         assert f["table/eps"][1] == 0.4
         f["table/eps"][1] = 0.9
-        h = reader.text(f["table/hash"][1])
+        h = stored_text(f["table/hash"][1])
     with pytest.raises(StoreCorruptedError, match=h):
         sweep.load(store)
     problems = sweep.validate(store)

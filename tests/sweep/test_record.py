@@ -1,4 +1,4 @@
-"""sweep.record: one Record per finished point, built once from (point, outcome)."""
+"""sweep.store.record: one Record per finished point, built once from (point, outcome)."""
 from __future__ import annotations
 
 import json
@@ -6,10 +6,11 @@ import json
 import numpy as np
 import pytest
 
-from sweep.journal import decode
-from sweep.record import Record, known_outcome, plain
+from sweep.errors import UnstorableError
+from sweep.protocol import Outcome, plain
+from sweep.store.journal import decode
+from sweep.store.record import Record
 from sweep.testing import fake_point
-from sweep.writer import Unstorable
 
 TOML = "[base]\nL_sheet = 6.0\n[sweep]\neps = [0.2, 0.4]\n"
 
@@ -25,7 +26,7 @@ def outcome(point, **changes):
            "host": "h", "rank": 3, "pid": 7, "start_time": "t0", "end_time": "t1",
            "wall_time": 0.5}
     out.update(changes)
-    return out
+    return Outcome(**out)
 
 
 def provenance(rank, mode):
@@ -50,7 +51,7 @@ def test_from_outcome_holds_row_datasets_and_provenance(campaign):
 def test_a_scalar_of_the_wrong_kind_makes_a_failed_record(campaign):
     p = campaign.points()[0]
     out = outcome(p)
-    out["scalars"]["W_c"] = "wide"
+    out.scalars["W_c"] = "wide"
     rec = Record.from_outcome(p, out, provenance=provenance)
     assert rec.status == "failed" and "does not fit the schema: W_c = 'wide'" in rec.row[
         "message"]
@@ -62,20 +63,20 @@ def test_a_scalar_of_the_wrong_kind_makes_a_failed_record(campaign):
 def test_an_unstorable_value_makes_a_failed_record(campaign):
     p = campaign.points()[0]
     out = outcome(p)
-    out["scalars"]["iterations"] = 10 ** 20  # an int, but beyond 64 bits
+    out.scalars["iterations"] = 10 ** 20  # an int, but beyond 64 bits
     rec = Record.from_outcome(p, out, provenance=provenance)
     assert rec.status == "failed"
     assert rec.row["message"].startswith("the result cannot be stored: iterations")
     assert rec.row["provenance"] == provenance(3, "")
-    with pytest.raises(Unstorable, match="64-bit"):
+    with pytest.raises(UnstorableError, match="64-bit"):
         Record.coerce({"row": {"hash": p.hash, "iterations": 10 ** 20}})
-    with pytest.raises(Unstorable, match="no 'hash'"):
+    with pytest.raises(UnstorableError, match="no 'hash'"):
         Record.coerce({"row": {"status": "converged"}})
 
 
 def test_known_outcome_and_journal_line(campaign):
     p = campaign.points()[1]
-    rec = Record.from_outcome(p, known_outcome(p.hash, "invalid", "cutoff"))
+    rec = Record.from_outcome(p, Outcome.known(p.hash, "invalid", "cutoff"))
     assert rec.status == "invalid" and rec.row["message"] == "cutoff"
     assert rec.row["rank"] == 0 and rec.row["wall_time"] == 0.0
     assert np.isnan(rec.row["model_wall_time"]) and "provenance" not in rec.row

@@ -190,9 +190,9 @@ def test_export_checks_its_output_before_reading(tmp_path, capsys, campaign, mon
                  str(tmp_path / "nodir" / "t.csv")]) == 2  # the path first, not the store
     err = capsys.readouterr().err
     assert "nodir" in err and "does not exist" in err and err.count("\n") == 1
-    import sweep.cli
+    import sweep.analysis.export
 
-    monkeypatch.setattr(sweep.cli, "_parquet_engine", lambda: False)
+    monkeypatch.setattr(sweep.analysis.export, "parquet_engine", lambda: False)
     assert main(["export", str(store), "-o", str(tmp_path / "t.parquet")]) == 2
     err = capsys.readouterr().err
     assert "floewave[parquet]" in err and err.count("\n") == 1
@@ -223,7 +223,7 @@ def test_a_requested_stop_is_not_reported_as_an_error(capsys):
 def test_load_profiles_of_failed_points_are_nan_variables(tmp_path, campaign):
     """Points without results are NaN in every profile variable, even when no selected
     point has any (the variables exist, so ds.a works)."""
-    from sweep.schema import PROFILE_VARS
+    from sweep.store.schema import PROFILE_VARS
 
     store = tmp_path / "f.h5"
     run_campaign(campaign, str(store), compute="sweep.testing:raising_point")  # eps 0.4 fails
@@ -236,7 +236,7 @@ def test_load_profiles_of_failed_points_are_nan_variables(tmp_path, campaign):
 def test_load_profiles_by_parameter(tmp_path, campaign):
     """Issue *first hour*: one Dataset of every profile along the swept dimensions and a
     floe dimension; missing points NaN; units on every variable; selection by value."""
-    from sweep.schema import PROFILE_VARS
+    from sweep.store.schema import PROFILE_VARS
 
     store = tmp_path / "s.h5"
     run_campaign(campaign.shard(0, 2), str(store), compute="sweep.testing:fake_point")

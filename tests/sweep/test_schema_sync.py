@@ -1,7 +1,7 @@
 """The store schema covers everything floewave's PointResult reports (no silent drift)."""
 from floewave.results import PROFILE_FIELDS, SCALAR_FIELDS
 from floewave.results import STATUSES as MODEL_STATUSES
-from sweep.schema import COLUMNS, PROFILE_VARS, STATUSES
+from sweep.store.schema import COLUMNS, PROFILE_VARS, STATUSES
 
 
 def test_every_profile_is_stored():

@@ -15,8 +15,9 @@ import sweep
 import sweep.testing
 from sweep import parse_campaign, run_campaign
 from sweep.cli import main
-from sweep.schema import SCHEMA_VERSION, schema_document
-from sweep.store import Store
+from sweep.store.document import schema_document
+from sweep.store.schema import SCHEMA_VERSION
+from sweep.store.store import Store
 
 ROOT = Path(__file__).resolve().parents[2]
 TOML = "[base]\nL_sheet = 6.0\n[sweep]\nL_x = [0.5, 1.5]\neps = [0.2, 0.4, 0.6]\n"
@@ -43,7 +44,7 @@ def test_second_writer_refused_stale_lock_taken_over(tmp_path, campaign):
         assert proc.returncode == 3 and "live campaign" in proc.stderr
     # a lock left by a killed writer: the file exists but nobody holds its flock
     holder = subprocess.Popen([sys.executable, "-c", "import sys, sweep;"
-                               "from sweep.store import Store;"
+                               "from sweep.store.store import Store;"
                                f"s = Store({str(path)!r}, sweep.parse_campaign({TOML!r}));"
                                "print('locked', flush=True); sys.stdin.read()"],
                               stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
@@ -239,8 +240,8 @@ def test_kill_9_torture(tmp_path, campaign):
 _GROUP_SCRIPT = """
 import os, signal, sys
 import sweep
-from sweep.journal import Journal, journal_path
-from sweep.store import Store
+from sweep.store.journal import Journal, journal_path
+from sweep.store.store import Store
 from sweep.testing import fake_point
 campaign = sweep.parse_campaign({toml!r})
 points = campaign.points()
@@ -248,7 +249,7 @@ kill_at = {kill_at!r}
 
 def record(p, seq):
     out = fake_point(p.config)
-    prof = {{k: v for k, v in out.items() if k in sweep.schema.PROFILE_VARS}}
+    prof = {{k: v for k, v in out.items() if k in sweep.store.schema.PROFILE_VARS}}
     return {{"row": {{"hash": p.hash, "status": "converged", "W_c": out["W_c"],
                      "L_x": p.config.L_x, "eps": p.config.eps,
                      "n_floes": p.config.n_floes}},
@@ -329,8 +330,10 @@ def test_group_commit_survives_kill_9(tmp_path, kill_at):
 _MASTER_SCRIPT = """
 import os, signal, sys
 import sweep
-from sweep.executor import InProcessTransport, Master, RunSummary, _StopSignals
-from sweep.store import Store
+from sweep.run.master import Master, RunSummary
+from sweep.run.signals import StopSignals
+from sweep.run.transport import InProcessTransport
+from sweep.store.store import Store
 campaign = sweep.parse_campaign({toml!r})
 todo = campaign.points()
 store = Store({path!r}, campaign)
@@ -352,7 +355,7 @@ class Progress:  # counts acknowledged points; dies at the {kill_after}th
             os.kill(os.getpid(), signal.SIGKILL)
 
 master = Master(store, InProcessTransport("sweep.testing:trivial_point"))
-with _StopSignals(5.0, in_process=True) as signals:
+with StopSignals(5.0, in_process=True) as signals:
     master.run(todo, Progress(), signals, RunSummary())
 """
 

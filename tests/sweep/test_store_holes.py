@@ -14,8 +14,8 @@ import pytest
 import sweep
 from sweep import parse_campaign, run_campaign
 from sweep.cli import main
-from sweep.journal import journal_path, rejected_path
-from sweep.store import Store
+from sweep.store.journal import journal_path, rejected_path
+from sweep.store.store import Store
 from sweep.testing import find_mpiexec
 from tests.sweep.helpers import make_unclean, table
 
@@ -98,12 +98,12 @@ def test_the_guard_passes_on_status_and_signals(tmp_path):
 def test_run_never_exits_0_with_points_missing(tmp_path, monkeypatch, capsys):
     """Belt and braces in the campaign process: a summary with grid points neither
     skipped nor computed is status 6."""
-    import sweep.executor
-    from sweep.master import RunSummary
+    import sweep.run.launch
+    from sweep.run.master import RunSummary
 
     cfg = tmp_path / "c.toml"
     cfg.write_text(TOML)
-    monkeypatch.setattr(sweep.executor, "run_campaign",
+    monkeypatch.setattr(sweep.run.launch, "run_campaign",
                         lambda *a, **k: RunSummary(total=6, skipped=2, computed=3))
     assert main(["run", str(cfg), "--store", str(tmp_path / "s.h5")]) == 6
     assert "1 grid point of 6 not stored" in capsys.readouterr().err
@@ -302,7 +302,7 @@ def test_a_resume_on_a_full_disk_is_one_line_and_exit_3(tmp_path, monkeypatch, c
     exit 3 and one line, no traceback; the store is untouched."""
     import errno
 
-    import sweep.lock
+    import sweep.store.lock
 
     cfg = tmp_path / "c.toml"
     cfg.write_text(TOML)
@@ -314,7 +314,7 @@ def test_a_resume_on_a_full_disk_is_one_line_and_exit_3(tmp_path, monkeypatch, c
     def full(fd, data, offset):
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
 
-    monkeypatch.setattr(sweep.lock.os, "pwrite", full)
+    monkeypatch.setattr(sweep.store.lock.os, "pwrite", full)
     assert main(["run", str(cfg), "--store", str(path), "--compute", FAKE, "--no-bar"]) == 3
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "No space left on device" in err and "free space" in err
@@ -528,12 +528,12 @@ def test_a_rebuild_keeps_the_runs_and_their_numbering(tmp_path, campaign):
     with h5py.File(path, "r+", locking=False) as f:
         f["runs"]["1"].attrs["outcome"] = "running"  # as a killed run leaves it
     run_campaign(campaign, str(path), compute=FAKE)
-    runs = sweep.analysis.store_runs(path)
+    runs = sweep.analysis.load.store_runs(path)
     assert [r["index"] for r in runs] == [0, 1, 2]
     assert runs[1]["outcome"].startswith("died") and runs[2]["outcome"] == "complete"
     path.unlink()
     run_campaign(campaign, str(path), compute=FAKE)
-    assert [r["index"] for r in sweep.analysis.store_runs(path)] == [2]  # the journal's last
+    assert [r["index"] for r in sweep.analysis.load.store_runs(path)] == [2]  # the journal's last
     assert set(sweep.load(path)["run"]) == {0, 1}
 
 

@@ -15,8 +15,8 @@ import pytest
 import sweep
 from sweep import parse_campaign, run_campaign
 from sweep.cli import main
-from sweep.journal import Journal, decode, encode, journal_path, rejected_path
-from sweep.store import Store
+from sweep.store.journal import Journal, decode, encode, journal_path, rejected_path
+from sweep.store.store import Store
 from sweep.testing import catches_signal
 from tests.sweep.helpers import make_unclean, table
 
@@ -27,8 +27,8 @@ FAKE = "sweep.testing:fake_point"
 # ---------------------------------------------------------------- atomic rebuild, stops
 _OPEN_SCRIPT = """
 import sys, time, sweep, sweep.cli
-from sweep.store import Store
-from sweep.writer import H5Writer
+from sweep.store.store import Store
+from sweep.store.writer import H5Writer
 real = H5Writer.write_many
 def slow(self, records):  # a rebuild that takes long enough to be hit
     print("writing", flush=True)
@@ -206,7 +206,7 @@ def test_empty_store_beside_its_journal_is_rebuilt(tmp_path, campaign):
 
 _HOLD = """
 import sys, sweep
-from sweep.store import Store
+from sweep.store.store import Store
 s = Store(sys.argv[1], sweep.parse_campaign(sys.argv[2]))
 print("locked", flush=True)
 sys.stdin.read()

@@ -27,9 +27,11 @@ import numpy as np
 import pytest
 
 import sweep
-from sweep.journal import BadLine, decode
-from sweep.schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, REPLICA_VARS
-from sweep.store import journal_path, lock_path, read_journal
+from sweep.errors import BadJournalLineError
+from sweep.store.journal import decode, journal_path
+from sweep.store.lock import lock_path
+from sweep.store.reader import read_journal
+from sweep.store.schema import COLUMNS, HISTORY_VAR, PROFILE_VARS, REPLICA_VARS
 from sweep.testing import SMALL_REAL_BASE, find_mpiexec
 
 MPIEXEC = find_mpiexec()
@@ -116,7 +118,7 @@ def _journal(store: Path) -> tuple[list[str], int, bool]:
     for line in lines[:-1]:
         try:
             obj, _ = decode(line, require_checksum=False)
-        except BadLine:
+        except BadJournalLineError:
             bad += 1
             continue
         if "row" in obj:  # a point record (not a campaign, hand-out or release line)
@@ -325,7 +327,8 @@ def test_kill_9_whole_mpi_campaign_torture(tmp_path, compiled_kernels):
 _TORN_SCRIPT = """
 import os, signal, sys
 import sweep
-from sweep.store import Store, journal_path
+from sweep.store.journal import journal_path
+from sweep.store.store import Store
 from sweep.testing import fake_point
 campaign = sweep.parse_campaign({toml!r})
 p = campaign.points()[int(sys.argv[1])]
@@ -333,7 +336,7 @@ out = fake_point(p.config)
 store = Store({path!r}, campaign)
 store.put({{"row": {{"hash": p.hash, "status": "converged", "W_c": out["W_c"],
                     "eps": p.config.eps, "n_floes": p.config.n_floes}},
-           "profiles": {{k: v for k, v in out.items() if k in sweep.schema.PROFILE_VARS}},
+           "profiles": {{k: v for k, v in out.items() if k in sweep.store.schema.PROFILE_VARS}},
            "residual_history": out["residual_history"]}})
 print("acknowledged", p.hash, flush=True)
 if sys.argv[2] == "tear":  # as if killed inside the next commit's journal write
@@ -359,7 +362,7 @@ def test_torn_journal_tail_does_not_swallow_the_next_point(tmp_path):
     hashes, bad, torn = _journal(path)
     assert hashes == acked and bad == 0 and not torn
     campaign = sweep.parse_campaign(toml)
-    from sweep.store import Store
+    from sweep.store.store import Store
     with Store(path, campaign) as store:
         assert store.repaired_from_journal
         assert set(store.rows) == set(acked), "an acknowledged point was lost"

@@ -1,0 +1,254 @@
+"""The master of a campaign run: schedules points onto workers, stores each result.
+
+The master (:class:`Master`) is a small state machine over a transport
+(:mod:`sweep.run.transport`): keep every worker supplied with the costliest pending points,
+wait (blocking with backoff, never a hot spin) for a result, take every other result
+already waiting, store them all with one group commit (:meth:`sweep.store.store.Store.commit`:
+one journal fsync, one HDF5 flush), count them as stored, repeat; ``None`` is the stop
+message. A worker holds one task at a time while points are slow; when points take less
+than a few commits' time it is given a short queue of tasks (up to :data:`_MAX_DEPTH`)
+so that it computes while the master commits. Each result becomes one
+:class:`sweep.store.record.Record` (:meth:`Master.record`).
+"""
+from __future__ import annotations
+
+import collections
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+from sweep.config import Point
+from sweep.errors import Interrupted, WorkerError
+from sweep.protocol import Kind, Outcome, Task, WorkerFailure
+from sweep.run.compute import DEFAULT_COMPUTE
+from sweep.run.progress import Progress
+from sweep.run.signals import GraceExpired, StopSignals
+from sweep.run.transport import Transport
+from sweep.store.record import Record, provenance_json
+from sweep.store.store import Store
+
+__all__ = ["Master", "RunSummary"]
+
+#: Group commit: at most this many results per commit, and at most this long [s] between
+#: taking the first result of a batch and committing it.
+_MAX_BATCH, _BATCH_WINDOW = 512, 0.2
+#: Tasks queued per worker at most. The depth is 1 + commit time / (share x point time):
+#: 1 for points much longer than a commit, more for quick points, so that commits cost
+#: the workers at most about ``_COMMIT_SHARE`` of their time.
+_MAX_DEPTH, _COMMIT_SHARE = 64, 0.1
+
+
+@dataclass
+class RunSummary:
+    """What one ``sweep run`` did."""
+
+    total: int = 0
+    skipped: int = 0
+    computed: int = 0
+    counts: dict[str, int] = field(default_factory=dict)
+    interrupted: str = ""
+    abandoned: int = 0
+    elapsed: float = 0.0
+    master_cpu: float = 0.0
+    loop_elapsed: float = 0.0
+    #: the master computed the points itself (no MPI workers): its CPU share is the
+    #: computation's, not the scheduling overhead, and is not reported
+    in_process: bool = False
+    #: [s] compiling or loading the kernels before the first point (:mod:`sweep.run.warmup`)
+    warm_up: float = 0.0
+
+    @property
+    def master_cpu_share(self) -> float:
+        """CPU seconds of the master per wall second of the scheduling loop (start-up
+        -- imports, grid expansion, store opening -- excluded)."""
+        return self.master_cpu / self.loop_elapsed if self.loop_elapsed > 0 else 0.0
+
+    def __str__(self) -> str:
+        counts = ", ".join(f"{k} {v}" for k, v in sorted(self.counts.items())) or "none"
+        noun = "grid point" if self.total == 1 else "grid points"
+        text = (f"{self.total} {noun}: {self.skipped} already stored, {self.computed}"
+                f" stored now ({counts}) in {self.elapsed:.2f} s")
+        if self.in_process:
+            return text + " (computed in-process)"
+        return text + f"; master CPU {100 * self.master_cpu_share:.1f}% of a core"
+
+
+class Master:
+    """Schedules points costliest-first onto idle workers and stores each result.
+
+    Parameters
+    ----------
+    store : the open :class:`sweep.store.store.Store` (this process is its only writer).
+    transport : :class:`sweep.run.transport.InProcessTransport` or
+        :class:`sweep.run.transport.MPITransport`.
+    compute : the compute function spec (its kernels are warmed up before the run).
+    """
+
+    def __init__(self, store: Store, transport: Transport, compute: str = DEFAULT_COMPUTE,
+                 git: dict[str, Any] | None = None, point_timeout: float = 0.0) -> None:
+        self.store = store
+        self.point_timeout = point_timeout
+        self.transport = transport
+        self.compute = compute
+        self.git = git or {}
+        self._provenance: dict[tuple[int, str], str] = {}
+        self.outstanding = 0  # tasks handed out and not yet stored
+        #: points in flight when an earlier run died: each is computed alone, so that a
+        #: death while it runs is its attempt (``[run] max_attempts``)
+        self.suspects: set[str] = set()
+        self._queues: dict[int, collections.deque[tuple[Point, dict[str, Any]]]] = {}
+        self.point_time = math.nan  # [s] moving average of a point's compute time
+        self.commit_time = math.nan  # [s] moving average of a batch's store time
+
+    @property
+    def depth(self) -> int:
+        """How many tasks each worker holds (1 until points and commits are timed)."""
+        if not (self.point_time >= 0 and self.commit_time >= 0):
+            return 1
+        ratio = self.commit_time / (_COMMIT_SHARE * max(self.point_time, 1e-6))
+        return max(1, min(_MAX_DEPTH, 1 + int(ratio)))
+
+    def _task(self, point: Point, config: dict[str, Any]) -> Task:
+        """The :class:`~sweep.protocol.Task` of ``point`` (``config``: its configuration
+        as a dict, kept with the worker's queue)."""
+        return Task(point.hash, config, float(self.point_timeout or 0.0))
+
+    def record(self, point: Point, out: Outcome,
+               config: dict[str, Any] | None = None) -> Record:
+        """The :class:`sweep.store.record.Record` of a worker's outcome (or of
+        :meth:`sweep.protocol.Outcome.known`) for ``point``."""
+        return Record.from_outcome(point, out, config, self._provenance_of)
+
+    def _provenance_of(self, rank: int, kernel_mode: str) -> str:
+        """The ``provenance`` column of a point computed by ``rank`` in ``kernel_mode``
+        (the same for all its points: built once)."""
+        key = (rank, kernel_mode)
+        prov = self._provenance.get(key)
+        if prov is None:
+            prov = self._provenance[key] = provenance_json(
+                self.transport.worker_env.get(rank, {}), self.git, kernel_mode)
+        return prov
+
+    def run(self, todo: list[Point], progress: Progress, signals: StopSignals,
+            summary: RunSummary) -> None:
+        """Compute and store every point of ``todo`` (or stop on a signal).
+
+        Results are stored by group commit: the first result that arrives, plus every
+        result already waiting (at most :data:`_MAX_BATCH`, taken within
+        :data:`_BATCH_WINDOW`), are staged and committed together; only then are they
+        counted as stored and are their workers given new tasks.
+        """
+        suspects = sorted((p for p in todo if p.hash in self.suspects),
+                          key=lambda p: (-p.cost, p.index), reverse=True)
+        pending = sorted((p for p in todo if p.hash not in self.suspects),
+                         key=lambda p: (-p.cost, p.index))
+        pending.reverse()  # pop() from the end takes the costliest
+        # per worker, its tasks in the order sent (MPI keeps the order of one sender)
+        queues: dict[int, collections.deque[tuple[Point, dict[str, Any]]]] = {
+            w: collections.deque() for w in self.transport.workers}
+        self._queues = queues
+        self.outstanding = 0
+        stop_at = math.inf
+        try:
+            while pending or suspects or self.outstanding:
+                if signals.requested and stop_at == math.inf:
+                    stop_at = time.monotonic() + signals.grace
+                    summary.interrupted = signals.requested
+                    pending += suspects  # not started: counted as not started
+                    suspects = []
+                if not signals.requested and suspects and not self.outstanding:
+                    point = suspects.pop()  # alone: nothing else is in flight
+                    worker = self.transport.workers[0]
+                    queues[worker].append((point, point.config.to_dict()))
+                    self.store.handout([(point.hash, worker)], alone=True)
+                    self.outstanding += 1
+                    self.transport.send(worker, self._task(point, queues[worker][-1][1]))
+                elif not signals.requested and not suspects:
+                    depth = self.depth
+                    sent: list[tuple[Point, dict[str, Any], int]] = []
+                    for worker, queue in queues.items():
+                        while len(queue) < depth and pending:
+                            point = pending.pop()
+                            sent.append((point, point.config.to_dict(), worker))
+                            queue.append(sent[-1][:2])
+                    # journaled before they go out: a point whose worker dies is counted
+                    self.store.handout([(p.hash, w) for p, _, w in sent])
+                    for point, config, worker in sent:
+                        self.outstanding += 1
+                        self.transport.send(worker, self._task(point, config))
+                if not self.outstanding:
+                    break
+                if time.monotonic() > stop_at:
+                    break
+                msg = self.transport.poll(min(1.0, max(stop_at - time.monotonic(), 0.0)))
+                progress.tick()
+                if msg is None:
+                    continue
+                batch = [msg]
+                window_end = time.monotonic() + _BATCH_WINDOW
+                while len(batch) < min(self.outstanding, _MAX_BATCH) and \
+                        batch[-1][1] != Kind.ERROR and time.monotonic() < window_end:
+                    more = self.transport.poll(0.0)
+                    if more is None:
+                        break
+                    batch.append(more)
+                self.outstanding -= self._store_batch(batch, queues, progress, summary)
+        except GraceExpired:
+            summary.interrupted = summary.interrupted or "signal"
+        if summary.interrupted:
+            summary.abandoned = abandoned = self.outstanding
+            raise Interrupted(
+                f"campaign stopped by {summary.interrupted}: {summary.computed} points stored"
+                f" in this run, {abandoned} running point(s) abandoned, {len(pending)} not"
+                " started; the store is closed and consistent — the campaign is resumable:"
+                " run the same command again")
+
+    def release_abandoned(self) -> None:
+        """Journal that the points still handed out were abandoned by a stop (they did
+        not kill their worker: no attempt is counted)."""
+        hashes = [p.hash for q in self._queues.values() for p, _ in q]
+        self.store.release(hashes)
+
+    def _store_batch(self, batch: list[tuple[int, str, Any]],
+                     queues: dict[int, collections.deque[tuple[Point, dict[str, Any]]]],
+                     progress: Progress, summary: RunSummary) -> int:
+        """Stage the results of ``batch``, commit them together, count them as stored.
+
+        Returns the number of results taken. A worker's error message is raised (as
+        :class:`WorkerError`) after the results before it are committed.
+        """
+        t0 = time.perf_counter()
+        statuses: list[str] = []
+        error: WorkerFailure | None = None
+        wall = 0.0
+        for worker, kind, payload in batch:
+            if kind == Kind.ERROR:
+                error = payload
+                break
+            point, config = queues[worker].popleft()
+            if kind != Kind.RESULT or payload.hash != point.hash:
+                raise WorkerError(f"worker rank {worker} returned {kind} of point"
+                                  f" {str(getattr(payload, 'hash', ''))[:12]}, expected the"
+                                  f" result of {point.hash[:12]} (protocol error)")
+            rec = self.record(point, payload, config)
+            self.store.add(rec)
+            statuses.append(rec.status)
+            wall += float(payload.wall_time)
+        self.store.commit()  # now they are stored: count them
+        for status in statuses:
+            summary.computed += 1
+            summary.counts[status] = summary.counts.get(status, 0) + 1
+            progress.update(status)
+        if error is not None:
+            raise WorkerError(f"worker rank {error.rank} on {error.host}:"
+                              f" {error.message}\n{error.traceback}")
+        if statuses:
+            self.point_time = _average(self.point_time, wall / len(statuses))
+            self.commit_time = _average(self.commit_time, time.perf_counter() - t0)
+        return len(statuses)
+
+
+def _average(old: float, new: float, weight: float = 0.3) -> float:
+    """Exponential moving average (``new`` alone when there is no ``old``)."""
+    return new if math.isnan(old) else (1 - weight) * old + weight * new

@@ -1,0 +1,65 @@
+"""sweep.store.merge: shard stores of one campaign combine into one store, one row per
+point (a success beats a failure); other campaigns and newer schemas are refused."""
+from __future__ import annotations
+
+import dataclasses
+
+import h5py
+import pytest
+
+import sweep
+from sweep import parse_campaign, run_campaign
+from sweep.errors import CampaignMismatchError, StoreError
+from sweep.store.merge import merge
+from sweep.store.validate import validate
+
+TOML = "[base]\nL_sheet = 6.0\n[sweep]\nL_x = [0.5, 1.5]\neps = [0.2, 0.4, 0.6]\n"
+
+
+def shards(tmp_path, campaign):
+    """The campaign run as two shards (``--shard K/2``), one store each."""
+    paths = []
+    for k in range(2):
+        path = tmp_path / f"shard{k}.h5"
+        run_campaign(dataclasses.replace(campaign, shard_of=(k, 2)), str(path),
+                     compute="sweep.testing:fake_point", progress_bar=False)
+        paths.append(path)
+    return paths
+
+
+def test_shards_merge_into_the_whole_campaign(tmp_path, campaign):
+    a, b = shards(tmp_path, campaign)
+    n_a, n_b = len(sweep.load(a)), len(sweep.load(b))
+    assert n_a + n_b == 6 and n_a and n_b
+    merge(tmp_path / "all.h5", [a, b])
+    df = sweep.load(tmp_path / "all.h5")
+    assert sorted(df["hash"]) == sorted(p.hash for p in campaign.points())
+    assert validate(tmp_path / "all.h5") == []
+    merge(tmp_path / "all.h5", [a])  # again: nothing duplicated
+    assert len(sweep.load(tmp_path / "all.h5")) == 6
+
+
+def test_a_success_replaces_a_failure(tmp_path, campaign):
+    bad = tmp_path / "bad.h5"
+    good = tmp_path / "good.h5"
+    run_campaign(campaign, str(bad), compute="sweep.testing:raising_point",
+                 progress_bar=False)
+    run_campaign(campaign, str(good), compute="sweep.testing:fake_point", progress_bar=False)
+    assert (sweep.load(bad)["status"] == "failed").sum() == 2
+    merge(tmp_path / "m.h5", [bad, good])
+    assert set(sweep.load(tmp_path / "m.h5")["status"]) == {"converged"}
+
+
+def test_other_campaigns_and_newer_schemas_are_refused(tmp_path, campaign):
+    a, _ = shards(tmp_path, campaign)
+    other = tmp_path / "other.h5"
+    run_campaign(parse_campaign(TOML.replace("6.0", "7.0")), str(other),
+                 compute="sweep.testing:fake_point", progress_bar=False)
+    with pytest.raises(CampaignMismatchError):
+        merge(tmp_path / "m.h5", [a, other])
+    with h5py.File(a, "r+") as f:
+        f.attrs["schema_version"] = 99
+    with pytest.raises(StoreError, match="schema version 99"):
+        merge(tmp_path / "m2.h5", [a])
+    with pytest.raises(StoreError, match="output store itself"):
+        merge(other, [other])
