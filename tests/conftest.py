@@ -85,7 +85,8 @@ GROUPED = ("tests/test_slurm.py",  # one Slurm cluster and one reference job per
 #: controller compiles first: :func:`pytest_sessionstart`): numba compiles each such entry
 #: point for its own signature, so they run on one worker, which compiles each once.
 KERNEL_CALLERS = ("tests/floewave/test_kernels.py", "tests/floewave/test_drag.py",
-                  "tests/floewave/test_forces.py", "tests/floewave/test_exact_drag.py")
+                  "tests/floewave/test_forces.py", "tests/floewave/test_exact_drag.py",
+                  "tests/floewave/test_drag_every.py")
 #: The longest tests and modules, handed out first under xdist so that no long one is left
 #: alone at the end (longest first); the rest keep pytest's order.
 FIRST = ("tests/test_slurm.py",

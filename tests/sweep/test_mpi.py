@@ -119,7 +119,8 @@ def test_slurm_ntasks_mismatch_refused(tmp_path, tiny):
     assert not store.exists()
 
 
-@pytest.mark.parametrize("sig", [signal.SIGTERM, pytest.param(signal.SIGUSR1, marks=pytest.mark.slow)])
+@pytest.mark.parametrize("sig", [signal.SIGTERM,
+                                 pytest.param(signal.SIGUSR1, marks=pytest.mark.slow)])
 # SIGUSR1: slow tier (fast: SIGTERM here; SIGUSR1 in test_store_safety.py's rebuild stops)
 def test_signal_stops_cleanly_and_resumes(tmp_path, sig):
     cfg = tmp_path / "c.toml"
