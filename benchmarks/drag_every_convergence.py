@@ -33,17 +33,15 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import multiprocessing as mp
 import os
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from dt_convergence import MATCHED  # noqa: E402
-from honesty import SCALARS, floored, key_of, points, run_one, z_scores  # noqa: E402
+from dt_convergence import MATCHED, compute_missing  # noqa: E402
+from honesty import SCALARS, floored, key_of, points, z_scores  # noqa: E402
 
 from floewave import ModelConfig  # noqa: E402
 
@@ -79,17 +77,7 @@ def main(argv: list[str] | None = None) -> int:
                     continue
                 runs[(i, K, dt, seed)] = key_of(d)
                 tasks.append((d, key_of(d)))
-    todo = list({k: (d, k) for d, k in tasks if k not in cache}.values())
-    todo.sort(key=lambda t: -ModelConfig(**t[0]).floe_steps_per_iteration())
-    print(f"{len(pts)} points, {len(todo)} runs to compute, matched run length {MATCHED}",
-          flush=True)
-    t0 = time.perf_counter()
-    with mp.get_context("fork").Pool(args.jobs) as pool:
-        for i, (key, rec) in enumerate(pool.imap_unordered(run_one, todo), 1):
-            cache[key] = rec
-            cache_path.write_text(json.dumps(cache))
-            if i % 10 == 0 or i == len(todo):
-                print(f"  {i}/{len(todo)} done ({time.perf_counter() - t0:.0f} s)", flush=True)
+    compute_missing(tasks, cache, cache_path, args.jobs, len(pts))
 
     def run(i, K, seed, dt=1e-3):
         return floored(cache[runs[(i, K, dt, seed)]], ModelConfig(**pts[i]).a0)

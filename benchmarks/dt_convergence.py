@@ -86,6 +86,23 @@ def restitution_table(dts: list[float]) -> bool:
     return ok
 
 
+def compute_missing(tasks: list[tuple[dict, str]], cache: dict, cache_path: Path, jobs: int,
+                    n_points: int) -> None:
+    """Run the (config, key) ``tasks`` not in ``cache`` at matched run length, costliest
+    first, ``jobs`` at a time, saving ``cache`` to ``cache_path`` after each."""
+    todo = list({k: (d, k) for d, k in tasks if k not in cache}.values())
+    todo.sort(key=lambda t: -ModelConfig(**t[0]).floe_steps_per_iteration())
+    print(f"{n_points} points, {len(todo)} runs to compute, matched run length {MATCHED}",
+          flush=True)
+    t0 = time.perf_counter()
+    with mp.get_context("fork").Pool(jobs) as pool:
+        for i, (key, rec) in enumerate(pool.imap_unordered(run_one, todo), 1):
+            cache[key] = rec
+            cache_path.write_text(json.dumps(cache))
+            if i % 10 == 0 or i == len(todo):
+                print(f"  {i}/{len(todo)} done ({time.perf_counter() - t0:.0f} s)", flush=True)
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--candidates", nargs="+", type=float, default=[1e-3])
@@ -111,17 +128,7 @@ def main(argv: list[str] | None = None) -> int:
                 d = {**p, **MATCHED, "dt": dt, "seed": seed}
                 runs[(i, dt, seed)] = key_of(d)
                 tasks.append((d, key_of(d)))
-    todo = list({k: (d, k) for d, k in tasks if k not in cache}.values())
-    todo.sort(key=lambda t: -ModelConfig(**t[0]).floe_steps_per_iteration())
-    print(f"{len(pts)} points, {len(todo)} runs to compute, matched run length {MATCHED}",
-          flush=True)
-    t0 = time.perf_counter()
-    with mp.get_context("fork").Pool(args.jobs) as pool:
-        for i, (key, rec) in enumerate(pool.imap_unordered(run_one, todo), 1):
-            cache[key] = rec
-            cache_path.write_text(json.dumps(cache))
-            if i % 10 == 0 or i == len(todo):
-                print(f"  {i}/{len(todo)} done ({time.perf_counter() - t0:.0f} s)", flush=True)
+    compute_missing(tasks, cache, cache_path, args.jobs, len(pts))
     s1, s2 = args.seeds
     names = ("a", *SCALARS)
     print(f"\nRMS z over {len(pts)} points (n: number of z values; band: the candidate's two"

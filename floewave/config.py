@@ -198,7 +198,7 @@ class ModelConfig:
     relax: float = 0.5
     max_iterations: int = 100
     noise_window: int = 4
-    n_average: int = 8
+    n_average: int = 10
     target_stderr: float = 0.01
     target_W_c_stderr: float = 1.0
     n0_warm: int = 0
@@ -350,10 +350,10 @@ class ModelConfig:
         """Raise :class:`InvalidPointError` if this point cannot be simulated; else return
         the wavenumber k and group velocity c_g it solved for (eqs. 6, 7).
 
-        Checks: T/dt and L_x/dx integral, n_t a multiple of ``drag_every``, a binary contact resolved in at least
-        :data:`MIN_CONTACT_STEPS` steps (:meth:`contact_steps`; not for ``confined``), at least
-        two floes, and (via the dispersion
-        solver) that eq. 6 has an admissible root (``ml`` below its cutoff).
+        Checks: T/dt and L_x/dx integral, n_t a multiple of ``drag_every``, a binary contact
+        resolved in at least :data:`MIN_CONTACT_STEPS` steps (:meth:`contact_steps`; not for
+        ``confined``), at least two floes, and (via the dispersion solver) that eq. 6 has an
+        admissible root (``ml`` below its cutoff).
         """
         _require_integral("T", self.T, self.dt, "dt")
         _require_integral("L_x", self.L_x, self.dx, "dx")

@@ -16,9 +16,9 @@ from sweep.identity import canonical_json, point_hash, short_hash
 # version 4 (issue *ensemble*): replicas. Model version 5 (issue *SIMD*): the quadrature
 # drag of floes with a root by closed-form prefix sums (equal to the cell loop to rounding:
 # other trajectories). Model version 6 (issue *protocol*): the stationary protocol, dt 1e-3.
-# Model version 7: the drag held over drag_every = 4 steps (a new field).
+# Model version 7: the drag held over drag_every = 4 steps (a new field), n_average 10.
 KNOWN = {
-    "default": "9af45f891dfa949af53b1acbca675690742949060634cded5cedebe41522deab",
+    "default": "e64de7a9c1aaef614d1b310ae8340f528a5e34201ab25ecde11ebe7dda2b00dc",
 }
 
 
@@ -54,8 +54,8 @@ def test_known_hashes(changes, expected):
 
 
 PINNED = {
-    "KNOWN_1": "710f592470273283066678a15edab67ed18d7c24ea3a4e660e4d7acecec09aaa",
-    "KNOWN_2": "5044b1d9f3b657e4e03b6557b6f112270429c89d0539522db092041a956bbf09",
+    "KNOWN_1": "6a4547390d4b6ae504b870fc2ad75f7f206ffc0f4388200180f65bf4cd1e818b",
+    "KNOWN_2": "3e9a314131fe10a79a687d37186c777811e50925a91abbf9dc53f7dc9bbc1397",
 }
 
 
