@@ -437,7 +437,7 @@ def test_scripts_run_outside_slurm(tmp_path, run_main):
              SLURM_ARRAY_TASK_MAX="1")
     shards = sorted((tmp_path / "shards").glob("c-*.h5"))
     assert [s.name for s in shards] == ["c-0.h5", "c-1.h5"]
-    assert 0 < len(sweep.load(shards[0])) < 6
+    assert sum(len(sweep.load(s)) for s in shards) == 6   # (split by hash: sizes vary)
     merged = tmp_path / "merged.h5"
     assert run_main(main, ["merge", merged, *shards]).returncode == 0
     res = compare(tmp_path / "mpi.h5", merged)
