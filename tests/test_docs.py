@@ -117,8 +117,35 @@ def _small_run_point(run_point):
     return small
 
 
+def _in_process(run: str):
+    """``(main, argv)`` of a command line that runs in this process (``sweep …`` or
+    ``floewave …`` without a launcher, pipe or redirection), else ``None``."""
+    if any(c in run for c in "|<>;$`"):
+        return None
+    words = shlex.split(run)
+    if words[0] == "sweep":
+        import sweep.cli
+
+        return sweep.cli.main, words[1:]
+    if words[0] == "floewave":
+        import floewave.cli
+
+        return floewave.cli.main, words[1:]
+    return None
+
+
+#: The two ways a document is walked. ``in-process`` (fast tier): Python blocks by ``exec``,
+#: every ``sweep``/``floewave`` line by its ``main(argv)``; a launcher (``mpiexec -n N``)
+#: is dropped, so the command runs as a singleton in this process; a line that needs a
+#: process of its own (``python -c`` under ``mpiexec``, a pipe) is left to the other walk.
+#: ``launcher`` (slow tier): the same, except that every such line, and every line with a
+#: launcher, runs as written in ``bash`` (at most 3 MPI ranks).
+WALKS = ("in-process", pytest.param("launcher", marks=pytest.mark.slow))
+
+
+@pytest.mark.parametrize("walk", WALKS)
 @pytest.mark.parametrize("doc", DOCS)
-def test_every_code_block_runs(doc, tmp_path, monkeypatch):
+def test_every_code_block_runs(doc, walk, tmp_path, monkeypatch, run_main):
     import matplotlib
 
     matplotlib.use("Agg")
@@ -131,10 +158,11 @@ def test_every_code_block_runs(doc, tmp_path, monkeypatch):
     env = dict(os.environ, HOME=str(sandbox), MPLBACKEND="Agg",
                PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}")
     monkeypatch.chdir(sandbox)
+    monkeypatch.setenv("HOME", str(sandbox))
     monkeypatch.setattr(floewave.model, "run_point",
                         _small_run_point(floewave.model.run_point))
     namespace: dict = {}
-    ran = {"bash": 0, "python": 0}
+    ran = {"bash": 0, "python": 0, "in-process": 0, "left": 0}
     for lang, text in code_blocks(ROOT / doc):
         if lang == "bash":
             for command in _commands(text):
@@ -146,15 +174,30 @@ def test_every_code_block_runs(doc, tmp_path, monkeypatch):
                         name, _, value = run[len("export "):].partition("=")
                         env[name] = os.path.expandvars(shlex.split(value, comments=True)[0]
                                                        .replace("$HOME", env["HOME"]))
+                        monkeypatch.setenv(name, env[name])
                         continue
-                    p = subprocess.run(["bash", "-c", run], cwd=sandbox, env=env,
-                                       capture_output=True, text=True, timeout=600)
+                    words = shlex.split(run)
+                    launched = "mpiexec" in words
+                    if walk == "in-process" and launched and words[0] == "mpiexec":
+                        run = shlex.join(words[words.index("-n") + 2:])  # a singleton
+                    here = _in_process(run)
+                    if here is not None and not (walk == "launcher" and launched):
+                        p = run_main(*here)
+                        ran["in-process"] += 1
+                    elif walk == "in-process":
+                        ran["left"] += 1   # needs a process of its own: the launcher walk
+                        continue
+                    else:
+                        p = subprocess.run(["bash", "-c", run], cwd=sandbox, env=env,
+                                           capture_output=True, text=True, timeout=600)
                     assert p.returncode == 0, f"{doc}: {part!r} ran as {run!r}:\n{p.stderr}"
                     ran["bash"] += 1
         elif lang == "python":
             exec(compile(text, f"{doc} (python block)", "exec"), namespace)  # noqa: S102
             ran["python"] += 1
     assert ran["bash"] + ran["python"] >= 3, ran
+    if walk == "in-process":
+        assert ran["in-process"] == ran["bash"], ran
 
 
 _INLINE = re.compile(r"`((?:sweep|floewave) [^`]+)`")

@@ -10,11 +10,19 @@ interpreters:
 
 - A: an empty cache directory, the quadrature point first, then the exact-drag point;
 - B: the cache A left (everything loaded, nothing compiled);
-- C: another empty cache directory, compiled in the other order (exact first).
+- C: another empty cache directory, compiled in the other order (exact first) by two
+  interpreters at once (as the ranks of an MPI job compile with a cold cache).
 
 Every array and scalar of every point must be equal bit for bit across A, B and C. The
 points are chaotic: a last-bit difference in any force moves the trajectory (and so the
 digests) within a few steps.
+
+Both tests here start fresh interpreters with cold caches: the slow tier. The fast tier
+proves the same machinery in-process: the cache key of every kernel file's functions
+(:func:`test_every_kernel_file_is_keyed_by_all_kernel_files`), a point's bits repeated in
+one process (tests/floewave/test_iteration.py::test_run_point_is_deterministic), replica
+invariance (tests/floewave/test_kernels.py), one rank = three ranks
+(tests/sweep/test_mpi.py) and kill -9 then resume (tests/sweep/test_store.py).
 """
 from __future__ import annotations
 
@@ -67,78 +75,39 @@ SCRIPT = textwrap.dedent("""
 """)
 
 
-def _run(cache_dir, order):
+def _start(cache_dir, order):
     env = dict(os.environ, NUMBA_CACHE_DIR=str(cache_dir))
     env.pop("NUMBA_DISABLE_JIT", None)
-    proc = subprocess.run([sys.executable, "-c", SCRIPT, *order], env=env,
-                          capture_output=True, text=True, timeout=600)
-    assert proc.returncode == 0, proc.stderr
-    return json.loads(proc.stdout)
+    return subprocess.Popen([sys.executable, "-c", SCRIPT, *order], env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
+def _result(proc):
+    out, err = proc.communicate(timeout=600)
+    assert proc.returncode == 0, err
+    return json.loads(out)
+
+
+def _run(cache_dir, order):
+    return _result(_start(cache_dir, order))
+
+
+@pytest.mark.slow  # fresh interpreters compiling with cold caches (module docstring)
 @pytest.mark.skipif(os.environ.get("NUMBA_DISABLE_JIT") == "1", reason="needs the JIT")
 def test_point_bits_do_not_depend_on_the_jit_cache(tmp_path):
     names = ["quadrature", "long", "exact", "exact-long", "independent"]
     cold = _run(tmp_path / "cache-a", names)
     assert any((tmp_path / "cache-a").rglob("*.nbc")), "nothing was cached"
     warm = _run(tmp_path / "cache-a", names)
-    other_order = _run(tmp_path / "cache-c", names[::-1])
+    # two interpreters compiling into one empty cache at once, in opposite orders
+    together = [_start(tmp_path / "cache-c", order) for order in (names[::-1], names)]
+    other_order, concurrent = (_result(p) for p in together)
     for name in names:
         assert cold[name]["iterations"] >= 2
         # the points are chaotic: contacts happen (a last-bit change would move them)
         assert warm[name] == cold[name], f"{name}: warm cache differs from the cold compile"
         assert other_order[name] == cold[name], f"{name}: compile order changes the bits"
-
-
-def test_campaign_bits_in_process_mpi_and_after_kill_and_resume(tmp_path):
-    """A small real campaign stores the same bits per hash (every result column, every
-    profile) whether it ran in-process with a cold cache, under ``mpiexec -n 3`` with
-    another cold cache (the workers compile at the same time), or was killed with SIGKILL
-    after its first points and resumed (with the warm cache of the MPI run)."""
-    import signal
-    import time
-
-    from tests.sweep.test_torture import MPIEXEC, TORTURE_TOML, _command, _env, _group_gone, compare
-
-    if MPIEXEC is None:
-        pytest.skip("no mpiexec (pip install mpich)")
-    from sweep.store.journal import journal_path
-    from sweep.store.reader import read_journal
-
-    config = tmp_path / "c.toml"
-    config.write_text(TORTURE_TOML)
-
-    def env(cache):
-        return {**_env(), "NUMBA_CACHE_DIR": str(tmp_path / cache)}
-
-    def run(store, n_ranks, cache):
-        proc = subprocess.run(_command(config, store, n_ranks), env=env(cache),
-                              capture_output=True, text=True, timeout=600)
-        assert proc.returncode == 0, proc.stderr[-2000:]
-
-    one, mpi, killed = tmp_path / "one.h5", tmp_path / "mpi.h5", tmp_path / "killed.h5"
-    run(one, 1, "cache-one")
-    run(mpi, 3, "cache-mpi")
-    # killed after its first stored points, then resumed
-    proc = subprocess.Popen(_command(config, killed, 3), env=env("cache-mpi"),
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                            start_new_session=True)
-    deadline = time.monotonic() + 300
-    while time.monotonic() < deadline and proc.poll() is None:
-        jpath = journal_path(killed)
-        if jpath.exists() and sum(1 for _ in read_journal(jpath)) >= 3:
-            break
-        time.sleep(0.05)
-    assert proc.poll() is None, "the campaign ended before it could be killed"
-    os.killpg(proc.pid, signal.SIGKILL)
-    proc.wait()
-    assert _group_gone(proc.pid)
-    n_before = sum(1 for _ in read_journal(journal_path(killed)))
-    assert 3 <= n_before < 24
-    run(killed, 3, "cache-mpi")
-    for store in (mpi, killed):
-        res = compare(one, store)
-        assert res["problems"] == [] and res["compared"] == 24, res["problems"][:5]
+        assert concurrent[name] == cold[name], f"{name}: a concurrent compile changes the bits"
 
 
 CALLEE_SCRIPT = textwrap.dedent("""
@@ -162,6 +131,35 @@ CALLEE_SCRIPT = textwrap.dedent("""
 """)
 
 
+def test_every_kernel_file_is_keyed_by_all_kernel_files(tmp_path, monkeypatch):
+    """In-process (fast tier) half of the next test: numba's cache locator for a function of
+    a kernel file is :class:`floewave._jit.KernelSourcesLocator`, whose source stamp holds
+    the fingerprint of all kernel files, and a change in any one of them (here the
+    callee file ``_exact.py``, in a copy) changes that fingerprint; a function of another
+    file keeps numba's own key."""
+    import shutil
+    from pathlib import Path
+
+    from floewave import _exact, _jit, _kernels, dispersion
+
+    for fn in (_kernels.exact_pass, _exact.drag_pass_exact):
+        loc = _jit.KernelSourcesLocator.from_function(fn.py_func, fn.py_func.__code__.co_filename)
+        assert isinstance(loc, _jit.KernelSourcesLocator)
+        assert loc.get_source_stamp()[1] == _jit.kernel_fingerprint()
+    assert _jit.KernelSourcesLocator.from_function(dispersion.solve_dispersion,
+                                                   dispersion.__file__) is None
+    src = Path(_jit.__file__).parent
+    for name in _jit.KERNEL_SOURCES:
+        shutil.copy(src / name, tmp_path / name)
+    fingerprint = _jit.kernel_fingerprint.__wrapped__
+    monkeypatch.setattr(_jit, "_HERE", str(tmp_path))
+    assert fingerprint() == _jit.kernel_fingerprint()
+    exact = tmp_path / "_exact.py"
+    exact.write_text(exact.read_text() + "\n# changed\n")
+    assert fingerprint() != _jit.kernel_fingerprint()
+
+
+@pytest.mark.slow  # fresh interpreters compiling a copy of the package
 def test_a_change_in_a_callee_file_recompiles_the_cached_callers(tmp_path):
     """``floe_drag`` (``_kernels.py``) calls ``drag_sums_exact`` (``_exact.py``). numba
     keys a cached function by its own file only, so a changed ``_exact.py`` left the cached

@@ -8,8 +8,10 @@ uninterrupted run (the first test's job; ``compare`` of the torture test).
 The daemons are started by the session fixture :func:`slurm` (tests/slurm_cluster.py) and
 need Debian's ``slurm-wlm`` and ``munge`` and root. Without them these tests skip; with
 ``FLOEWAVE_REQUIRE_SLURM=1`` (set by ``.ci/run``, which installs both) a missing or
-unstartable Slurm is a failure. To run them here: ``apt-get install slurm-wlm munge`` as
-root, then ``FLOEWAVE_REQUIRE_SLURM=1 python -m pytest tests/test_slurm.py``.
+unstartable Slurm is a failure. They are the slow tier; to run them here: ``apt-get install
+slurm-wlm munge`` as root, then ``FLOEWAVE_REQUIRE_SLURM=1 python -m pytest -m slow
+tests/test_slurm.py``. The fast tier runs the scripts without Slurm
+(:func:`test_scripts_run_outside_slurm`).
 
 Slurm holds a requeued job for about two minutes (BeginTime); the tests start it at once
 (:meth:`SlurmCluster.release`). With ``pytest -s`` (and at the end of any run) each
@@ -186,6 +188,7 @@ def reference(slurm, campaign, tmp_path_factory) -> tuple[Path, str]:
     return store, job
 
 
+@pytest.mark.slow  # a real Slurm (fast: test_scripts_run_outside_slurm)
 def test_mpi_script_runs_a_campaign(slurm, reference):
     store, job = reference
     rec = slurm.job(job)
@@ -199,6 +202,7 @@ def test_mpi_script_runs_a_campaign(slurm, reference):
     assert sweep.validate(store) == []
 
 
+@pytest.mark.slow  # a real Slurm (fast: test_scripts_run_outside_slurm)
 def test_mpi_script_without_user(slurm, campaign, reference, tmp_path):
     """Submitted from an environment without USER (cron, service accounts)."""
     env = job_env(slurm, USER=None)
@@ -220,6 +224,7 @@ def test_mpi_script_without_user(slurm, campaign, reference, tmp_path):
     same_as(reference[0], store)
 
 
+@pytest.mark.slow  # a real Slurm (fast: test_scripts_run_outside_slurm)
 def test_mpi_script_with_the_wheels_mpiexec(slurm, campaign, reference, tmp_path):
     """LAUNCHER=mpiexec: the mpich wheel's Hydra, which starts its proxies with srun (so
     the ranks must be handed the job's SLURM_NTASKS, or sweep refuses the launch)."""
@@ -236,6 +241,7 @@ def test_mpi_script_with_the_wheels_mpiexec(slurm, campaign, reference, tmp_path
     assert set(sweep.load(store)["rank"]) == {1, 2}
 
 
+@pytest.mark.slow  # a real Slurm (fast: test_scripts_run_outside_slurm)
 def test_time_limit_signal_stops_requeues_and_resumes(slurm, campaign, reference, tmp_path):
     """What --signal=B:USR1@300 sends: clean stop (6), requeue, resume; nothing recomputed."""
     store = tmp_path / "usr1.h5"
@@ -268,6 +274,7 @@ def test_time_limit_signal_stops_requeues_and_resumes(slurm, campaign, reference
     assert set(after.values()) == {0, 1}
 
 
+@pytest.mark.slow  # a real Slurm (fast: test_scripts_run_outside_slurm)
 def test_scancel_cancels_and_does_not_requeue(slurm, campaign, tmp_path):
     store = tmp_path / "cancel.h5"
     job = submit_mpi(slurm, campaign, store)
@@ -289,6 +296,7 @@ def test_scancel_cancels_and_does_not_requeue(slurm, campaign, tmp_path):
     assert sweep.validate(store) == []
 
 
+@pytest.mark.slow  # a real Slurm (fast: test_scripts_run_outside_slurm)
 def test_array_script_and_merge(slurm, campaign, reference, tmp_path):
     shards = tmp_path / "shards"
     job = slurm.sbatch("--array=0-3", f"--output={tmp_path}/shard-%A_%a.log",
@@ -315,6 +323,7 @@ def test_array_script_and_merge(slurm, campaign, reference, tmp_path):
     same_as(reference[0], merged)
 
 
+@pytest.mark.slow  # a real Slurm (fast: test_scripts_run_outside_slurm)
 def test_array_task_time_limit_signal_during_startup(slurm, campaign, reference, tmp_path):
     """The time-limit signal to an array task still starting (one shard: the whole grid):
     held back until ``sweep run`` listens, then a clean stop, that task requeued, resumed."""
@@ -347,6 +356,7 @@ def test_array_task_time_limit_signal_during_startup(slurm, campaign, reference,
     assert {h: after[h] for h in first} == first, "a point stored before the stop was redone"
 
 
+@pytest.mark.slow  # a real Slurm (fast: test_scripts_run_outside_slurm)
 def test_node_failure_then_time_limit_signal_during_startup(slurm, campaign, reference,
                                                            tmp_path):
     """The job step killed with SIGKILL (as by a node failure), the job requeued, and the
@@ -392,3 +402,43 @@ def test_node_failure_then_time_limit_signal_during_startup(slurm, campaign, ref
     resumed = log.split(f"Force Terminated StepId={job}.0")[1].split("requeueing job")[0]
     assert resumed.index("time limit near") < resumed.index(" points to compute ("), \
         f"the signal came after the resumed run's start-up: this test proves nothing\n{log}"
+
+
+def test_scripts_run_outside_slurm(tmp_path, run_main):
+    """Fast tier: both scripts, run by ``bash`` without Slurm (the MPI one with a no-op
+    launcher, the array one as two array tasks), compute a campaign whose merged shards
+    hold every point once; the Slurm behaviour (signals, requeue, time limits) is the slow
+    tier's tests above. ``sweep`` is a stand-in that adds ``--compute`` with the hand-set
+    ``sweep.testing:power_point``."""
+    from sweep.cli import main
+
+    bin_ = tmp_path / "bin"
+    bin_.mkdir()
+    (bin_ / "sweep").write_text(f'#!/bin/sh\nexec {sys.executable} -m sweep "$@"'
+                                " --compute sweep.testing:power_point\n")
+    (bin_ / "sweep").chmod(0o755)
+    config = tmp_path / "c.toml"
+    config.write_text("[base]\nL_sheet = 6.0\n[sweep]\nL_x = [0.5, 1.5]\n"
+                      "eps = [0.2, 0.4, 0.6]\n")
+    env = {k: v for k, v in os.environ.items() if not k.startswith("SLURM_")}
+    env.update(PATH=f"{bin_}{os.pathsep}{env['PATH']}", NUMBA_CACHE_DIR=str(tmp_path / "nc"))
+
+    def bash(script, *args, **extra):
+        p = subprocess.run(["bash", str(script), *map(str, args)], env={**env, **extra},
+                           capture_output=True, text=True, timeout=120)
+        assert p.returncode == 0, p.stdout + p.stderr
+        return p.stdout
+
+    out = bash(MPI_SCRIPT, config, tmp_path / "mpi.h5", LAUNCH="env")
+    assert "stop signals are trapped" in out
+    assert len(sweep.load(tmp_path / "mpi.h5")) == 6
+    for k in (0, 1):
+        bash(ARRAY_SCRIPT, config, tmp_path / "shards", SLURM_ARRAY_TASK_ID=str(k),
+             SLURM_ARRAY_TASK_MAX="1")
+    shards = sorted((tmp_path / "shards").glob("c-*.h5"))
+    assert [s.name for s in shards] == ["c-0.h5", "c-1.h5"]
+    assert sum(len(sweep.load(s)) for s in shards) == 6   # (split by hash: sizes vary)
+    merged = tmp_path / "merged.h5"
+    assert run_main(main, ["merge", merged, *shards]).returncode == 0
+    res = compare(tmp_path / "mpi.h5", merged)
+    assert res["problems"] == [] and res["compared"] == 6 and res["dup_table"] == 0

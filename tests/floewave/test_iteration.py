@@ -64,16 +64,41 @@ def test_run_point_is_deterministic():
         np.testing.assert_array_equal(getattr(r1, name), getattr(r2, name))
 
 
-def test_paper_plain_algorithm_available():
-    """relax = 1, no noise handling: the paper's iteration; it stops at max_iterations."""
+def test_paper_plain_algorithm_available(monkeypatch):
+    """relax = 1, no noise handling: the paper's iteration a <- a_new (each iteration's
+    wave forcing is the amplitude the previous one marched); it stops at the first residual
+    below delta or at max_iterations."""
+    import floewave.model as M
+
+    forcing, marched = [], []           # per iteration: a given to the window, a_new
+
+    def window(cfg, chain, x0s, a, first):
+        forcing.append(np.array(a))
+        return run_window(cfg, chain, x0s, a, first)
+
+    def march(*args):                   # coupling "independent": a profile per replica
+        marched.append(np.array(march_rows(*args)))
+        return marched[-1]
+
+    run_window, march_rows = M.run_window, M.march_rows
+    monkeypatch.setattr(M, "run_window", window)
+    monkeypatch.setattr(M, "march_rows", march)
     cfg = ModelConfig(eps=0.6, L_x=3.0, n0=2, nT=1, relax=1.0, noise_window=0,
                       max_iterations=8, protocol="noise_floor")
+    assert cfg.coupling == "independent" and cfg.n_chains > 1
     r = run_point(cfg)
     assert r.status in ("converged", "not_converged")
-    # the status agrees with the residual history: it stopped at the first residual below
-    # delta (converged), else ran all 8 iterations with none below delta
     hist = r.residual_history
-    assert len(hist) == r.iterations and np.all(hist[:-1] >= cfg.delta)
+    assert len(hist) == r.iterations == len(forcing) == len(marched) >= 2
+    np.testing.assert_array_equal(forcing[0], cfg.a0)
+    for it in range(1, r.iterations):   # relax = 1: not a blend of the old and new profiles
+        np.testing.assert_array_equal(forcing[it], marched[it - 1])
+        assert not np.array_equal(marched[it], marched[it - 1])
+    assert list(hist) == [max(residual(f_r, m_r) for f_r, m_r in zip(f, m, strict=True))
+                          for f, m in zip(forcing, marched, strict=True)]
+    # the status agrees with the residual history: it stopped at the first residual below
+    # delta (converged), else ran all 8 iterations with none below delta; never averaged
+    assert np.all(hist[:-1] >= cfg.delta)
     if r.status == "converged":
         assert hist[-1] < cfg.delta
     else:

@@ -19,3 +19,25 @@ def make_unclean(path):
     """Mark the store as left open by a writer (its next open rebuilds or checks it)."""
     with h5py.File(path, "r+", locking=False) as f:
         f.attrs["writer_open"] = True
+
+
+def partial_shard(campaign, lo: float = 0.25, hi: float = 0.75):
+    """Shard 0 of the fewest shards (2, 3, ...) whose shard 0 holds between ``lo`` and
+    ``hi`` of the campaign's points: some stored, some missing, whatever the point hashes
+    (which points a shard holds follows the hashes, and they change with every model
+    version)."""
+    total = len(campaign.points())
+    for n in range(2, 16):
+        part = campaign.shard(0, n)
+        if lo * total <= len(part.points()) <= hi * total:
+            return part
+    raise AssertionError(f"no shard count splits these {total} points")
+
+
+def split_shards(campaign) -> list:
+    """The campaign as the fewest shards (2, 3, ...) of which at least two hold points."""
+    for n in range(2, 16):
+        parts = [campaign.shard(k, n) for k in range(n)]
+        if sum(1 for p in parts if p.points()) >= 2:
+            return parts
+    raise AssertionError("no shard count splits these points")

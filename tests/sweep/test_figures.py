@@ -298,7 +298,8 @@ def test_fig3_gap_axis_is_logarithmic_with_the_W_c_threshold(mixed_figures):
     assert REPLICA_W_C in texts
 
 
-@pytest.mark.parametrize("kind", ["fig5", "fig6"])
+@pytest.mark.parametrize("kind", ["fig5", pytest.param("fig6", marks=pytest.mark.slow)])
+# fig6: slow tier (fast: fig5 here; fig6 drawn by test_every_kind_from_a_hand_built_store)
 def test_fig5_and_fig6_mark_and_explain_not_converged_curves(kind, fake_store, tmp_path,
                                                              monkeypatch):
     """FAKE's eps = 0.8 points are not converged (power_point): their curves carry crosses,

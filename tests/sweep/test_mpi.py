@@ -93,6 +93,7 @@ def test_mpiexec_3_real_points_equal_one_rank(tmp_path, tiny):
     assert list(after["seq"]) == list(df["seq"])
 
 
+@pytest.mark.slow  # fast: test_store_safety.py::test_compute_faults_are_failed_points
 def test_mpiexec_raising_points_recorded(tmp_path):
     cfg = tmp_path / "c.toml"
     cfg.write_text(FAKE_TOML)
@@ -118,7 +119,9 @@ def test_slurm_ntasks_mismatch_refused(tmp_path, tiny):
     assert not store.exists()
 
 
-@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGUSR1])
+@pytest.mark.parametrize("sig", [signal.SIGTERM,
+                                 pytest.param(signal.SIGUSR1, marks=pytest.mark.slow)])
+# SIGUSR1: slow tier (fast: SIGTERM here; SIGUSR1 in test_store_safety.py's rebuild stops)
 def test_signal_stops_cleanly_and_resumes(tmp_path, sig):
     cfg = tmp_path / "c.toml"
     cfg.write_text(FAKE_TOML)
@@ -198,7 +201,8 @@ sys.exit(sweep.cli.main(sys.argv[2:]))
 """
 
 
-@pytest.mark.parametrize("how", ["open", "full"])
+@pytest.mark.parametrize("how", ["open", pytest.param("full", marks=pytest.mark.slow)])
+# "full": slow tier (fast: "open"; a full disk in test_store_holes.py and test_store.py)
 def test_any_master_failure_ends_the_job(tmp_path, how):
     """Rank 0 failing with something else than a SweepError (opening the store), or a
     full disk while workers are busy: the job ends within seconds, nothing hangs."""
@@ -223,6 +227,7 @@ def test_any_master_failure_ends_the_job(tmp_path, how):
         assert f"{done} already stored" in again.stdout and len(sweep.load(store)) == 32
 
 
+@pytest.mark.slow  # fast: test_store_safety.py::test_point_timeout_records_timeout
 def test_mpi_point_timeout(tmp_path):
     cfg = tmp_path / "c.toml"
     cfg.write_text(FAKE_TOML.replace("[0.2, 0.4, 0.6, 0.8]", "[0.2, 0.4]").replace(

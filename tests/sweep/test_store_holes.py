@@ -17,7 +17,7 @@ from sweep.cli import main
 from sweep.store.journal import journal_path, rejected_path
 from sweep.store.store import Store
 from sweep.testing import find_mpiexec
-from tests.sweep.helpers import make_unclean, table
+from tests.sweep.helpers import make_unclean, partial_shard, table
 
 TOML = "[base]\nL_sheet = 6.0\n[sweep]\nL_x = [0.5, 1.5]\neps = [0.2, 0.4, 0.6]\n"
 FAKE = "sweep.testing:fake_point"
@@ -110,6 +110,7 @@ def test_run_never_exits_0_with_points_missing(tmp_path, monkeypatch, capsys):
 
 
 @pytest.mark.skipif(MPIEXEC is None, reason="no mpiexec (pip install mpich)")
+@pytest.mark.slow  # fast: test_a_point_that_exits_0_never_makes_the_campaign_succeed
 def test_a_worker_that_exits_0_never_makes_the_mpi_job_succeed(tmp_path):
     """Under mpiexec a worker rank ending with 0 inside a point ends the job non-zero
     (its guard exits 6; the launcher then kills the other ranks); the next runs resume
@@ -391,7 +392,9 @@ def test_a_stop_during_the_compute_import_is_status_6(tmp_path):
     assert "Traceback" not in err
 
 
-@pytest.mark.parametrize("delay", [0.0, 0.02, 0.05, 0.1, 0.2, 0.4])
+@pytest.mark.parametrize("delay", [0.0, pytest.param(0.02, marks=pytest.mark.slow), 0.05,
+                                   pytest.param(0.1, marks=pytest.mark.slow), 0.2,
+                                   pytest.param(0.4, marks=pytest.mark.slow)])
 def test_a_stop_in_the_first_instants_is_status_6(tmp_path, delay):
     """SIGTERM or SIGINT from the first instants of ``sweep run`` (its handlers are
     installed before any heavy import): 6 (or 0 once finished), never a traceback or a
@@ -453,6 +456,8 @@ def test_values_beyond_any_parameter_are_config_errors():
     parse_campaign("[base]\nL_sheet = 6.0\nC_sd = 0.0\n[sweep]\neps = [0.5]\n")  # zero is fine
 
 
+@pytest.mark.slow  # a pipe; fast: test_a_resume_on_a_full_disk_is_one_line_and_exit_3,
+# test_a_campaign_file_that_is_not_a_file_is_refused_at_once
 def test_hostile_paths_and_outputs_are_one_line(tmp_path):
     cfg = tmp_path / "c.toml"
     cfg.write_text(TOML)
@@ -517,7 +522,7 @@ def test_a_rebuild_keeps_the_runs_and_their_numbering(tmp_path, campaign):
     """A rebuilt unclean file keeps /runs (the dead run marked so); a file rebuilt from
     the journal alone (removed) goes on after the journal's last run, not from 0."""
     path = tmp_path / "s.h5"
-    run_campaign(campaign.shard(0, 2), str(path), compute=FAKE)
+    run_campaign(partial_shard(campaign), str(path), compute=FAKE)
     run_campaign(campaign, str(path), compute=FAKE)
     make_unclean(path)
     with h5py.File(path, "r+", locking=False) as f:

@@ -61,7 +61,7 @@ def test_kill_9_during_rebuild_never_ruins_the_store(tmp_path):
         n_ref = int(f["table"].attrs["n_rows"])
     make_unclean(path)
     rng = random.Random(15)
-    hit = 0
+    hit = left = 0
     for _ in range(6):
         p = subprocess.Popen([sys.executable, "-c", _OPEN_SCRIPT, "open", str(path), str(cfg)],
                              stdout=subprocess.PIPE, text=True)
@@ -74,8 +74,13 @@ def test_kill_9_during_rebuild_never_ruins_the_store(tmp_path):
             if not f.attrs["writer_open"]:
                 assert int(f["table"].attrs["n_rows"]) == n_ref
                 assert "rebuilt_from_journal" in f.attrs
+        # the temporary file of a killed rebuild stays until the next open removes it: at
+        # most this process's own is left, never an earlier one's
+        temps = {t.name for t in tmp_path.glob(".s.h5.rebuild-*")}
+        assert temps <= {f".s.h5.rebuild-{p.pid}.tmp"}, temps
+        left += bool(temps)
     assert hit >= 4
-    assert not list(tmp_path.glob(".s.h5.rebuild-*"))  or True  # removed on the next open
+    assert left >= 1  # a killed rebuild did leave its temporary file (removed below)
     s = run_campaign(sweep.load_campaign(cfg), str(path), compute="sweep.testing:raising_point")
     assert s.computed == 0
     assert not list(tmp_path.glob(".s.h5.rebuild-*"))
@@ -83,7 +88,9 @@ def test_kill_9_during_rebuild_never_ruins_the_store(tmp_path):
     assert sweep.validate(path) == []
 
 
-@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGUSR1, signal.SIGINT])
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGUSR1,
+                                 pytest.param(signal.SIGINT, marks=pytest.mark.slow)])
+# SIGINT: slow tier (fast: SIGTERM and SIGUSR1 here; SIGINT in test_store_holes.py)
 def test_stop_signal_during_rebuild_is_deferred_then_exit_6(tmp_path, sig):
     cfg, path = _big(tmp_path)
     ref = table(path)

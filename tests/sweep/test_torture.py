@@ -311,6 +311,7 @@ def torture(config: Path, workdir: Path, *, kills: int = 10, n_ranks: int = 3, s
     return fig
 
 
+@pytest.mark.slow  # fast: tests/sweep/test_store.py::test_kill_9_torture, test_mpi.py
 @pytest.mark.skipif(MPIEXEC is None, reason="no mpiexec (pip install mpich)")
 def test_kill_9_whole_mpi_campaign_torture(tmp_path, compiled_kernels):
     config = tmp_path / "torture.toml"
