@@ -140,9 +140,20 @@ def test_every_kernel_file_is_keyed_by_all_kernel_files(tmp_path, monkeypatch):
     import shutil
     from pathlib import Path
 
-    from floewave import _exact, _jit, _kernels, dispersion
+    from floewave import (
+        _contact,
+        _drag,
+        _exact,
+        _exact_pass,
+        _jit,
+        _kernels,
+        _march,
+        _prefix,
+        dispersion,
+    )
 
-    for fn in (_kernels.exact_pass, _exact.drag_pass_exact):
+    for fn in (_kernels.floe_drag, _contact.contact_law, _drag.drag_pass, _exact.drag_sums_exact,
+               _exact_pass.drag_pass_exact, _prefix.prefix_sums, _march._root):
         loc = _jit.KernelSourcesLocator.from_function(fn.py_func, fn.py_func.__code__.co_filename)
         assert isinstance(loc, _jit.KernelSourcesLocator)
         assert loc.get_source_stamp()[1] == _jit.kernel_fingerprint()
