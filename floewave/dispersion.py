@@ -2,15 +2,30 @@
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 from scipy.optimize import brentq
 
 from .errors import DispersionError
 
-if TYPE_CHECKING:       # the formulas read a ModelConfig's fields; they import no module of
-    from .config import ModelConfig  # floewave but errors (config imports this one)
+
+class ModelConfig(Protocol):
+    """The fields of a :class:`floewave.ModelConfig` these formulas read (a structural
+    type: this module imports no floewave module but errors, and config imports it)."""
+
+    T: float
+    h: float
+    h_i: float
+    rho_i: float
+    rho_w: float
+    E: float
+    nu: float
+    C_sd: float
+    dispersion: str
+
+    @property
+    def omega(self) -> float: ...
 
 G = 9.81  # [m s^-2] acceleration due to gravity (docs/model.md §2)
 
