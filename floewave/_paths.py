@@ -1,4 +1,5 @@
-"""Output paths checked before any work starts (a result is never computed and then lost).
+"""Outputs: paths checked before any work starts (a result is never computed and then
+lost), and stdout quieted when its reader has gone.
 
 Both command-line programs (``floewave run --json/--plot``, ``sweep figures --out``,
 ``sweep export -o``) call these first; each returns ``None`` when the path can be written
@@ -7,6 +8,7 @@ and otherwise one sentence naming the path and the reason.
 from __future__ import annotations
 
 import os
+import sys
 from pathlib import Path
 
 __all__ = ["output_file_problem", "output_dir_problem"]
@@ -51,3 +53,13 @@ def output_dir_problem(path: str | Path, option: str) -> str | None:
             return f"{option} {path}: directory {base} is not writable"
         return f"{option} {path}: cannot be created: {base} is not writable"
     return None
+
+
+def quiet_stdout() -> None:
+    """Point stdout at /dev/null: its reader went away (``... | head``), so what is left to
+    print, and the flush at exit, go nowhere instead of raising BrokenPipeError."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import signal
 import sys
 import traceback
@@ -382,7 +381,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         sys.stdout.flush()
     except BrokenPipeError:
-        _quiet_stdout()
+        from floewave._paths import quiet_stdout
+        quiet_stdout()
     except (OSError, ValueError):
         pass
     if argv is None:  # the command line: a stop from now on cannot kill the exit
@@ -394,15 +394,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     if child:
         guard.report_status(status)
     return status
-
-
-def _quiet_stdout() -> None:
-    """Point stdout at /dev/null (its reader went away: no error at the exit's flush)."""
-    try:
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
-    except (OSError, ValueError):
-        pass
 
 
 def _main(argv: Sequence[str] | None) -> int:
@@ -420,7 +411,8 @@ def _main(argv: Sequence[str] | None) -> int:
         _err(str(exc))
         return EXIT_STORE
     except BrokenPipeError:  # `sweep status S.h5 | head -1`: the reader has what it wanted
-        _quiet_stdout()
+        from floewave._paths import quiet_stdout
+        quiet_stdout()
         return EXIT_OK
     except Exception:  # noqa: BLE001 - a bug: show it
         if _START_UP_STOP:  # an import cut short by the stop, not a bug
