@@ -110,6 +110,37 @@ CONFIGS = {
                 eps=[0.6], d_f=[0.005], dispersion=["ep", "ow", "ml"]),
         run='name = "periods"\ndescription = "alpha(omega) across the campaign periods, EP,'
             ' OW and ML"'),
+    "uniform": dict(header="""
+# Paper §4.1: "tests with random initial locations of the floes have shown that this aspect
+# of the setup has no influence on the results". The Fig. 2 points (configs/fig2.toml) with
+# the paper's uniform initial placement (replicas perturbed by nanometres) instead of random
+# arrangements; `sweep paper-check` compares the two. 8 points.
+""", sweep=dict(L_x=[0.5], T=[1.2], a0=[0.0125], C_sd=[0.05], eps=[0.2, 0.4, 0.6, 0.8],
+                d_f=[0.005], dispersion=["ml", "ep"]),
+        run='name = "uniform"\ndescription = "Fig. 2 points with the paper\'s uniform initial'
+            ' placement"', over=dict(placement="uniform")),
+    "spring_none": dict(header="""
+# Paper §4.1-4.2: the edge spring (k_s, on floes 1 and N_f) keeps the ice edge in place;
+# "without that force, the floes drift gradually in the upwave direction". The Fig. 2 point
+# ML eps 0.6 with k_s = 0. 1 point.
+""", sweep=dict(L_x=[0.5], T=[1.2], a0=[0.0125], C_sd=[0.05], eps=[0.6], d_f=[0.005],
+                dispersion=["ml"]),
+        run='name = "spring_none"\ndescription = "Fig. 2 ML eps 0.6 without the edge spring"',
+        over=dict(k_s=0.0)),
+    "spring_soft": dict(header="""
+# Paper §4.1: "the value of k_s doesn't have visible results on the simulated attenuation".
+# The Fig. 2 point ML eps 0.6 with k_s / 10. 1 point.
+""", sweep=dict(L_x=[0.5], T=[1.2], a0=[0.0125], C_sd=[0.05], eps=[0.6], d_f=[0.005],
+                dispersion=["ml"]),
+        run='name = "spring_soft"\ndescription = "Fig. 2 ML eps 0.6 with k_s / 10"',
+        over=dict(k_s=9.0e3)),
+    "spring_stiff": dict(header="""
+# Paper §4.1: "the value of k_s doesn't have visible results on the simulated attenuation".
+# The Fig. 2 point ML eps 0.6 with k_s x 10. 1 point.
+""", sweep=dict(L_x=[0.5], T=[1.2], a0=[0.0125], C_sd=[0.05], eps=[0.6], d_f=[0.005],
+                dispersion=["ml"]),
+        run='name = "spring_stiff"\ndescription = "Fig. 2 ML eps 0.6 with k_s x 10"',
+        over=dict(k_s=9.0e5)),
 }
 
 

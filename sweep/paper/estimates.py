@@ -68,7 +68,8 @@ class Estimate:
     """A value with its standard error.
 
     ``se`` is NaN when unknown; ``source`` says where it came from (``replicas``,
-    ``profile``, ``fit``, ``floor``, ``exact`` or ``none``); ``dof`` the degrees of freedom
+    ``profile``, ``fit``, ``floor``, ``combined`` (a difference of estimates with different
+    sources), ``exact`` (an analytic value, SE 0) or ``none``); ``dof`` the degrees of freedom
     of an SE estimated from residuals (``inf``: known); ``label`` names the point.
     """
 
@@ -90,6 +91,8 @@ class Estimate:
             return f"{self.label}: n/a"
         if not math.isfinite(self.se):
             return f"{self.label}: {self.value:.4g} (no SE)"
+        if self.source == "exact":
+            return f"{self.label}: {self.value:.4g} (exact)"
         digits = max(0, 1 - math.floor(math.log10(self.se))) if self.se > 0 else 4
         mark = " (floor)" if self.source == "floor" else ""
         return f"{self.label}: {self.value:.{digits}f} ± {self.se:.{digits}f}{mark}"
@@ -183,7 +186,9 @@ def pairs(pair_list: Sequence[tuple[Estimate, Estimate]]) -> tuple[str, str]:
         return INCONCLUSIVE, f"no pair with values{gone_txt}"
     diffs = [_diff(a, b) for a, b in valid]
     zs = [d.z for d in diffs]
-    comb = sum(zs) / math.sqrt(len(zs)) if all(math.isfinite(z) for z in zs) else math.nan
+    # an exact pair (SE 0) has z = +-inf; inf - inf (or a missing SE) leaves no combined z
+    comb = sum(zs) / math.sqrt(len(zs)) if not any(math.isnan(z) for z in zs) else math.nan
+    comb = math.nan if math.isnan(comb) else comb
     zc = z_critical(min(d.dof for d in diffs))
     evidence = (f"pair z = {', '.join(_zs(z) for z in zs)}; combined z = {_zs(comb)}"
                 f" (z_c {zc:.2g}){gone_txt}"

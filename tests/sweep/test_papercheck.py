@@ -10,7 +10,7 @@ import pytest
 
 from sweep.cli import main
 from sweep.paper import check as pc
-from sweep.paper import claims, estimates
+from sweep.paper import claims, estimates, points
 from sweep.paper.estimates import FAILS, HOLDS, INCONCLUSIVE, Estimate
 
 
@@ -160,6 +160,10 @@ def _fig2(W_c, *, ensemble=True, a_end=None):
     return pd.DataFrame(rows)
 
 
+#: Every claim of the table (the rows per period of Fig. 6 appear once per stored period).
+CLAIMS = {c.claim for c in claims.paper_checks({})}
+
+
 def _by(checks, claim, campaign=None):
     out = [c for c in checks if c.claim.startswith(claim)
            and (campaign is None or c.campaign == campaign)]
@@ -249,16 +253,20 @@ def test_exponents_from_the_periods_table():
     checks = claims.paper_checks({"periods": pd.DataFrame(rows)})
     verdicts = {c.claim: c.verdict for c in checks if c.campaign == "periods"}
     assert set(verdicts.values()) == {HOLDS}, verdicts
-    m = _by(checks, "alpha_inner (DEM) ~ omega^m")[0].estimates[0]
+    m, mc, diff = [c for c in checks if c.claim.endswith("the same periods (ep)")][0].estimates
     assert m.value == pytest.approx(2.2) and m.source == "fit" and m.dof == math.inf
+    # alpha_c's exponent over the same periods is exact (no SE), the difference has m's SE
+    assert mc.value == pytest.approx(2.2) and mc.se == 0 and mc.source == "exact"
+    assert diff.value == pytest.approx(0.0, abs=1e-9) and diff.se == m.se
 
 
 def test_missing_tables_are_inconclusive_not_hidden():
     checks = claims.paper_checks({}, missing={"fig2": "no store x.h5"})
-    assert checks and {c.verdict for c in checks} == {INCONCLUSIVE}
-    assert {c.campaign for c in checks} == set(claims.PAPER_CAMPAIGNS)
+    stored = [c for c in checks if c.campaign != "analytic"]    # Fig. 1's tails need none
+    assert stored and {c.verdict for c in stored} == {INCONCLUSIVE}
+    assert {c.campaign for c in stored} == set(claims.PAPER_CAMPAIGNS)
     assert any("no store x.h5" in c.evidence for c in checks)
-    assert "0 hold, 0 fail" in pc.format_table(checks)
+    assert "0 hold, 0 fail" in pc.format_table(stored)
 
 
 def test_table_marks_failures_in_its_count_line():
@@ -283,7 +291,8 @@ def test_cli_runs_and_checks_the_paper_campaigns(stores, capsys):
         assert (stores / f"{name}.h5").exists()
     assert main(["paper-check", "--stores", str(stores), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
-    assert out["problems"] == {} and sum(out["counts"].values()) == len(out["checks"]) == 26
+    assert out["problems"] == {} and sum(out["counts"].values()) == len(out["checks"])
+    assert {c["claim"] for c in out["checks"]} == CLAIMS
     by = {(c["claim"], c["campaign"]): c for c in out["checks"]}
     # fake_point: W_c = x[N_f // 3] whatever eps -> no difference at all
     w = by["higher eps -> narrower collisional zone W_c (ml)", "fig2"]
@@ -322,9 +331,9 @@ def test_cli_unreadable_store_exits_3(tmp_path, capsys):
 def test_fill_values_are_not_read_as_replica_counts():
     """-1 in replicas / W_c_n is the store's 'unknown' (failed points, older schemas)."""
     row = pd.Series({"replicas": -1, "W_c_n": -1, "W_c": 3.0, "W_c_stderr": np.nan})
-    assert math.isnan(claims._col(row, "replicas")) and math.isnan(claims._col(row, "W_c_n"))
-    assert "R=" not in claims._label(row, "eps", 0.4)
-    assert "n=" not in claims._W_c(row, "eps=0.4").label
+    assert math.isnan(points.col(row, "replicas")) and math.isnan(points.col(row, "W_c_n"))
+    assert "R=" not in points.label_of(row, "eps", 0.4)
+    assert "n=" not in points.w_c(row, "eps=0.4").label
 
 
 def test_a_partial_fig6a_store_is_not_compared_with_itself():
@@ -339,7 +348,7 @@ def test_a_partial_fig6a_store_is_not_compared_with_itself():
               and "reversal" in c.claim]
     short = [c for c in checks if "1.2" in c.points]
     assert short and short[0].verdict == INCONCLUSIVE
-    assert "fewer than 2 values" in short[0].evidence
+    assert "fewer than 2 points with a value" in short[0].evidence
 
 
 # ---------------------------------------------------------------------- --seeds
@@ -381,7 +390,7 @@ def test_cli_seeds_runs_each_seed_into_its_own_stores(tmp_path, capsys):
     lines = table.splitlines()
     assert lines[0].startswith("| # | claim") and "seed 0 | seed 1 | across seeds" in lines[0]
     rows = [ln for ln in lines if ln.startswith("| ") and ln[2].isdigit()]
-    assert len(rows) == 26
+    assert len(rows) == len(pc.check_stores(d / "seed0").checks) > len(CLAIMS)
     # fake_point ignores the seed: both seeds give the same verdicts, none seed-dependent
     assert "0 seed-dependent" in lines[-1]
     assert main(["paper-check", "--stores", str(d), "--seeds", "0", "1", "--json"]) == 0

@@ -1,0 +1,268 @@
+"""The points of the paper campaigns and their estimates, shared by the claims' modules.
+
+A point is a row of a campaign's table (:func:`sweep.load`), found by its swept values
+(:func:`point`); its quantities become :class:`~sweep.paper.estimates.Estimate` s with the
+standard error the store gives (the ensemble columns, else the profile's ``a_stderr``),
+else a stated floor (:data:`FLOORS`). :class:`Check` is one row of the table.
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from sweep.paper.estimates import INCONCLUSIVE, Estimate
+
+__all__ = ["FLOORS", "X_NEAR", "Check", "Profile", "close", "point", "col", "label_of",
+           "a_end", "a_near", "w_c", "inner_over_c", "force_decades", "make_check",
+           "sorted_values", "M_OW", "M_EP", "INNER_OVER_C", "FORCE_DECADES", "M_CLOSE",
+           "NO_EFFECT", "Tables", "difference", "exact"]
+
+#: Standard errors assumed where a store gives none (see the module docstring):
+#:
+#: - ``a_rel``: a/a0 of a single trajectory, 0.01 (1 % of a0): the default
+#:   ``target_stderr``; rounding-level reruns differed by 0.1-0.7 % of a0 (docs/convergence.md).
+#:   Used only where the profile's ``a_stderr`` is missing or NaN.
+#: - ``W_c`` [m]: 4 m. Measured: the Fig. 2 points rerun with the floe spacing changed by
+#:   one ulp (``benchmarks/rounding_spread.py``, docs/reproducibility.md) gave 7 pairs of
+#:   W_c differing by 0.5-2.5 m and once 15 m; sigma = RMS difference / sqrt(2) = 4.1 m.
+#: - ``inner_over_c``: 0.1 (10 %) on alpha_inner / alpha_c — *assumed, not measured*
+#:   (single-trajectory stores carry no spread of alpha_inner).
+#: - ``log10_force``: 0.02 decade on a median log10 force ratio over a zone (F_w / F_d,
+#:   F_c / F_w). Measured: the time-mean force profiles carry no standard error, so
+#:   ``python benchmarks/paper_floors.py paper/seed0 paper/seed1`` compares the Fig. 2
+#:   points of two independent ensembles: sigma = RMS difference / sqrt(2) = 0.007-0.017
+#:   decade (compact zone 0.007-0.010, collisional 0.017, model version 7), rounded up.
+#:   (Until model version 7 this floor was 0.1 decade, assumed.)
+FLOORS: dict[str, float] = {"a_rel": 0.01, "W_c": 4.0, "inner_over_c": 0.1,
+                            "log10_force": 0.02}
+
+#: Distance from the ice edge [m] at which "near the edge" is read (Fig. 6): ten 0.5 m
+#: floes in, inside the collisional zone of every Fig. 6 point with one (W_c >= 12 m).
+X_NEAR = 5.0
+
+# ---------------------------------------------------------------------- the claims' targets
+#: Claimed ranges of the exponent m of alpha ~ omega^m (paper §3, §5): "~ omega^4" for
+#: ``ow`` read as 4 +- 0.5; "m close to 2.0-2.5" for ``ep`` read as 2.0-2.5 widened by 0.25
+#: on each side ("close to").
+M_OW = (3.5, 4.5)
+M_EP = (1.75, 2.75)
+#: "Close to" for an exponent: within 0.5, the half-width of "~ omega^4".
+M_CLOSE = 0.5
+#: "Close to", for a ratio (alpha_inner / alpha_c, x_b / W_c, F_c / F_w): within 25 %
+#: (0.8-1.25, symmetric in log).
+INNER_OVER_C = (0.8, 1.25)
+#: "Roughly two orders of magnitude": log10(F_w / F_d) within half a decade of 2.
+FORCE_DECADES = (1.5, 2.5)
+#: "No visible effect" / "no influence" on a/a0: a difference within 0.02 (2 % of a0, about
+#: a line width of the paper's a/a0 figures, whose axes span 0.4-1).
+NO_EFFECT = 0.02
+
+
+# ---------------------------------------------------------------------- checks
+@dataclass(frozen=True)
+class Check:
+    """One row of the table: a claim of the paper and its verdict."""
+
+    claim: str
+    source: str
+    campaign: str
+    points: str
+    quantity: str
+    rule: str
+    estimates: tuple[Estimate, ...]
+    verdict: str
+    evidence: str
+
+    def to_dict(self) -> dict[str, Any]:
+        out = asdict(self)
+        out["estimates"] = [{k: (None if isinstance(v, float) and not math.isfinite(v)
+                                 and k != "dof" else v) for k, v in asdict(e).items()}
+                            for e in self.estimates]
+        for e in out["estimates"]:
+            if isinstance(e["dof"], float) and not math.isfinite(e["dof"]):
+                e["dof"] = None
+        return out
+
+
+Profile = Callable[[str, str], Mapping[str, Any]]
+
+
+def close(series: pd.Series, value: Any) -> pd.Series:
+    if isinstance(value, str):
+        return series.astype(str) == value
+    return pd.Series(np.isclose(series.astype(float), float(value), rtol=1e-9, atol=0.0),
+                     index=series.index)
+
+
+def point(df: pd.DataFrame, **values: Any) -> pd.Series | None:
+    """The row of ``df`` with these swept values (None if absent or without result)."""
+    mask = pd.Series(True, index=df.index)
+    for k, v in values.items():
+        mask &= close(df[k], v)
+    rows = df[mask]
+    return None if rows.empty else rows.iloc[0]
+
+
+def col(row: pd.Series, name: str) -> float:
+    """``row[name]`` as float; NaN where the column is absent (an older schema)."""
+    v = row.get(name, math.nan)
+    try:
+        v = float(v)
+    except (TypeError, ValueError):
+        return math.nan
+    # -1 is the store's fill value of its integer columns (replicas, W_c_n): unknown
+    return math.nan if (name in ("replicas", "W_c_n") and v < 0) else v
+
+
+def label_of(row: pd.Series | None, key: str, value: Any) -> str:
+    extra = ""
+    if row is not None and math.isfinite(col(row, "replicas")):
+        extra = f" (R={int(col(row, 'replicas'))})"
+    return f"{key}={value}{extra}"
+
+
+def a_end(row: pd.Series | None, label: str, profile: Profile | None,
+           campaign: str) -> Estimate:
+    """a_end / a0 with its SE: ``a_end_stderr``, else the profile's last ``a_stderr``."""
+    if row is None:
+        return Estimate(label, math.nan)
+    a0 = col(row, "a0")
+    value = col(row, "a_end") / a0
+    se, src = col(row, "a_end_stderr") / a0, "replicas"
+    if not math.isfinite(se) and profile is not None:
+        try:
+            se, src = float(np.asarray(profile(campaign, row["hash"])["a_stderr"])[-1]) / a0, \
+                "profile"
+        except KeyError:
+            se = math.nan
+    return Estimate(label, value, se, src if math.isfinite(se) else "none").floored(
+        FLOORS["a_rel"])
+
+
+def a_near(row: pd.Series | None, label: str, profile: Profile | None, campaign: str,
+            x_near: float = X_NEAR) -> Estimate:
+    """a / a0 at the floe nearest ``x_near`` from the edge, SE from the profile."""
+    if row is None or profile is None:
+        return Estimate(label, math.nan)
+    try:
+        p = profile(campaign, row["hash"])
+    except KeyError:
+        return Estimate(label, math.nan)
+    x = np.asarray(p["x_mean"], dtype=float)
+    i = int(np.nanargmin(np.abs(x - x_near)))
+    a0 = col(row, "a0")
+    se = float(np.asarray(p["a_stderr"], dtype=float)[i]) / a0
+    return Estimate(label, float(np.asarray(p["a"], dtype=float)[i]) / a0, se,
+                    "profile" if math.isfinite(se) else "none").floored(FLOORS["a_rel"])
+
+
+def w_c(row: pd.Series | None, label: str, name: str = "W_c") -> Estimate:
+    """W_c (or ``name``, e.g. ``W_c_gap``) with its replicas' SE, else the floor."""
+    if row is None:
+        return Estimate(label, math.nan)
+    se = col(row, f"{name}_stderr")
+    n = col(row, "W_c_n")
+    if math.isfinite(n) and name == "W_c":
+        label = f"{label} n={int(n)}"
+    return Estimate(label, col(row, name), se, "replicas" if math.isfinite(se) else "none"
+                    ).floored(FLOORS["W_c"])
+
+
+def inner_over_c(row: pd.Series | None, label: str) -> Estimate:
+    """alpha_inner / alpha_c with the replicas' SE, else the floor."""
+    if row is None:
+        return Estimate(label, math.nan)
+    c = col(row, "alpha_c")
+    se = col(row, "alpha_inner_stderr") / c
+    return Estimate(label, col(row, "alpha_inner") / c, se,
+                    "replicas" if math.isfinite(se) else "none").floored(FLOORS["inner_over_c"])
+
+
+def force_decades(row: pd.Series | None, label: str, profile: Profile | None, campaign: str,
+                  zone: str, num: str = "F_w_mean", den: str = "F_d_mean") -> Estimate:
+    """Median over the floes of a zone of log10(num / den) (default F_w_mean / F_d_mean):
+    ``compact`` (from W_c to compact_end) or ``collisional`` (before W_c); SE: the measured
+    floor ``log10_force`` (no per-replica forces are stored)."""
+    if row is None or profile is None:
+        return Estimate(label, math.nan)
+    W_c, end = col(row, "W_c"), col(row, "compact_end")
+    if not math.isfinite(W_c):
+        return Estimate(label, math.nan)
+    try:
+        p = profile(campaign, row["hash"])
+    except KeyError:
+        return Estimate(label, math.nan)
+    if num not in p or den not in p:
+        return Estimate(label, math.nan)
+    x = np.asarray(p["x_mean"], dtype=float)
+    fn = np.asarray(p[num], dtype=float)
+    fd = np.asarray(p[den], dtype=float)
+    if zone == "compact":
+        sel = (x >= W_c) & (x <= (end if math.isfinite(end) else np.inf))
+    else:
+        sel = x < W_c
+    sel &= (fn > 0) & (fd > 0)
+    if not sel.any():
+        return Estimate(label, math.nan)
+    return Estimate(label, float(np.median(np.log10(fn[sel] / fd[sel])))).floored(
+        FLOORS["log10_force"])
+
+
+def make_check(claim: str, source: str, campaign: str, points: str, quantity: str,
+               rule: str, estimates: Sequence[Estimate], verdict: tuple[str, str]) -> Check:
+    """A :class:`Check` from a rule's (verdict, evidence)."""
+    return Check(claim, source, campaign, points, quantity, rule, tuple(estimates), *verdict)
+
+
+def sorted_values(df: pd.DataFrame, key: str, **fixed: Any) -> list[Any]:
+    """The sorted distinct values of ``key`` among the rows with these ``fixed`` values."""
+    mask = pd.Series(True, index=df.index)
+    for k, v in fixed.items():
+        mask &= close(df[k], v)
+    return sorted(df.loc[mask, key].unique().tolist())
+
+
+def difference(lo: Estimate, hi: Estimate, label: str) -> Estimate:
+    """hi - lo with the combined SE of two independent estimates."""
+    return Estimate(label, hi.value - lo.value, math.hypot(lo.se, hi.se),
+                    "replicas" if lo.source == hi.source == "replicas" else "combined",
+                    min(lo.dof, hi.dof))
+
+
+def exact(label: str, value: float) -> Estimate:
+    """An exactly computed value (an analytic rate or its fit): SE 0."""
+    return Estimate(label, float(value), 0.0, "exact")
+
+
+@dataclass
+class Tables:
+    """The campaigns' tables (name -> DataFrame, with :func:`sweep.analysis.stats.derived`
+    columns), their profiles, and why a campaign is missing; ``checks`` collects the rows."""
+
+    d: dict[str, pd.DataFrame]
+    profile: Profile | None
+    missing: dict[str, str]
+    checks: list[Check]
+
+    def add(self, check: Check) -> None:
+        self.checks.append(check)
+
+    def unavailable(self, name: str, claim: str, source: str, points: str, quantity: str,
+                    rule: str) -> None:
+        """An inconclusive row for a claim whose campaign has no table."""
+        self.checks.append(Check(claim, source, name, points, quantity, rule, (), INCONCLUSIVE,
+                                 f"not checked: {self.missing[name]}"))
+
+    def prof(self, name: str, row: pd.Series | None) -> Mapping[str, Any] | None:
+        """The profiles of ``row`` in campaign ``name`` (None if not available)."""
+        if row is None or self.profile is None:
+            return None
+        try:
+            return self.profile(name, row["hash"])
+        except KeyError:
+            return None
