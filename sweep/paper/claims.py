@@ -141,7 +141,8 @@ def paper_checks(tables: Mapping[str, pd.DataFrame | None],
                 ("smaller d_f attenuates more near the edge", "T 1.2 s and 1.8 s", near),
                 ("Fig. 6a reversal: far downwave smaller d_f attenuates less (short waves)",
                  "T 1.2 s", "a_end/a0"),
-                ("Fig. 6a: no reversal for long waves", "T 1.8 s", "a_end/a0")):
+                ("Fig. 6a: no reversal for long waves (collisional zone spans the domain)",
+                 "T 1.8 s", "a_end/a0")):
             unavailable("fig6a", claim, "§4.2, Fig. 6a", pts, q, "")
     else:
         df = d["fig6a"]
