@@ -39,6 +39,7 @@ from sweep.paper.points import (
     sorted_values,
     w_c,
 )
+from sweep.paper.traces import trace_checks
 from sweep.paper.variants import variant_checks
 from sweep.paper.zones import notes, unless_marginal, zone_checks
 
@@ -51,7 +52,8 @@ PAPER_CAMPAIGNS = ("fig2", "fig5", "fig6a", "fig6b", "periods", "uniform", "spri
 
 def paper_checks(tables: Mapping[str, pd.DataFrame | None],
                  profile: Profile | None = None,
-                 missing: Mapping[str, str] | None = None) -> list[Check]:
+                 missing: Mapping[str, str] | None = None, *, trace: bool = True
+                 ) -> list[Check]:
     """Every claim, checked on the campaigns' tables.
 
     Parameters
@@ -64,6 +66,7 @@ def paper_checks(tables: Mapping[str, pd.DataFrame | None],
         :func:`sweep.load_profile` of the campaign's store. Without it the claims that need
         profiles are inconclusive (and a_end has only its column SE or the floor).
     missing : campaign name -> why its table is absent (shown in the evidence).
+    trace : run the Fig. 4 trace (:mod:`sweep.paper.traces`) when the profiles allow it.
     """
     missing = dict(missing or {})
     d: dict[str, pd.DataFrame] = {}
@@ -73,7 +76,7 @@ def paper_checks(tables: Mapping[str, pd.DataFrame | None],
             missing.setdefault(name, "no store")
         else:
             d[name] = derived(table)
-    t = Tables(d, profile, missing, [])
+    t = Tables(d, profile, missing, [], trace)
     checks = t.checks
     unavailable = t.unavailable
 
@@ -228,6 +231,7 @@ def paper_checks(tables: Mapping[str, pd.DataFrame | None],
                              pairs(plist)))
     zone_checks(t)
     exponent_checks(t)
+    trace_checks(t)
     variant_checks(t)
     return checks
 

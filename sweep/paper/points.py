@@ -242,12 +242,14 @@ def exact(label: str, value: float) -> Estimate:
 @dataclass
 class Tables:
     """The campaigns' tables (name -> DataFrame, with :func:`sweep.analysis.stats.derived`
-    columns), their profiles, and why a campaign is missing; ``checks`` collects the rows."""
+    columns), their profiles, and why a campaign is missing; ``checks`` collects the rows;
+    ``trace``: run the Fig. 4 trace (a model run of about a second)."""
 
     d: dict[str, pd.DataFrame]
     profile: Profile | None
     missing: dict[str, str]
     checks: list[Check]
+    trace: bool = True
 
     def add(self, check: Check) -> None:
         self.checks.append(check)

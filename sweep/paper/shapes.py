@@ -44,15 +44,20 @@ def two_segment_break(x: np.ndarray, a: np.ndarray, a0: float, *, min_floes: int
     if len(x) < 2 * min_floes:
         return math.nan, math.nan, math.nan
     lo, hi = x[min_floes - 1], x[-min_floes]
-    best = (math.inf, math.nan, math.nan, math.nan)
-    for xb in np.arange(lo, hi + 0.5 * BREAK_STEP, BREAK_STEP):
-        # y = s1 min(x, xb) + s2 max(x - xb, 0): linear in (s1, s2)
-        A = np.column_stack([np.minimum(x, xb), np.maximum(x - xb, 0.0)])
-        coef, *_ = np.linalg.lstsq(A, y, rcond=None)
-        sse = float(np.sum((A @ coef - y) ** 2))
-        if sse < best[0]:
-            best = (sse, float(xb), float(coef[0]), float(coef[1]))
-    return best[1], best[2], best[3]
+    xb = np.arange(lo, hi + 0.5 * BREAK_STEP, BREAK_STEP)[:, None]
+    # y = s1 min(x, xb) + s2 max(x - xb, 0): linear in (s1, s2); the 2 x 2 normal equations
+    # solved for every candidate knot at once
+    u, v = np.minimum(x, xb), np.maximum(x - xb, 0.0)
+    suu, suv, svv = (u * u).sum(1), (u * v).sum(1), (v * v).sum(1)
+    suy, svy = (u * y).sum(1), (v * y).sum(1)
+    det = suu * svv - suv * suv
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s1 = (svv * suy - suv * svy) / det
+        s2 = (suu * svy - suv * suy) / det
+    sse = ((s1[:, None] * u + s2[:, None] * v - y) ** 2).sum(1)
+    sse = np.where(np.isfinite(sse), sse, np.inf)
+    k = int(np.argmin(sse))
+    return float(xb[k, 0]), float(s1[k]), float(s2[k])
 
 
 def jackknife(values: np.ndarray) -> float:

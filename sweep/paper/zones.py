@@ -72,7 +72,7 @@ def notes(parts: list[str]) -> str:
 def _break(t: Tables, row, lab: str) -> tuple[Estimate, str]:
     p = t.prof("fig2", row)
     W, W_se = col(row, "W_c"), col(row, "W_c_stderr")
-    if p is None or not math.isfinite(W) or "config_json" not in row.index:
+    if p is None or not math.isfinite(W) or not {"config_json", "k", "c_g"} <= set(row.index):
         return Estimate(lab, math.nan), ""
     xb, xb_se, _, _ = break_estimate(row, p)
     ratio = xb / W

@@ -100,13 +100,13 @@ def _fig2_zone(W_c, xb_frac, fc_over_fw=1.0, crossing=None):
 def test_the_rate_changes_at_W_c_holds_when_the_knot_is_at_W_c_and_fails_well_before():
     W = [25.0, 20.0, 17.0, 14.0]
     t, prof = _fig2_zone(W, 1.0)
-    checks = claims.paper_checks({"fig2": t}, lambda n, h: prof[h])
+    checks = claims.paper_checks({"fig2": t}, lambda n, h: prof[h], trace=False)
     at = _by(checks, "the rate changes at W_c (ml)")
     assert at.verdict == HOLDS, at.evidence
     assert [e.value for e in at.estimates] == pytest.approx([1.0] * 4, abs=0.01)
     assert _by(checks, "attenuation steep near the edge, flatter downwave (ml)").verdict == HOLDS
     t, prof = _fig2_zone(W, 0.6)
-    before = _by(claims.paper_checks({"fig2": t}, lambda n, h: prof[h]),
+    before = _by(claims.paper_checks({"fig2": t}, lambda n, h: prof[h], trace=False),
                  "the rate changes at W_c (ml)")
     assert before.verdict == FAILS and "x_b 15.0" in before.evidence
 
@@ -115,7 +115,7 @@ def test_contact_forces_balance_the_wave_force_in_the_compact_zone():
     W = [25.0, 20.0, 17.0, 14.0]
     for ratio, verdict in ((1.0, HOLDS), (2.0, FAILS), (1.2, INCONCLUSIVE)):
         t, prof = _fig2_zone(W, 1.0, fc_over_fw=ratio)
-        c = _by(claims.paper_checks({"fig2": t}, lambda n, h, p=prof: p[h]),
+        c = _by(claims.paper_checks({"fig2": t}, lambda n, h, p=prof: p[h], trace=False),
                 "Fig. 3: in the compact zone the wave force is balanced")
         assert c.verdict == verdict, (ratio, c.evidence)
         assert c.estimates[0].value == pytest.approx(math.log10(ratio))
@@ -124,7 +124,7 @@ def test_contact_forces_balance_the_wave_force_in_the_compact_zone():
 def test_a_zone_at_the_far_end_is_marginal_and_left_out():
     W = [39.5, 20.0, 17.0, 14.0]          # eps 0.2: 3 m before the ice's end (42.4 m)
     t, prof = _fig2_zone(W, 1.0)
-    checks = claims.paper_checks({"fig2": t}, lambda n, h: prof[h])
+    checks = claims.paper_checks({"fig2": t}, lambda n, h: prof[h], trace=False)
     w = _by(checks, "higher eps -> narrower collisional zone W_c (ml)")
     assert math.isnan(w.estimates[0].value) and "marginal zone" in w.estimates[0].label
     assert "threshold artefact" in w.evidence and w.verdict == HOLDS
@@ -224,3 +224,33 @@ def test_without_the_spring_the_first_floe_must_drift_upwave():
     assert c.verdict == FAILS
     assert variants.first_floe_drift(None, None).value != variants.first_floe_drift(
         None, None).value                                    # NaN without a point
+
+
+# ---------------------------------------------------------------------- Fig. 4 traces
+def test_spike_rate_counts_excursions_per_period():
+    from sweep.paper.traces import spike_rate
+
+    n = 120
+    base = np.full(n * 30, 1.0)
+    once = base.copy()
+    once[5::n] = 10.0                              # one spike per period
+    assert spike_rate(once, n) == (1.0, 0.0)
+    twice = once.copy()
+    twice[60::n] = 10.0
+    assert spike_rate(twice, n)[0] == 2.0
+    some = base.copy()
+    some[5: 15 * n: n] = 10.0                      # half the periods
+    r, se = spike_rate(some, n)
+    assert r == 0.5 and se == pytest.approx(0.5 * math.sqrt(30 / 29) / math.sqrt(30))
+
+
+def test_far_over_near_dissipation_is_judged_with_the_replicas():
+    t, prof = _fig2_zone([25.0, 20.0, 17.0, 14.0], 1.0)
+    rng = np.random.default_rng(3)
+    for low, verdict in ((0.05, HOLDS), (0.3, FAILS)):
+        S = -np.where(X < 10.0, 1.0, low) * (1 + 0.05 * rng.standard_normal((8, N)))
+        p2 = {h: {**v, "S_sd_replicas": S} for h, v in prof.items()}
+        t2 = t
+        c = _by(claims.paper_checks({"fig2": t2}, lambda n, h, p=p2: p[h], trace=False),
+                "far from the edge S_sd is low")
+        assert c.verdict == verdict and c.estimates[0].value == pytest.approx(low, rel=0.1)
