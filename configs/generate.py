@@ -93,6 +93,15 @@ CONFIGS = {
                 d_f=[0.005, 0.010, 0.020, 0.050], dispersion=["ml"]),
         run='name = "fig6a"\ndescription = "Herman et al. 2019 Fig. 6a: floe-floe distance,'
             ' two periods"'),
+    "dfscan": dict(header="""
+# The d_f scan at T = 1.8 s (issue 23; docs/dfscan.md): the Fig. 6a setting (L_x = 0.5 m,
+# a0 = 0.015 m, C_sd = 0.05, eps = 0.6, 'ML') at nine floe-floe distances d_f = 2 ... 50 mm,
+# to see where the paper's "smaller d_f attenuates more near the edge" holds. 9 points.
+""", sweep=dict(L_x=[0.5], T=[1.8], a0=[0.015], C_sd=[0.05], eps=[0.6],
+                d_f=[0.002, 0.003, 0.005, 0.0075, 0.01, 0.015, 0.02, 0.03, 0.05],
+                dispersion=["ml"]),
+        run='name = "dfscan"\ndescription = "d_f scan at T = 1.8 s, Fig. 6a setting'
+            ' (sweep.paper.dfscan)"'),
     "fig6b": dict(header="""
 # Paper Fig. 6b: a/a0 for incident amplitudes a0 = 0.0125, 0.015, 0.02, 0.025 m (the
 # campaign's values), L_x = 0.5 m, d_f = 0.005 m, C_sd = 0.05, eps = 0.6, two wave periods.

@@ -8,6 +8,7 @@ from collections.abc import Callable
 import numpy as np
 
 from . import _kernels as K
+from .collision_stats import GAP_AND_COLLISION_FIELDS
 from .config import ModelConfig
 from .dispersion import alpha_confined
 from .ensemble import (
@@ -226,6 +227,7 @@ def run_point(cfg: ModelConfig,
         W_c_replicas=est["W_c_replicas"], compact_end_replicas=est["compact_end_replicas"],
         x_mean_replicas=est["x_mean_replicas"], gap_mean_replicas=est["gap_mean_replicas"],
         S_sd_replicas=est["S_sd_replicas"],
+        **{name: est[name] for name in GAP_AND_COLLISION_FIELDS},
     )
 
 

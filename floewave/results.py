@@ -23,7 +23,10 @@ SCALAR_FIELDS = ("n_floes", "W_c", "compact_zone", "compact_end", "ice_extent", 
                  "status", "noise", "iterations", "residual", "floe_steps", "wall_time",
                  "kernel_mode", "a_end", "replicas", "W_c_stderr", "W_c_n",
                  "alpha_all_stderr", "alpha_edge_stderr", "alpha_inner_stderr",
-                 "alpha_exp_stderr", "a_end_stderr")
+                 "alpha_exp_stderr", "a_end_stderr", "W_c_gap", "W_c_gap_stderr",
+                 "contact_fraction_mean", "contact_fraction_mean_stderr", "collision_rate",
+                 "collision_rate_stderr", "dissipation_per_collision",
+                 "dissipation_per_collision_stderr")
 
 #: Per-replica results: (R,) scalars per replica and (R, N_f) profiles per replica.
 REPLICA_FIELDS = ("W_c_replicas", "compact_end_replicas", "x_mean_replicas",
@@ -63,7 +66,12 @@ class PointResult:
     ``compact_zone`` the most common layout over windows and replicas. Per replica:
     ``W_c_replicas``, ``compact_end_replicas`` (R,), ``x_mean_replicas``,
     ``gap_mean_replicas``, ``S_sd_replicas`` (R, N_f), time means over the averaging
-    window.
+    window. ``W_c_gap`` [m] is the same rule applied to each replica's gaps time-averaged
+    over the whole averaging (``gap_mean_replicas``), the mean over the replicas with a
+    compact zone. The ice-wide collision statistics ``contact_fraction_mean`` [1],
+    ``collision_rate`` [per pair per wave period] and ``dissipation_per_collision`` [J],
+    each with a jackknife ``*_stderr``, are defined in :mod:`floewave.collision_stats`
+    (NaN for fixed floes).
     """
 
     x_mean: np.ndarray
@@ -110,6 +118,14 @@ class PointResult:
     alpha_inner_stderr: float = math.nan
     alpha_exp_stderr: float = math.nan
     a_end_stderr: float = math.nan
+    W_c_gap: float = math.nan
+    W_c_gap_stderr: float = math.nan
+    contact_fraction_mean: float = math.nan
+    contact_fraction_mean_stderr: float = math.nan
+    collision_rate: float = math.nan
+    collision_rate_stderr: float = math.nan
+    dissipation_per_collision: float = math.nan
+    dissipation_per_collision_stderr: float = math.nan
     W_c_replicas: np.ndarray = field(default_factory=lambda: np.zeros(0))
     compact_end_replicas: np.ndarray = field(default_factory=lambda: np.zeros(0))
     x_mean_replicas: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))

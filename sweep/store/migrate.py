@@ -51,6 +51,12 @@ def _v2_to_v3(f: Any) -> None:
     add_columns(f, 3)
 
 
+def _v3_to_v4(f: Any) -> None:
+    """Add W_c_gap and the collision statistics with their standard errors: NaN for old
+    points (not recomputed; their per-replica datasets hold the gaps, not the collisions)."""
+    add_columns(f, 4)
+
+
 #: Migrations: from-version -> (to-version, description, function(h5py.File)). A store
 #: older than SCHEMA_VERSION is migrated step by step on open (by a writer; readers read
 #: an old store as it is, missing columns as fill values).
@@ -60,6 +66,8 @@ MIGRATIONS: dict[int, tuple[int, str, Any]] = {
     2: (3, "add the ensemble columns replicas (= 1 for old points), W_c_stderr, W_c_n "
            "(-1), alpha_*_stderr, a_end_stderr (NaN); old points have no per-replica "
            "datasets", _v2_to_v3),
+    3: (4, "add W_c_gap, contact_fraction_mean, collision_rate, dissipation_per_collision "
+           "and their *_stderr (NaN for old points)", _v3_to_v4),
 }
 
 

@@ -33,7 +33,7 @@ __all__ = ["SCHEMA_VERSION", "FORMAT", "Column", "COLUMNS", "DERIVED", "DERIVED_
            "STATUSES", "ADDED_IN", "MIGRATION_FILL", "HISTORY_VAR", "ROOT_ATTRS", "RUN_ATTRS",
            "column", "profile_path"]
 
-SCHEMA_VERSION = 3
+SCHEMA_VERSION = 4
 FORMAT = "sweep-store"
 
 #: Point statuses: the model's three plus sweep's four (``crashed``: its worker died
@@ -106,6 +106,23 @@ COLUMNS: tuple[Column, ...] = (
     _C("alpha_inner_stderr", "float", "m-2", "jackknife standard error of alpha_inner"),
     _C("alpha_exp_stderr", "float", "m-1", "jackknife standard error of alpha_exp"),
     _C("a_end_stderr", "float", "m", "standard error of a_end"),
+    _C("W_c_gap", "float", "m", "W_c of the gaps time-averaged over the whole averaging:"
+       " the W_c rule on each replica's gap_mean_replicas, mean over the replicas with a"
+       " compact zone (NaN: none)"),
+    _C("W_c_gap_stderr", "float", "m", "standard error of W_c_gap (NaN with fewer than 2"
+       " replicas with a compact zone)"),
+    _C("contact_fraction_mean", "float", "1", "fraction of time steps in contact, mean over"
+       " the N_f - 1 pairs and the replicas (NaN: confined)"),
+    _C("contact_fraction_mean_stderr", "float", "1", "jackknife standard error of"
+       " contact_fraction_mean over replicas (NaN: R = 1)"),
+    _C("collision_rate", "float", "1", "contact onsets per pair per wave period: mean over"
+       " the pairs and the replicas of onsets in an averaging window / nT (NaN: confined)"),
+    _C("collision_rate_stderr", "float", "1", "jackknife standard error of collision_rate"),
+    _C("dissipation_per_collision", "float", "J", "skin-drag dissipation per collision:"
+       " sum over floes of -S_sd L_x L_y [W] / sum over pairs of onsets per second, replica"
+       " means (NaN: no collision, confined)"),
+    _C("dissipation_per_collision_stderr", "float", "J", "jackknife standard error of"
+       " dissipation_per_collision"),
     _C("host", "str", "", "host that computed the point"),
     _C("rank", "int", "1", "MPI rank that computed the point (0: in-process)"),
     _C("pid", "int", "1", "process id that computed the point"),
@@ -131,9 +148,13 @@ _BY_NAME = {c.name: c for c in (*COLUMNS, *DERIVED)}
 ADDED_IN = {"compact_zone": 2, "compact_end": 2, "ice_extent": 2,
             **{name: 3 for name in ("replicas", "W_c_stderr", "W_c_n", "alpha_all_stderr",
                                     "alpha_edge_stderr", "alpha_inner_stderr",
-                                    "alpha_exp_stderr", "a_end_stderr")}}
+                                    "alpha_exp_stderr", "a_end_stderr")},
+            **{name: 4 for name in ("W_c_gap", "W_c_gap_stderr", "contact_fraction_mean",
+                                    "contact_fraction_mean_stderr", "collision_rate",
+                                    "collision_rate_stderr", "dissipation_per_collision",
+                                    "dissipation_per_collision_stderr")}}
 #: Fill value of a column added by a migration, where it differs from the column's fill
-#: (every point stored before schema 3 ran one trajectory).
+#: (every point stored before schema 3 ran one trajectory; schema 4's columns: NaN).
 MIGRATION_FILL = {"replicas": 1}
 
 #: Per-point profiles (``/profiles/<hh>/<hash>/<name>``): name -> (units, long_name).

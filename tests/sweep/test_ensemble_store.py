@@ -100,7 +100,7 @@ def test_schema_2_store_read_as_single_trajectories_and_migrated(store, tmp_path
     assert "replica" not in ds.dims and "W_c_replicas" not in ds
     run_campaign(parse_campaign(TOML, "e.toml"), str(path))      # a writer: migrated
     with h5py.File(path, "r") as f:
-        assert int(f.attrs["schema_version"]) == SCHEMA_VERSION == 3
+        assert int(f.attrs["schema_version"]) == SCHEMA_VERSION == 4
         assert all(name in f["table"] for name in new_cols)
     assert sweep.validate(path) == []
     new = sweep.load(path)
@@ -131,7 +131,7 @@ def test_a_store_of_an_older_model_version_is_refused_naming_both_versions(store
     before = path.read_bytes()
     with pytest.raises(sweep.CampaignMismatchError,
                        match=r"model version 3 \(store schema 2\).*model version "
-                             + floewave.MODEL_VERSION + r" \(schema 3\)"):
+                             + floewave.MODEL_VERSION + rf" \(schema {SCHEMA_VERSION}\)"):
         run_campaign(parse_campaign(TOML, "e.toml"), str(path))
     assert main(["run", str(tmp_path / "e.toml"), "--store", str(path)]) == 3
     assert path.read_bytes() == before
