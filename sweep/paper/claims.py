@@ -39,6 +39,7 @@ from sweep.paper.points import (
     sorted_values,
     w_c,
 )
+from sweep.paper.scan import scan_checks
 from sweep.paper.traces import trace_checks
 from sweep.paper.variants import variant_checks
 from sweep.paper.zones import notes, unless_marginal, zone_checks
@@ -46,8 +47,8 @@ from sweep.paper.zones import notes, unless_marginal, zone_checks
 __all__ = ["PAPER_CAMPAIGNS", "FLOORS", "X_NEAR", "Check", "Profile", "paper_checks"]
 
 #: The shipped paper campaigns (``configs/<name>.toml``), checked in this order.
-PAPER_CAMPAIGNS = ("fig2", "fig5", "fig6a", "fig6b", "periods", "uniform", "spring_none",
-                   "spring_soft", "spring_stiff")
+PAPER_CAMPAIGNS = ("fig2", "fig5", "fig6a", "fig6b", "periods", "dfscan", "uniform",
+                   "spring_none", "spring_soft", "spring_stiff")
 
 
 def paper_checks(tables: Mapping[str, pd.DataFrame | None],
@@ -231,6 +232,7 @@ def paper_checks(tables: Mapping[str, pd.DataFrame | None],
                              pairs(plist)))
     zone_checks(t)
     exponent_checks(t)
+    scan_checks(t)
     trace_checks(t)
     variant_checks(t)
     return checks

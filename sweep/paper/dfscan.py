@@ -10,7 +10,8 @@ a ``profile(campaign, hash)`` callable returning a point's profiles (a mapping w
 Columns of the table (units in ``table.attrs["units"]``), one row per d_f:
 
 - ``d_f`` [m], ``status``, ``replicas``;
-- ``x_near`` [m]: the time-mean centre of the floe nearest :data:`X_NEAR` (5 m) from the
+- ``x_near`` [m]: the time-mean centre of the floe nearest ``X_NEAR`` (5 m,
+  :data:`sweep.paper.points.X_NEAR`) from the
   ice edge; ``a_near_rel``, ``a_near_rel_stderr`` [1]: a / a0 there and its standard error
   (the profile's ``a_stderr``; needs ``profile``);
 - ``a_end_rel``, ``a_end_rel_stderr`` [1]: a / a0 of the last floe (``a_end / a0``);
@@ -43,11 +44,10 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from sweep.paper.points import X_NEAR
+
 __all__ = ["X_NEAR", "UNITS", "d_f_scan", "plot_d_f_scan"]
 
-#: Distance from the ice edge [m] at which "near the edge" is read (the paper's Fig. 6
-#: discussion; the same 5 m as ``sweep paper-check``'s).
-X_NEAR = 5.0
 #: The model's statuses: points that carry results.
 _RESULT = ("converged", "converged_noisy", "not_converged")
 _COLLISION = ("contact_fraction_mean", "collision_rate", "dissipation_per_collision")

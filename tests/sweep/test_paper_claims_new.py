@@ -254,3 +254,35 @@ def test_far_over_near_dissipation_is_judged_with_the_replicas():
         c = _by(claims.paper_checks({"fig2": t2}, lambda n, h, p=p2: p[h], trace=False),
                 "far from the edge S_sd is low")
         assert c.verdict == verdict and c.estimates[0].value == pytest.approx(low, rel=0.1)
+
+
+# ---------------------------------------------------------------------- the d_f scan
+def _scan(a_near):
+    d_fs = (0.002, 0.005, 0.01, 0.02, 0.05)
+    rows, prof = [], {}
+    for i, (d_f, a) in enumerate(zip(d_fs, a_near, strict=True)):
+        h = f"s{i}"
+        rows.append(_base(hash=h, T=1.8, a0=0.015, d_f=d_f, W_c=np.nan, compact_zone="none",
+                          config_json=CFG, contact_fraction_mean=0.5 - 0.1 * i,
+                          collision_rate=3.0 + 0.2 * i, dissipation_per_collision=0.02))
+        prof[h] = {"x_mean": X, "a": np.full(N, a * 0.015), "a_stderr": np.full(N, 1e-6),
+                   "contact_fraction": np.full(N, 0.3), "collisions": np.full(N, 10.0),
+                   "S_sd": np.full(N, -0.01)}
+    t = pd.DataFrame(rows)
+    fig6a = pd.DataFrame([{**r, "hash": "f" + r["hash"]} for r in rows])
+    return {"dfscan": t, "fig6a": fig6a}, (lambda n, h: prof[h.lstrip("f")])
+
+
+def test_the_d_f_scan_claim_and_its_explanation_on_the_fig6a_row():
+    tables, prof = _scan([0.95, 0.96, 0.97, 0.98, 0.99])              # monotonic
+    checks = claims.paper_checks(tables, prof, trace=False)
+    assert _by(checks, "smaller d_f attenuates more near the edge (long waves").verdict == HOLDS
+    tables, prof = _scan([0.97, 0.96, 0.95, 0.98, 0.99])              # lowest at 10 mm
+    checks = claims.paper_checks(tables, prof, trace=False)
+    scan = _by(checks, "smaller d_f attenuates more near the edge (long waves")
+    assert scan.verdict == FAILS and "lowest at d_f = 10 mm" in scan.evidence
+    assert "contact fraction 0.500 at 2 mm, 0.300 at 10 mm" in scan.evidence
+    assert "collide less often" in scan.evidence
+    row = [c for c in checks if c.campaign == "fig6a" and "1.8" in c.points
+           and c.claim.startswith("smaller d_f attenuates more near")][0]
+    assert row.verdict == FAILS and "the d_f scan: non-monotonic" in row.evidence
