@@ -232,7 +232,7 @@ def test_fig6a_reversal_and_near_edge():
                         "a": np.full(84, 0.012 + 0.0005 * (i % 4))}
             for i, r in enumerate(rows)}
     checks = claims.paper_checks({"fig6a": t}, lambda name, h: prof[h])
-    near = _by(checks, "smaller d_f attenuates more near the edge")
+    near = _by(checks, "smaller d_f attenuates more near the edge", "fig6a")
     assert [c.verdict for c in near] == [HOLDS, HOLDS]
     assert _by(checks, "Fig. 6a reversal")[0].verdict == HOLDS
     assert _by(checks, "Fig. 6a: no reversal")[0].verdict == HOLDS
