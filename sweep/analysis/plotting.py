@@ -194,6 +194,12 @@ def draw_amplitude(ax, row: pd.Series, prof: dict[str, np.ndarray], colour, styl
         if np.isfinite(alpha_c) and a_w > 0:
             xx = np.linspace(W_c, end, 100)
             ax.plot(xx, 1.0 / (1.0 / a_w + alpha_c * (xx - W_c)) / a0, "k--", lw=0.9)
+    # the same rule on the gaps averaged over the whole averaging (schema 4's W_c_gap): an
+    # open diamond, to show how much the definition moves the zone's start
+    W_g = float(row.get("W_c_gap", np.nan))
+    if np.isfinite(W_g) and W_g < x[-1]:
+        ax.plot([W_g], [float(np.interp(W_g, x, a)) / a0], "D", mfc="none", mec=colour,
+                ms=6, mew=1.2, zorder=5)
 
 
 def draw_confined(ax, row: pd.Series, x_end: float, label: bool = True) -> None:
