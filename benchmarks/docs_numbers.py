@@ -4,17 +4,20 @@
                                       [--timings]
 
 Runs the shipped campaigns the docs quote (``configs/demo.toml`` under ``mpiexec -n 3``
-when a launcher is available, else in-process; ``fig2``, ``fig5``, ``fig6a``, ``fig6b``,
-``periods`` in-process, two at a time) into stores in ``--out`` (default: a new temporary
+when a launcher is available, else in-process; the paper campaigns ``fig2``, ``fig5``,
+``fig6a``, ``fig6b``, ``periods``, ``dfscan``, ``uniform``, ``spring_*`` in-process, two at
+a time) into stores in ``--out`` (default: a new temporary
 directory; ``--skip-runs`` reuses the stores there, and takes the timings from their run
 records) and prints, labelled as in the docs:
 
 - the wall time of each campaign (a timing: machine-dependent);
 - the demo's ``collision_stats`` table and the periods' ``alpha_omega`` tables;
-- W_c, layout and alpha_inner / alpha_c of the Fig. 2 points.
+- W_c, layout and alpha_inner / alpha_c of the Fig. 2 points;
+- the d_f scan's table (:func:`sweep.paper.dfscan.d_f_scan`, docs/dfscan.md);
 
 - the ``sweep paper-check`` table on those stores;
-- with ``--timings`` (what ``docs/numbers.txt`` is made with), the other timings
+- with ``--timings`` (what ``docs/numbers.txt`` is made with), the table across seeds and the
+  other timings
   docs/performance.md quotes, so that one record holds them all with the machine named: the
   CPU (``/proc/cpuinfo``'s model name and vector width), the kernels' compile with an empty
   numba cache (``floewave run``'s ``kernels ready in`` line), the cost projection
@@ -46,7 +49,8 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-CAMPAIGNS = ("fig2", "fig5", "fig6a", "fig6b", "periods")
+CAMPAIGNS = ("fig2", "fig5", "fig6a", "fig6b", "periods", "dfscan", "uniform", "spring_none",
+             "spring_soft", "spring_stiff")          # sweep.paper.claims.PAPER_CAMPAIGNS
 
 
 def stamp() -> str:
@@ -129,6 +133,8 @@ def timings(out: Path) -> None:
     tail = [line for line in proc.stdout.splitlines() if line.startswith("across seeds")]
     print(f"[timing] sweep paper-check --stores DIR --run --seeds 0 1: {t:.0f} s;"
           f" {tail[0] if tail else proc.stderr.strip()[-200:]}")
+    print("\n[ensembles, stochastic] sweep paper-check --stores DIR --seeds 0 1")
+    print(proc.stdout)
 
 
 def main() -> int:
@@ -208,6 +214,15 @@ def main() -> int:
     print(f2[["dispersion", "eps", "W_c", "W_c_stderr", "W_c_n", "compact_zone",
               "inner_over_c", "inner_over_c_stderr", "a_end/a0", "SE(a_end)/a0", "status",
               "iterations", "Mfloe_steps"]].round(3).to_string(index=False))
+    from sweep.analysis.load import load_profile
+    from sweep.paper.dfscan import d_f_scan
+
+    scan = d_f_scan(sweep.load(out / "dfscan.h5"),
+                    lambda name, h: load_profile(out / f"{name}.h5", h))
+    print("\n[ensemble, stochastic] d_f scan (configs/dfscan.toml):"
+          " sweep.paper.dfscan.d_f_scan")
+    print(scan.drop(columns=["status", "replicas"]).to_string(index=False,
+                                                              float_format="%.4g"))
     print("\n[ensemble, stochastic] sweep paper-check --stores", out)
     proc = subprocess.run([sys.executable, "-m", "sweep", "paper-check", "--stores", str(out)],
                           capture_output=True, text=True)

@@ -286,3 +286,14 @@ def test_the_d_f_scan_claim_and_its_explanation_on_the_fig6a_row():
     row = [c for c in checks if c.campaign == "fig6a" and "1.8" in c.points
            and c.claim.startswith("smaller d_f attenuates more near")][0]
     assert row.verdict == FAILS and "the d_f scan: non-monotonic" in row.evidence
+
+
+def test_docs_numbers_runs_every_paper_campaign():
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "benchmarks" / "docs_numbers.py"
+    spec = importlib.util.spec_from_file_location("docs_numbers", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    assert mod.CAMPAIGNS == claims.PAPER_CAMPAIGNS
