@@ -297,3 +297,25 @@ def test_docs_numbers_runs_every_paper_campaign():
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     assert mod.CAMPAIGNS == claims.PAPER_CAMPAIGNS
+
+
+def test_fig2_draws_the_averaged_gap_W_c_as_an_open_diamond():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from sweep.analysis.plotting import draw_amplitude
+
+    a = _a_two_lines(X, 0.0125, 2.0, 0.4, 15.0)
+    row = pd.Series(_base(W_c=15.0, W_c_stderr=0.3, W_c_gap=17.5, compact_end=42.0))
+    fig, ax = plt.subplots()
+    draw_amplitude(ax, row, {"x": X, "a": a, "a_stderr": np.full(N, 1e-5)}, "C0", zone=True)
+    diamonds = [ln for ln in ax.get_lines() if ln.get_marker() == "D"]
+    assert len(diamonds) == 1 and diamonds[0].get_xdata()[0] == 17.5
+    assert diamonds[0].get_markerfacecolor() == "none"
+    fig2, ax2 = plt.subplots()
+    draw_amplitude(ax2, row.drop("W_c_gap"), {"x": X, "a": a, "a_stderr": np.full(N, 1e-5)},
+                   "C0", zone=True)
+    assert not [ln for ln in ax2.get_lines() if ln.get_marker() == "D"]
+    plt.close("all")
