@@ -250,4 +250,5 @@ def w_c_definitions(rows: Sequence[pd.Series | None], eps: Sequence[Any]) -> str
             d = difference(w, g, "")
             parts.append(f"eps={e} {d.value:+.2f} ± {d.se:.2f} m")
     return ("; W_c from the gaps averaged over all windows minus per window: "
-            + ", ".join(parts)) if parts else ""
+            + ", ".join(parts) + " (the two SEs combined as if independent: the definitions"
+            " share the replicas, so this overstates the difference's SE)") if parts else ""
