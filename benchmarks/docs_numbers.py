@@ -5,7 +5,8 @@
 
 Runs the shipped campaigns the docs quote (``configs/demo.toml`` under ``mpiexec -n 3``
 when a launcher is available, else in-process; the paper campaigns ``fig2``, ``fig5``,
-``fig6a``, ``fig6b``, ``periods``, ``dfscan``, ``uniform``, ``spring_*`` in-process, two at
+``fig6a``, ``fig6b``, ``periods``, ``periods_fine``, ``dfscan``, ``uniform``, ``spring_*``
+in-process, two at
 a time) into stores in ``--out`` (default: a new temporary
 directory; ``--skip-runs`` reuses the stores there, and takes the timings from their run
 records) and prints, labelled as in the docs:
@@ -49,8 +50,9 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-CAMPAIGNS = ("fig2", "fig5", "fig6a", "fig6b", "periods", "dfscan", "uniform", "spring_none",
-             "spring_soft", "spring_stiff")          # sweep.paper.claims.PAPER_CAMPAIGNS
+#: sweep.paper.claims.PAPER_CAMPAIGNS (tests/sweep/test_paper_claims_new.py checks it)
+CAMPAIGNS = ("fig2", "fig5", "fig6a", "fig6b", "periods", "periods_fine", "dfscan", "uniform",
+             "spring_none", "spring_soft", "spring_stiff")
 
 
 def stamp() -> str:

@@ -119,6 +119,16 @@ CONFIGS = {
                 eps=[0.6], d_f=[0.005], dispersion=["ep", "ow", "ml"]),
         run='name = "periods"\ndescription = "alpha(omega) across the campaign periods, EP,'
             ' OW and ML"'),
+    "periods_fine": dict(header="""
+# alpha(omega) of the DEM's compact zone (paper §5): the periods of configs/periods.toml
+# that have a compact zone (T 1.1-1.5 s) resolved into ten, so that the exponent of
+# alpha_inner has 8 degrees of freedom instead of 2 (issue 23). T/dt is a multiple of
+# drag_every (4): T in steps of 0.04 s. eps 0.6, EP, OW and ML. 30 points.
+""", sweep=dict(L_x=[0.5], T=[1.1, 1.16, 1.2, 1.24, 1.28, 1.32, 1.36, 1.4, 1.44, 1.5],
+                a0=[0.0125], C_sd=[0.05], eps=[0.6], d_f=[0.005],
+                dispersion=["ep", "ow", "ml"]),
+        run='name = "periods_fine"\ndescription = "alpha(omega) over ten periods with a'
+            ' compact zone, EP, OW and ML"'),
     "uniform": dict(header="""
 # Paper §4.1: "tests with random initial locations of the floes have shown that this aspect
 # of the setup has no influence on the results". The Fig. 2 points (configs/fig2.toml) with

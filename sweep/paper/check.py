@@ -141,8 +141,8 @@ def format_table(checks: Sequence[Check]) -> str:
     lines.append(f"{counts[HOLDS]} hold, {counts[FAILS]} fail"
                  f"{' (#' + ', #'.join(failing) + ')' if failing else ''},"
                  f" {counts[INCONCLUSIVE]} inconclusive. Rule: |z| >= {Z_CRIT:g} (Student-t"
-                 " for SEs from unweighted fits' residuals); '(floor)': no stored SE, the"
-                 " stated floor used instead"
+                 " with n - 2 degrees of freedom for fitted exponents); '(exact)': an"
+                 " analytic value; '(floor)': no stored SE, the stated floor used instead"
                  " (sweep.paper.claims.FLOORS).")
     return "\n".join(lines)
 

@@ -11,10 +11,12 @@ setup's (placement, edge spring) :mod:`sweep.paper.variants`'.
 """
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+import numpy as np
 import pandas as pd
 
 from sweep.analysis.stats import derived
@@ -30,7 +32,6 @@ from sweep.paper.points import (
     Tables,
     a_end,
     a_near,
-    difference,
     force_decades,
     inner_over_c,
     label_of,
@@ -47,8 +48,8 @@ from sweep.paper.zones import notes, unless_marginal, zone_checks
 __all__ = ["PAPER_CAMPAIGNS", "FLOORS", "X_NEAR", "Check", "Profile", "paper_checks"]
 
 #: The shipped paper campaigns (``configs/<name>.toml``), checked in this order.
-PAPER_CAMPAIGNS = ("fig2", "fig5", "fig6a", "fig6b", "periods", "dfscan", "uniform",
-                   "spring_none", "spring_soft", "spring_stiff")
+PAPER_CAMPAIGNS = ("fig2", "fig5", "fig6a", "fig6b", "periods", "periods_fine", "dfscan",
+                   "uniform", "spring_none", "spring_soft", "spring_stiff")
 
 
 def paper_checks(tables: Mapping[str, pd.DataFrame | None],
@@ -107,7 +108,7 @@ def paper_checks(tables: Mapping[str, pd.DataFrame | None],
                     for r, e in zip(rows, eps, strict=True)]
             est = [m[0] for m in marg]
             verdict, evidence = ordering(est, increasing=False)
-            evidence += w_c_definitions(rows, eps) + notes([m[1] for m in marg])
+            evidence += w_c_definitions(t, rows, eps) + notes([m[1] for m in marg])
             checks.append(make_check(claim, "§4.2, Figs. 2, 3a", "fig2", pts,
                                      "W_c [m] (per averaging window; no compact zone: no"
                                      " value)", "chain, decreasing", est, (verdict, evidence)))
@@ -238,17 +239,29 @@ def paper_checks(tables: Mapping[str, pd.DataFrame | None],
     return checks
 
 
-def w_c_definitions(rows: Sequence[pd.Series | None], eps: Sequence[Any]) -> str:
+def w_c_definitions(t: Tables, rows: Sequence[pd.Series | None], eps: Sequence[Any]) -> str:
     """Evidence text: W_c by the paper's rule on the gaps averaged over the whole averaging
-    (``W_c_gap``) minus the per-window W_c, where the store has both."""
+    (``W_c_gap``) minus the per-window W_c, paired per replica (both definitions from the
+    same replicas: ``W_c_replicas`` and :func:`floewave.collision_stats.gap_zone_width` of
+    the replicas' stored mean gaps), mean ± SE over the replicas that have both."""
+    from floewave.collision_stats import gap_zone_width
+    from floewave.config import ModelConfig
+
     parts = []
     for row, e in zip(rows, eps, strict=True):
-        if row is None:
+        p = t.prof("fig2", row)
+        if p is None or "config_json" not in row.index or not all(
+                k in p for k in ("W_c_replicas", "x_mean_replicas", "gap_mean_replicas")):
             continue
-        g, w = w_c(row, "", "W_c_gap"), w_c(row, "")
-        if math.isfinite(g.value) and math.isfinite(w.value):
-            d = difference(w, g, "")
-            parts.append(f"eps={e} {d.value:+.2f} ± {d.se:.2f} m")
-    return ("; W_c from the gaps averaged over all windows minus per window: "
-            + ", ".join(parts) + " (the two SEs combined as if independent: the definitions"
-            " share the replicas, so this overstates the difference's SE)") if parts else ""
+        cfg = ModelConfig.from_dict(json.loads(str(row["config_json"])))
+        per_window = np.asarray(p["W_c_replicas"], dtype=float)
+        averaged = gap_zone_width(cfg, np.asarray(p["x_mean_replicas"], dtype=float),
+                                  np.asarray(p["gap_mean_replicas"], dtype=float))[2]
+        d = (averaged - per_window)[np.isfinite(averaged) & np.isfinite(per_window)]
+        if len(d) >= 2:
+            parts.append(f"eps={e} {d.mean():+.2f} ± {d.std(ddof=1) / math.sqrt(len(d)):.2f}"
+                         f" m ({len(d)} replicas)")
+        else:
+            parts.append(f"eps={e} n/a (both in {len(d)} of {len(per_window)} replicas)")
+    return ("; W_c from the gaps averaged over all windows minus per window, paired per"
+            " replica: " + ", ".join(parts)) if parts else ""

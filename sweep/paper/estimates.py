@@ -11,17 +11,17 @@ comes from, in order of preference:
 2. the per-floe profile ``a_stderr`` (the iteration noise of a single trajectory; for a(x)
    it was measured to be honest: RMS z 0.63 between rounding-level reruns);
 3. for a power-law exponent, the least-squares fit (weighted by the alphas' SEs when they
-   exist, then inflated by sqrt(chi^2 / dof) when that exceeds 1 — the Birge ratio — and
-   treated as a known SE whatever chi^2 / dof is; else the unweighted fit's residual SE
-   with n - 2 degrees of freedom);
+   exist, then inflated by sqrt(chi^2 / dof) when that exceeds 1 — the Birge ratio; else
+   the unweighted fit's residual SE); either way the SE is judged with the Student-t value
+   for n - 2 degrees of freedom, whatever chi^2 / dof is (one rule for every fit);
 4. otherwise a stated **floor** (:data:`sweep.paper.claims.FLOORS`): the noise a single
    trajectory is known (or assumed, where so marked) to carry. A quantity with no SE and
    no floor keeps a NaN SE and can only be ``inconclusive``. So a quantity without an
    error bar can only hold or fail when the effect is large against its floor.
 
-The critical value is z_c = 2 (two standard errors); an SE estimated from a fit's
-residuals with nu degrees of freedom uses the Student-t value with the same tail
-probability (t_nu at 97.7 %: 4.5 for nu = 2, 2.5 for nu = 6) instead.
+The critical value is z_c = 2 (two standard errors); the SE of a fitted exponent (n
+periods, nu = n - 2 degrees of freedom) uses the Student-t value with the same tail
+probability (t_nu at 97.7 %: 4.5 for nu = 2, 2.5 for nu = 6, 2.4 for nu = 8) instead.
 
 - **Ordering along a chain** (``higher eps -> lower a/a0`` over eps = 0.2 ... 0.8): the
   required differences are the consecutive steps, each with
@@ -234,11 +234,12 @@ def power_exponent(omega: np.ndarray, alpha: np.ndarray, alpha_se: np.ndarray | 
     """The exponent m of alpha = c omega^m (least squares in log-log) with its SE.
 
     Weighted by se(ln alpha) = alpha_se / alpha when every fitted alpha has a finite,
-    positive SE (the SE then from the weights, times sqrt(chi^2/dof) when that exceeds 1,
-    and treated as known: one rule whatever chi^2/dof, so that a verdict does not flip
-    with the seed);
-    else unweighted, its SE from the residuals with n - 2 degrees of freedom. Points with
-    alpha NaN or <= 0 are left out; fewer than ``min_periods`` distinct omegas give NaN.
+    positive SE (the SE then from the weights, times sqrt(chi^2/dof) when that exceeds 1);
+    else unweighted, its SE from the residuals. Either way ``dof`` = n - 2: the SE is
+    judged with the Student-t value whatever chi^2/dof is (one rule, so that a verdict
+    does not jump with a noise fluctuation of chi^2/dof, and conservative where the
+    Birge ratio estimated the SE from the residuals). Points with alpha NaN or <= 0 are
+    left out; fewer than ``min_periods`` distinct omegas give NaN.
     """
     om = np.asarray(omega, dtype=float)
     al = np.asarray(alpha, dtype=float)
@@ -258,13 +259,14 @@ def power_exponent(omega: np.ndarray, alpha: np.ndarray, alpha_se: np.ndarray | 
         m_se = math.sqrt(1.0 / sxx)
         if n > 2:
             # the Birge ratio: inflated when the power law does not fit within the error
-            # bars; the SE stays a known one (z_c 2) whatever chi^2/dof is. (Switching to
-            # Student-t at chi^2/dof > 1, as before, made #26 fail with one seed, chi^2/dof
-            # 0.30, and be inconclusive with another, 2.0: the critical value jumped 2 ->
-            # 4.5 on a noise fluctuation.)
+            # bars. The critical value is t_(n-2) whatever chi^2/dof is: switching between
+            # z_c 2 (chi^2/dof <= 1) and Student-t (above), as model version 6 did, made
+            # one claim fail with one seed (chi^2/dof 0.30) and be inconclusive with
+            # another (2.0); treating the inflated SE as known (z_c 2) was too liberal:
+            # the inflation is an estimate from n - 2 residuals.
             red = float(np.sum(w * resid ** 2)) / (n - 2)
             m_se *= math.sqrt(max(red, 1.0))
-        return Estimate(label, m, m_se, "fit", math.inf)
+        return Estimate(label, m, m_se, "fit", float(n - 2))
     from floewave.results import power_law
 
     m, _, m_se, _ = power_law(om[ok], al[ok])

@@ -28,19 +28,29 @@ def _why(table) -> str:
     if k == 0:
         return ""
     lo, at = table.iloc[0], table.iloc[k]
+    se = table["a_near_rel_stderr"].to_numpy(float)
+    tied = [j for j in (k - 1, k + 1) if 0 <= j < len(a) and math.isfinite(a[j])
+            and abs(a[j] - a[k]) < 2 * math.hypot(se[j], se[k])]
+    lowest = sorted([k, *tied])
+    where = "-".join(f"{table['d_f'].iloc[j] * 1e3:g}" for j in (lowest[0], lowest[-1]))
+    where = where if len(lowest) > 1 else f"{at['d_f'] * 1e3:g}"
 
-    def both(name: str, fmt: str) -> str:
-        return (f"{lo[name]:{fmt}} at {lo['d_f'] * 1e3:g} mm, {at[name]:{fmt}} at"
+    def both(name: str, fmt: str, unit: str = "") -> str:
+        return (f"{lo[name]:{fmt}}{unit} at {lo['d_f'] * 1e3:g} mm, {at[name]:{fmt}}{unit} at"
                 f" {at['d_f'] * 1e3:g} mm")
+
+    dpc = "dissipation_per_collision"
 
     def more(name: str) -> str:
         return "more" if lo[name] > at[name] else "less"
 
-    return (f"non-monotonic: a/a0 at {X_NEAR:g} m is lowest at d_f = {at['d_f'] * 1e3:g} mm;"
+    return (f"non-monotonic: a/a0 at {X_NEAR:g} m is lowest at d_f = {where} mm (within 2 SE);"
             f" towards smaller d_f the floes touch {more('contact_fraction_mean')} (contact"
             f" fraction {both('contact_fraction_mean', '.3f')}) and collide"
             f" {more('collision_rate')} often (collisions per pair per period"
-            f" {both('collision_rate', '.2f')}); docs/dfscan.md")
+            f" {both('collision_rate', '.2f')}), and the drag dissipation per collision"
+            f" {'falls' if lo[dpc] < at[dpc] else 'rises'}"
+            f" ({both('dissipation_per_collision', '.3g', ' J')}); docs/dfscan.md")
 
 
 def scan_checks(t: Tables) -> None:

@@ -14,6 +14,14 @@
   0.05-0.7 % of a0 and its jackknife SE of a_end is 0.9-1.7 times the stored one
   (``a_stderr``, made from the windows' own amplitudes): an approximation, stated in the
   table.
+- :func:`rate_reach` / :func:`reach_estimate`: where the *local* rate reaches the compact
+  zone's. The local rate is the least-squares slope of 1/a - 1/a0 over the floes within
+  :data:`REACH_HALF` (1 m) of each floe; x_r is the first floe from which it stays at or
+  below :data:`REACH_FACTOR` (1.25, the "close to" of the ratio claims) times alpha_inner
+  for :data:`REACH_HOLD` (3 m, the compact-zone rule's minimum length). A two-line knot
+  sits in the middle of a gradual bend; x_r is where the bend ends. SE: the same
+  re-marched jackknife (alpha_inner held at the stored value), at least the floe grid's
+  rounding error (spacing / sqrt(12)): x_r moves in steps of one floe.
 - :func:`threshold_crossing`: the first pair whose mean gap is below the compact-zone
   threshold (the paper's dots in Figs. 2, 3a), for points where the zone rule found no zone.
 """
@@ -26,7 +34,8 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["two_segment_break", "break_estimate", "threshold_crossing", "jackknife"]
+__all__ = ["two_segment_break", "break_estimate", "threshold_crossing", "jackknife",
+           "rate_reach", "reach_estimate", "REACH_HALF", "REACH_FACTOR", "REACH_HOLD"]
 
 #: Grid step of the break search [m].
 BREAK_STEP = 0.05
@@ -60,6 +69,75 @@ def two_segment_break(x: np.ndarray, a: np.ndarray, a0: float, *, min_floes: int
     return float(xb[k, 0]), float(s1[k]), float(s2[k])
 
 
+REACH_HALF = 1.0
+REACH_FACTOR = 1.25
+REACH_HOLD = 3.0
+
+
+def rate_reach(x: np.ndarray, a: np.ndarray, a0: float, alpha_inner: float) -> float:
+    """x_r: the first floe centre from which the local slope of 1/a - 1/a0 stays at or below
+    REACH_FACTOR alpha_inner for REACH_HOLD metres (NaN if none or alpha_inner is NaN)."""
+    x = np.asarray(x, dtype=float)
+    a = np.asarray(a, dtype=float)
+    if not (math.isfinite(alpha_inner) and alpha_inner > 0):
+        return math.nan
+    with np.errstate(divide="ignore", invalid="ignore"):
+        y = np.where(a > 0, 1.0 / a - 1.0 / a0, np.nan)
+    near = np.abs(x[:, None] - x[None, :]) <= REACH_HALF           # (floe, window member)
+    cnt = near.sum(1)
+    xm = np.where(near, x, 0.0).sum(1) / cnt
+    ym = np.where(near, y, 0.0).sum(1) / cnt
+    dx = np.where(near, x[None, :] - xm[:, None], 0.0)
+    dy = np.where(near, y[None, :] - ym[:, None], 0.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        slope = (dx * dy).sum(1) / (dx * dx).sum(1)
+    ok = np.isfinite(slope) & (slope <= REACH_FACTOR * alpha_inner) & (cnt >= 3)
+    for i in range(len(x)):
+        span = (x >= x[i]) & (x <= x[i] + REACH_HOLD)
+        if x[-1] - x[i] >= REACH_HOLD and ok[span].all():
+            return float(x[i])
+    return math.nan
+
+
+def _loo_amplitudes(row: Mapping[str, Any], profile: Mapping[str, Any], cfg: Any
+                    ) -> list[np.ndarray]:
+    """Each replica left out in turn: a(x) re-marched from the other replicas' stored
+    dissipation coefficients (the module docstring); [] without S_sd_replicas."""
+    from floewave._march import march_coefficients
+
+    a = np.asarray(profile["a"], dtype=float)
+    S = profile["S_sd_replicas"] if "S_sd_replicas" in profile else None
+    if S is None:
+        return []
+    S = np.asarray(S, dtype=float)
+    if S.ndim != 2 or S.shape[0] < 2:
+        return []
+    with np.errstate(divide="ignore", invalid="ignore"):
+        C = np.where(a > 0, S / a ** 3, np.nan)
+    out = []
+    for r in range(S.shape[0]):
+        c = np.nanmean(np.delete(C, r, axis=0), axis=0)
+        c = np.where(np.isfinite(c), c, 0.0)
+        out.append(march_coefficients(cfg, c, float(row["c_g"]), float(row["k"])))
+    return out
+
+
+def reach_estimate(row: Mapping[str, Any], profile: Mapping[str, Any]) -> tuple[float, float]:
+    """(x_r, its jackknife SE) of a stored point (:func:`rate_reach` of the stored a(x)
+    with the stored alpha_inner)."""
+    a0, ai = float(row["a0"]), float(row.get("alpha_inner", math.nan))
+    x = np.asarray(profile["x_mean"], dtype=float)
+    xr = rate_reach(x, np.asarray(profile["a"], dtype=float), a0, ai)
+    if not math.isfinite(xr):
+        return xr, math.nan
+    loo = [rate_reach(x, a_r, a0, ai) for a_r in _loo_amplitudes(row, profile, _cfg(row))]
+    if not loo:
+        return xr, math.nan
+    # x_r moves in steps of one floe: at least the rounding error of that grid
+    grid = float(np.median(np.diff(x))) / math.sqrt(12.0)
+    return xr, max(jackknife(np.array(loo)), grid)
+
+
 def jackknife(values: np.ndarray) -> float:
     """Delete-one jackknife SE of leave-one-out values (NaN if any is NaN or fewer than 2)."""
     v = np.asarray(values, dtype=float)
@@ -80,8 +158,6 @@ def break_estimate(row: Mapping[str, Any], profile: Mapping[str, Any]
     """(x_b, its jackknife SE, slope before, slope after) of a stored point
     (:func:`two_segment_break` of the stored a(x) up to ``compact_end``; SE as the module
     docstring says, NaN without ``S_sd_replicas`` or with one replica)."""
-    from floewave._march import march_coefficients
-
     a0 = float(row["a0"])
     end = float(row.get("compact_end", math.nan))
     x_max = end if math.isfinite(end) else math.inf
@@ -89,22 +165,11 @@ def break_estimate(row: Mapping[str, Any], profile: Mapping[str, Any]
     a = np.asarray(profile["a"], dtype=float)
     cfg = _cfg(row)
     xb, s1, s2 = two_segment_break(x, a, a0, min_floes=cfg.fit_min_floes, x_max=x_max)
-    S = profile["S_sd_replicas"] if "S_sd_replicas" in profile else None
-    if S is None or not math.isfinite(xb):
+    if not math.isfinite(xb):
         return xb, math.nan, s1, s2
-    S = np.asarray(S, dtype=float)
-    if S.ndim != 2 or S.shape[0] < 2:
-        return xb, math.nan, s1, s2
-    with np.errstate(divide="ignore", invalid="ignore"):
-        C = np.where(a > 0, S / a ** 3, np.nan)
-    loo = []
-    for r in range(S.shape[0]):
-        c = np.nanmean(np.delete(C, r, axis=0), axis=0)
-        c = np.where(np.isfinite(c), c, 0.0)
-        a_r = march_coefficients(cfg, c, float(row["c_g"]), float(row["k"]))
-        loo.append(two_segment_break(x, a_r, a0, min_floes=cfg.fit_min_floes,
-                                     x_max=x_max)[0])
-    return xb, jackknife(np.array(loo)), s1, s2
+    loo = [two_segment_break(x, a_r, a0, min_floes=cfg.fit_min_floes, x_max=x_max)[0]
+           for a_r in _loo_amplitudes(row, profile, cfg)]
+    return xb, jackknife(np.array(loo)) if loo else math.nan, s1, s2
 
 
 def threshold_crossing(x: np.ndarray, gap: np.ndarray, threshold: float) -> float:

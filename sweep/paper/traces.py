@@ -38,11 +38,15 @@ _POINT = dict(eps=0.6, dispersion="ml")
 _LOW = 0.1
 
 
-def spike_rate(s: np.ndarray, samples_per_period: int) -> tuple[float, float]:
-    """(spikes per period, its SE) of a trace ``s`` of |S_sd| (whole periods of samples)."""
+def spike_rate(s: np.ndarray, samples_per_period: int, factor: float = SPIKE
+               ) -> tuple[float, float]:
+    """(spikes per period, its SE) of a trace ``s`` of |S_sd| (whole periods of samples):
+    excursions above ``factor`` times its median (NaN for a trace whose median is 0)."""
     s = np.abs(np.asarray(s, dtype=float))
     n = len(s) // samples_per_period
-    above = s[: n * samples_per_period] > SPIKE * np.median(s)
+    if not np.median(s) > 0 or n < 2:
+        return math.nan, math.nan
+    above = s[: n * samples_per_period] > factor * np.median(s)
     starts = np.zeros_like(above)
     starts[1:] = above[1:] & ~above[:-1]
     starts[0] = above[0]
@@ -78,10 +82,17 @@ def trace_checks(t: Tables) -> None:
         every = 10
         tr = trace_point(cfg, res, distances=(NEAR,), every=every, periods=PERIODS,
                          spin_up=SPIN_UP)
-        r, se = spike_rate(tr.S_sd[:, 0], cfg.n_t // every)
+        spp = cfg.n_t // every
+        r, se = spike_rate(tr.S_sd[:, 0], spp)
         rate = Estimate(f"spikes per period at {tr.distance[0]:.2f} m", r, se, "periods")
-        detail = (f"; one trajectory from the uniform start, {SPIN_UP} periods of spin-up with"
-                  f" the stored a(x), {PERIODS} periods recorded")
+        other = ", ".join(f"{f:g}x: {spike_rate(tr.S_sd[:, 0], spp, f)[0]:.2f}"
+                          for f in (2.0, 5.0, 10.0))
+        touching = np.abs(tr.F_c[:, 0]) > 0
+        onsets = int(np.sum(touching[1:] & ~touching[:-1])) / PERIODS
+        detail = (f"; with other thresholds (x median) {other} per period; contact onsets"
+                  f" of that floe {onsets:.2f} per period; one trajectory from the uniform"
+                  f" start, {SPIN_UP} periods of spin-up with the stored a(x), {PERIODS}"
+                  " periods recorded (the threshold, 3x, was the first tried)")
     if p is not None and "S_sd_replicas" in p:
         x = np.asarray(p["x_mean"], dtype=float)
         S = np.abs(np.asarray(p["S_sd_replicas"], dtype=float))

@@ -155,12 +155,13 @@ def test_the_dem_exponent_is_judged_against_alpha_c_over_the_same_periods():
             rows.append(_base(hash=f"{disp}{T}", T=T, dispersion=disp,
                               alpha_c=1e-3 * om ** m_c, alpha_inner=inner,
                              alpha_inner_stderr=1e-3 * inner, a_end=0.01))
-    checks = claims.paper_checks({"periods": pd.DataFrame(rows)})
+    table = pd.DataFrame(rows)
+    checks = claims.paper_checks({"periods": table, "periods_fine": table})
     ow = _by(checks, "alpha_inner (DEM) ~ omega^m with alpha_c's m over the same periods (ow)")
     ep = _by(checks, "alpha_inner (DEM) ~ omega^m with alpha_c's m over the same periods (ep)")
     assert ow.verdict == HOLDS and ep.verdict == FAILS, (ow.evidence, ep.evidence)
     assert ep.estimates[2].value == pytest.approx(-0.8, abs=1e-6)
-    assert "4 periods" in ep.points
+    assert "4 with a value" in ep.points and ep.estimates[2].dof == 2
     # alpha_c exact: the ow exponent of 4 holds with no SE at all, ml > ow too
     exact = _by(checks, "alpha_c (eq. 24) ~ omega^4 for ow")
     assert exact.verdict == HOLDS and exact.estimates[0].source == "exact"
@@ -171,7 +172,9 @@ def test_the_ep_tails_are_the_papers_two_ice_cases():
     checks = claims.paper_checks({})
     field = _by(checks, "alpha_c (eq. 24) ~ omega^m, m 2-2.5, high-frequency tail, ep (field")
     lab = _by(checks, "alpha_c (eq. 24) ~ omega^m, m 2-2.5, high-frequency tail, ep (lab")
-    assert field.verdict == lab.verdict == HOLDS
+    # the field ice is the paper's own; its lab ice is not given: that row cannot decide
+    assert field.verdict == HOLDS and lab.verdict == INCONCLUSIVE
+    assert "not testable" in lab.evidence
     # within 0.01 of the paper's 2.397 for its own field ice (this lab ice is assumed)
     assert field.estimates[0].value == pytest.approx(2.397, abs=0.01)
     assert "2.397" in field.evidence and "1.994" in lab.evidence
@@ -319,3 +322,53 @@ def test_fig2_draws_the_averaged_gap_W_c_as_an_open_diamond():
                    "C0", zone=True)
     assert not [ln for ln in ax2.get_lines() if ln.get_marker() == "D"]
     plt.close("all")
+
+
+def test_the_two_W_c_definitions_are_compared_per_replica():
+    W = [25.0, 20.0, 17.0, 14.0]
+    t, prof = _fig2_zone(W, 1.0)
+    rng = np.random.default_rng(5)
+    for h, p in prof.items():
+        w = float(t.loc[t["hash"] == h, "W_c"].iloc[0])
+        shift = 2.0 + 0.2 * rng.standard_normal(8)          # averaged gaps: ~2 m further
+        p["W_c_replicas"] = np.full(8, w)
+        p["x_mean_replicas"] = np.tile(X, (8, 1))
+        p["gap_mean_replicas"] = np.array([np.where(X < w + s, 1e-3, 5e-5) for s in shift])
+    c = _by(claims.paper_checks({"fig2": t}, lambda n, h: prof[h], trace=False),
+            "higher eps -> narrower collisional zone W_c (ml)")
+    txt = c.evidence.split("paired per replica: ")[1]
+    diffs = [float(part.split()[1]) for part in txt.split(", ")[:4]]
+    # the zone starts at the first compact pair's centre: within a floe of the shift
+    assert all(1.5 < d < 2.6 for d in diffs), txt
+    assert "(8 replicas)" in txt
+
+
+def test_a_detected_difference_is_named_even_when_equivalence_holds():
+    tables, prof = _variant_tables(0.006, -5.0)         # 0.6 % of a0, SE 0.28 %: z ~ 2.2
+    c = _by(claims.paper_checks(tables, prof), "random initial locations have no influence")
+    assert "a difference from zero is detected" in c.evidence
+    tables, prof = _variant_tables(0.0, -5.0)
+    c = _by(claims.paper_checks(tables, prof), "random initial locations have no influence")
+    assert "detected" not in c.evidence
+
+
+def test_spike_rate_is_undefined_for_a_flat_zero_trace():
+    from sweep.paper.traces import spike_rate
+
+    assert all(math.isnan(v) for v in spike_rate(np.zeros(1200), 120))
+
+
+def test_rate_reach_finds_the_end_of_a_gradual_bend():
+    s1, s2, x1, x2 = 2.0, 0.4, 5.0, 15.0
+    ramp = np.clip((x2 - X) / (x2 - x1), 0.0, 1.0)
+    slope = s2 + (s1 - s2) * ramp
+    y = np.concatenate([[0.0], np.cumsum(0.5 * (slope[1:] + slope[:-1]) * np.diff(X))])
+    y += s1 * X[0]
+    a = 1.0 / (1.0 / 0.0125 + y)
+    expect = x2 - (shapes.REACH_FACTOR - 1.0) * s2 * (x2 - x1) / (s1 - s2)   # 14.375 m
+    got = shapes.rate_reach(X, a, 0.0125, s2)
+    assert abs(got - expect) <= 0.6, (got, expect)
+    # the two-line knot of the same curve sits inside the bend, well before its end
+    assert shapes.two_segment_break(X, a, 0.0125)[0] < expect - 3.0
+    assert math.isnan(shapes.rate_reach(X, a, 0.0125, np.nan))
+    assert math.isnan(shapes.rate_reach(X, a, 0.0125, 0.1))      # never that slow

@@ -123,13 +123,13 @@ def test_power_exponent_weighted_unweighted_and_too_few_periods():
     # without SEs: the residuals' SE, n - 2 degrees of freedom
     u = estimates.power_exponent(om, noisy)
     assert u.dof == 2 and math.isfinite(u.se)
-    # SEs too small for the scatter: inflated by sqrt(chi^2/dof) (the Birge ratio), still a
-    # known SE: one critical value (2) whatever chi^2/dof, so a verdict does not jump
-    # between z_c 2 and 4.5 with the seed
+    # SEs too small for the scatter: inflated by sqrt(chi^2/dof) (the Birge ratio); every
+    # fit is judged with t_(n-2), whatever chi^2/dof (one critical value per fit size, so a
+    # verdict does not jump between z_c 2 and 4.5 with the seed)
     s = estimates.power_exponent(om, noisy, 1e-4 * noisy)
     naive = 1e-4 / math.sqrt(((np.log(om) - np.log(om).mean()) ** 2).sum())
-    assert s.dof == math.inf and s.se > 5 * naive
-    assert m.dof == math.inf
+    assert s.dof == 2 and s.se > 5 * naive
+    assert m.dof == 2 and estimates.z_critical(m.dof) == pytest.approx(4.53, abs=0.01)
     assert math.isnan(estimates.power_exponent(om[:2], al[:2]).value)
     # NaN and non-positive rates are left out
     assert math.isnan(estimates.power_exponent(om, np.array([1.0, np.nan, -1.0, 2.0])).value)
@@ -250,14 +250,17 @@ def test_exponents_from_the_periods_table():
             om = 2 * np.pi / T
             rows.append(_row(f"{disp}{T}", T=T, dispersion=disp, alpha_c=1e-3 * om ** m,
                              alpha_inner=1.1e-3 * om ** m, alpha_inner_stderr=1e-5 * om ** m))
-    checks = claims.paper_checks({"periods": pd.DataFrame(rows)})
-    verdicts = {c.claim: c.verdict for c in checks if c.campaign == "periods"}
+    table = pd.DataFrame(rows)
+    checks = claims.paper_checks({"periods": table, "periods_fine": table})
+    verdicts = {c.claim: c.verdict for c in checks
+                if c.campaign in ("periods", "periods_fine")}
     assert set(verdicts.values()) == {HOLDS}, verdicts
     m, mc, diff = [c for c in checks if c.claim.endswith("the same periods (ep)")][0].estimates
-    assert m.value == pytest.approx(2.2) and m.source == "fit" and m.dof == math.inf
-    # alpha_c's exponent over the same periods is exact (no SE), the difference has m's SE
+    assert m.value == pytest.approx(2.2) and m.source == "fit" and m.dof == 3    # 5 periods
+    # alpha_c's exponent over the same periods is exact (no SE); the difference is the
+    # weighted fit of alpha_inner / alpha_c (here a constant 1.1: m - m_c = 0)
     assert mc.value == pytest.approx(2.2) and mc.se == 0 and mc.source == "exact"
-    assert diff.value == pytest.approx(0.0, abs=1e-9) and diff.se == m.se
+    assert diff.value == pytest.approx(0.0, abs=1e-9) and diff.dof == 3
 
 
 def test_missing_tables_are_inconclusive_not_hidden():
