@@ -11,7 +11,7 @@
   each leave-one-out a(x) is re-marched (eq. 20,
   :func:`floewave._march.march_coefficients`) from the mean of the other replicas' coefficients
   S_sd,r / a^3. On the Fig. 2 points this re-march reproduces the stored a(x) within
-  0.05-0.7 % of a0 and its jackknife SE of a_end is 0.50-1.68 times the stored one
+  0.004-0.7 % of a0 and its jackknife SE of a_end is 0.50-1.68 times the stored one
   (``a_stderr``, made from the windows' own amplitudes): an approximation, stated in the
   table.
 - :func:`rate_reach` / :func:`reach_estimate`: where the *local* rate reaches the compact
