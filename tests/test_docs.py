@@ -5,7 +5,8 @@ directory (its own ``HOME``), as a reader following it would, with these documen
 reductions so that the whole walk takes about a minute (issue *first hour*):
 
 - campaigns run on reduced copies of the shipped configs (``configs/*.toml`` with the
-  first two values of each swept list, four of T) and with the hand-set
+  first two values of each swept list, four of T, one of the demo's: 8 points, 10 of its
+  18 figures; tests/sweep/test_figures.py draws every kind) and with the hand-set
   ``sweep.testing:power_point`` results instead of the model (``--compute``);
 - ``floewave run`` and ``floewave.run_point`` run with n0 = nT = 1 and 2 iterations;
 - ``sweep plan`` is given ``--rate`` instead of calibrating; ``mpiexec -n N`` runs at most
@@ -66,7 +67,8 @@ def _reduced_configs(sandbox: Path) -> None:
         lines = ["[base]"] + [f"{k} = {_toml_value(v)}" for k, v in data.get("base", {}).items()]
         lines.append("[sweep]")
         for k, values in data["sweep"].items():
-            lines.append(f"{k} = {_toml_value(values[:4] if k == 'T' else values[:2])}")
+            n_T = 1 if src.name == "demo.toml" else 4
+            lines.append(f"{k} = {_toml_value(values[:n_T] if k == 'T' else values[:2])}")
         (sandbox / "configs" / src.name).write_text("\n".join(lines) + "\n")
 
 
