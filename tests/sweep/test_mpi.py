@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import sweep
+import sweep.cli
 from sweep.testing import TINY_TOML, find_mpiexec
 
 MPIEXEC = find_mpiexec()
@@ -41,10 +42,17 @@ def mpirun(n, *args, env=None, timeout=120):
                           env=env or _env())
 
 
-def inproc(*args, env=None, timeout=120):
-    cmd = [sys.executable, "-m", "sweep", *map(str, args)]
-    return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout,
-                          env=env or _env())
+@pytest.fixture
+def inproc(run_main, monkeypatch):
+    """``inproc(*args, **env)``: ``sweep *args`` without a launcher, run in this process
+    (a singleton: what runs it in a process of its own is the launcher's business)."""
+    def call(*args, **env):
+        monkeypatch.delenv("SLURM_NTASKS", raising=False)
+        for name, value in env.items():
+            monkeypatch.setenv(name, value)
+        return run_main(sweep.cli.main, args)
+
+    return call
 
 
 @pytest.fixture
@@ -54,7 +62,7 @@ def tiny(tmp_path):
     return path
 
 
-def test_mpiexec_3_real_points_equal_one_rank(tmp_path, tiny):
+def test_mpiexec_3_real_points_equal_one_rank(tmp_path, tiny, inproc):
     mpi_store, one_store = tmp_path / "mpi.h5", tmp_path / "one.h5"
     proc = mpirun(3, "run", tiny, "--store", mpi_store)
     assert proc.returncode == 0, proc.stderr
@@ -108,13 +116,13 @@ def test_mpiexec_raising_points_recorded(tmp_path):
     assert set(failed["rank"]) <= {1, 2}
 
 
-def test_slurm_ntasks_mismatch_refused(tmp_path, tiny):
+def test_slurm_ntasks_mismatch_refused(tmp_path, tiny, inproc):
     store = tmp_path / "s.h5"
     proc = mpirun(2, "run", tiny, "--store", store, env=_env(SLURM_NTASKS="4"))
     assert proc.returncode == 4
     assert "SLURM_NTASKS=4" in proc.stderr
     assert not store.exists()
-    proc = inproc("run", tiny, "--store", store, env=_env(SLURM_NTASKS="3"))
+    proc = inproc("run", tiny, "--store", store, SLURM_NTASKS="3")
     assert proc.returncode == 4 and "singletons" in proc.stderr
     assert not store.exists()
 
@@ -154,7 +162,7 @@ def test_signal_stops_cleanly_and_resumes(tmp_path, sig):
     assert list(kept) == list(first["seq"]), "points stored before the stop were kept"
 
 
-def test_grace_expiry_aborts_but_store_consistent(tmp_path):
+def test_grace_expiry_aborts_but_store_consistent(tmp_path, inproc):
     cfg = tmp_path / "c.toml"
     cfg.write_text(FAKE_TOML.replace("grace_period = 5.0", "grace_period = 0.0"))
     store = tmp_path / "s.h5"

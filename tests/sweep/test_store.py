@@ -32,15 +32,14 @@ def test_schema_file_matches_code():
     assert doc == json.loads(json.dumps(schema_document()))
 
 
-def test_second_writer_refused_stale_lock_taken_over(tmp_path, campaign):
+def test_second_writer_refused_stale_lock_taken_over(tmp_path, campaign, run_main):
     path = tmp_path / "s.h5"
     with Store(path, campaign):
         with pytest.raises(sweep.StoreLockedError, match="live campaign"):
             Store(path, campaign)
         cfg = tmp_path / "c.toml"
         cfg.write_text(TOML)
-        proc = subprocess.run([sys.executable, "-m", "sweep", "run", str(cfg), "--store",
-                               str(path)], capture_output=True, text=True)
+        proc = run_main(main, ["run", cfg, "--store", path])  # the command line's refusal
         assert proc.returncode == 3 and "live campaign" in proc.stderr
     # a lock left by a killed writer: the file exists but nobody holds its flock
     holder = subprocess.Popen([sys.executable, "-c", "import sys, sweep;"

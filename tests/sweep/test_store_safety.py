@@ -482,7 +482,7 @@ def test_status_counts_the_journal(tmp_path, campaign, capsys):
 def test_reads_during_writes(tmp_path):
     """sweep.load and status while a live run commits quickly: every read succeeds and
     sees a growing, duplicate-free table."""
-    eps = ", ".join(repr(round(0.001 + 0.0009 * i, 5)) for i in range(1000))
+    eps = ", ".join(repr(round(0.001 + 0.0009 * i, 5)) for i in range(500))
     cfg = tmp_path / "c.toml"
     cfg.write_text(f"[base]\nL_sheet = 6.0\n[sweep]\neps = [{eps}]\n")
     path = tmp_path / "s.h5"
