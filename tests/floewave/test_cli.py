@@ -1,7 +1,8 @@
 """``floewave run``: summary, JSON and plot output, bad input -> exit 2 with one message.
 
 ``floewave.cli.main`` runs in-process (the ``run_main`` fixture); the entry points themselves
-(``python -m floewave``/``sweep``) by a subprocess in the help and version test."""
+(``python -m floewave``/``sweep``) by a subprocess in the help test and
+tests/sweep/test_cli.py::test_python_m_sweep_is_the_command."""
 import json
 import subprocess
 import sys
@@ -76,13 +77,16 @@ def test_run_help_lists_every_field_with_default_and_units(run_main):
     assert "exit statuses: 0 success" in p.stdout
 
 
-def test_top_level_help_is_plain_text_and_versions_exist():
+def test_top_level_help_is_plain_text_and_versions_exist(run_main):
     top = subprocess.run([sys.executable, "-m", "floewave", "--help"], capture_output=True,
                          text=True, timeout=60)
     assert top.returncode == 0 and "``" not in top.stdout
-    for prog in ("floewave", "sweep"):
-        v = subprocess.run([sys.executable, "-m", prog, "--version"], capture_output=True,
-                           text=True, timeout=60)
+    # the versions in this process (``python -m sweep --version`` in a process of its own:
+    # tests/sweep/test_cli.py::test_python_m_sweep_is_the_command)
+    import sweep.cli
+
+    for prog, prog_main in (("floewave", main), ("sweep", sweep.cli.main)):
+        v = run_main(prog_main, ["--version"])
         assert v.returncode == 0 and "model version" in v.stdout, (prog, v.stderr)
 
 
