@@ -523,7 +523,7 @@ def test_a_point_that_swallows_its_timeout_is_timeout_in_one_run(tmp_path):
     path = tmp_path / "s.h5"
     t0 = time.monotonic()
     p = _sweep("run", cfg, "--store", path, "--compute", "sweep.testing:stubborn_point",
-               "--no-bar")
+               "--no-bar", env=_env(SWEEP_CHILD_MARGIN="0.2"))  # killed 0.2 s after it
     assert p.returncode == 0, p.stderr
     assert time.monotonic() - t0 < 30
     df = sweep.load(path).set_index(["L_x", "eps"])
