@@ -201,8 +201,28 @@ def test_merge_shards(tmp_path, campaign):
     assert not (tmp_path / "x.h5").exists()
 
 
+_FORKING_RUNS = """
+import json, os, sys, time
+import sweep.cli, sweep.run.launch, sweep.testing  # what `sweep run` imports, once
+for line in sys.stdin:  # a line: `sweep run ...` in a process of its own, forked from this one
+    pid = os.fork()
+    if pid == 0:
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, 1)
+        os.dup2(null, 2)
+        os._exit(sweep.cli.main(json.loads(line)))
+    print(pid, flush=True)
+    t0 = time.monotonic()
+    status = os.waitpid(pid, 0)[1]
+    print(status, time.monotonic() - t0, flush=True)
+"""
+
+
 def test_kill_9_torture(tmp_path, campaign):
-    """kill -9 the in-process campaign at random moments; the end equals a clean run."""
+    """kill -9 the in-process campaign at random moments; the end equals a clean run.
+    (The killed campaigns are processes forked by one that imported sweep once, so that
+    every kill falls in the campaign's own life: store open, points, commits; the last
+    run, which completes the store, is ``python -m sweep run``.)"""
     import random
 
     cfg = tmp_path / "c.toml"
@@ -210,25 +230,33 @@ def test_kill_9_torture(tmp_path, campaign):
         "[0.5, 1.5]", "[0.5, 1.0, 1.5, 3.0]"))
     ref, path = tmp_path / "ref.h5", tmp_path / "s.h5"
     args = ["--compute", "sweep.testing:fake_point", "--no-bar"]
-    t0 = time.monotonic()
-    subprocess.run([sys.executable, "-m", "sweep", "run", str(cfg), "--store", str(ref),
-                    *args], check=True, capture_output=True)
-    whole = time.monotonic() - t0  # an uninterrupted run: the kills fall in its second half
-    rng = random.Random(7)
-    kills = rounds = 0
-    while kills < 5 and rounds < 12:
-        rounds += 1
-        t0 = time.monotonic()
-        p = subprocess.Popen([sys.executable, "-m", "sweep", "run", str(cfg), "--store",
-                              str(path), *args], stdout=subprocess.DEVNULL,
-                             stderr=subprocess.DEVNULL)
-        time.sleep(rng.uniform(0.5, 1.0) * whole)
-        if p.poll() is None:
-            p.send_signal(signal.SIGKILL)
-            kills += 1
-        else:  # it ended first (what is left is shorter): aim within this run's length
-            whole = min(whole, time.monotonic() - t0)
-        p.wait()
+    runs = subprocess.Popen([sys.executable, "-c", _FORKING_RUNS], stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE, text=True)
+
+    def start(store):
+        runs.stdin.write(json.dumps(["run", str(cfg), "--store", str(store), *args]) + "\n")
+        runs.stdin.flush()
+        return int(runs.stdout.readline())
+
+    def ended():
+        status, seconds = runs.stdout.readline().split()
+        return int(status), float(seconds)
+
+    try:
+        start(ref)
+        status, whole = ended()  # an uninterrupted run: the kills fall within its length
+        assert status == 0
+        rng = random.Random(7)
+        kills = 0
+        for _ in range(10):
+            pid = start(path)
+            time.sleep(rng.uniform(0.0, 1.0) * whole)
+            os.kill(pid, signal.SIGKILL)
+            status, _ = ended()
+            kills += os.WIFSIGNALED(status) and os.WTERMSIG(status) == signal.SIGKILL
+    finally:
+        runs.stdin.close()
+        runs.wait(timeout=60)
     proc = subprocess.run([sys.executable, "-m", "sweep", "run", str(cfg), "--store",
                            str(path), *args], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
