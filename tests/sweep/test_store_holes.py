@@ -413,6 +413,22 @@ def test_a_stop_during_the_compute_import_is_status_6(tmp_path):
     assert "Traceback" not in err
 
 
+def test_a_stop_wrapped_by_an_import_is_status_6(monkeypatch, capsys):
+    """A stop raised inside an import whose machinery wraps it (Python 3.11 turns an
+    exception in a dataclass field's ``__set_name__`` into a RuntimeError) is still the
+    stop: status 6, no traceback (seen in test_a_stop_in_the_first_instants_is_status_6)."""
+    import sweep.cli
+
+    def parser():  # the start-up handler ran inside an import; its Interrupted wrapped
+        sweep.cli._START_UP_STOP.append(signal.SIGINT)
+        raise RuntimeError("Error calling __set_name__ on 'Field' instance 'warnings'")
+
+    monkeypatch.setattr(sweep.cli, "build_parser", parser)
+    assert main(["run", "c.toml", "--store", "s.h5"]) == 6
+    err = capsys.readouterr().err
+    assert "stopped by SIGINT during start-up" in err and "Traceback" not in err
+
+
 @pytest.mark.parametrize("delay", [0.0, pytest.param(0.02, marks=pytest.mark.slow), 0.05,
                                    pytest.param(0.1, marks=pytest.mark.slow), 0.2,
                                    pytest.param(0.4, marks=pytest.mark.slow)])
