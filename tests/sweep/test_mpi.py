@@ -154,7 +154,7 @@ def test_signal_stops_cleanly_and_resumes(tmp_path, sig):
     first = sweep.load(store)
     assert 0 < len(first) < 32
     assert sweep.validate(store) == []
-    proc = mpirun(3, "run", cfg, "--store", store, "--compute", "sweep.testing:fake_point")
+    proc = mpirun(2, "run", cfg, "--store", store, "--compute", "sweep.testing:fake_point")
     assert proc.returncode == 0, proc.stderr
     df = sweep.load(store)
     assert len(df) == 32 and df["hash"].is_unique
