@@ -402,6 +402,10 @@ def _main(argv: Sequence[str] | None) -> int:
     except SweepError as exc:  # a stop during the parser's imports
         _err(exc)
         return exc.exit_status
+    except Exception:  # the stop wrapped by an import (a dataclass's __set_name__ makes
+        if _START_UP_STOP:  # it a RuntimeError): main says "stopped" and returns 6
+            return EXIT_INTERNAL
+        raise
     try:
         return _COMMANDS[args.command](args)
     except SweepError as exc:  # ConfigError, StoreError, ...: each carries its exit status

@@ -5,11 +5,14 @@ directory (its own ``HOME``), as a reader following it would, with these documen
 reductions so that the whole walk takes about a minute (issue *first hour*):
 
 - campaigns run on reduced copies of the shipped configs (``configs/*.toml`` with the
-  first two values of each swept list, four of T) and with the hand-set
+  first two values of each swept list, four of T, one of the demo's: 8 points) and with
+  the hand-set
   ``sweep.testing:power_point`` results instead of the model (``--compute``);
 - ``floewave run`` and ``floewave.run_point`` run with n0 = nT = 1 and 2 iterations;
-- ``sweep plan`` is given ``--rate`` instead of calibrating; ``mpiexec -n N`` runs at most
-  3 ranks (plain ``sweep run`` without a launcher installed);
+- ``sweep plan`` is given ``--rate`` instead of calibrating, ``sweep figures`` ``--max 1``
+  (one figure of each kind: tests/sweep/test_figures.py draws every kind, and every
+  figure of a real store); ``mpiexec -n N`` runs at most 3 ranks (plain ``sweep run``
+  without a launcher installed);
 - not run, and listed in :data:`NOT_RUN` (a new kind of command fails the test until it
   is added there or made runnable): ``pip install`` (the environment is installed),
   ``python -m pytest`` (this is it), ``sbatch`` (Slurm: ``tests/test_slurm.py``),
@@ -66,7 +69,8 @@ def _reduced_configs(sandbox: Path) -> None:
         lines = ["[base]"] + [f"{k} = {_toml_value(v)}" for k, v in data.get("base", {}).items()]
         lines.append("[sweep]")
         for k, values in data["sweep"].items():
-            lines.append(f"{k} = {_toml_value(values[:4] if k == 'T' else values[:2])}")
+            n_T = 1 if src.name == "demo.toml" else 4
+            lines.append(f"{k} = {_toml_value(values[:n_T] if k == 'T' else values[:2])}")
         (sandbox / "configs" / src.name).write_text("\n".join(lines) + "\n")
 
 
@@ -103,6 +107,8 @@ def _transform(part: str) -> str | None:
         words += ["--compute", "sweep.testing:power_point", "--configs", "configs"]
     elif words[:2] == ["sweep", "plan"]:
         words += ["--rate", "1e8"]
+    elif words[:2] == ["sweep", "figures"] and "--max" not in words:
+        words += ["--max", "1"]
     elif words[:2] == ["floewave", "run"]:
         words = words[:2] + SMALL_RUN + words[2:]
     elif words[0] not in ("sweep", "floewave", "export", "python", "sh"):

@@ -1,7 +1,8 @@
 """``floewave run``: summary, JSON and plot output, bad input -> exit 2 with one message.
 
 ``floewave.cli.main`` runs in-process (the ``run_main`` fixture); the entry points themselves
-(``python -m floewave``/``sweep``) by a subprocess in the help and version test."""
+(``python -m floewave``/``sweep``) by a subprocess in the help test and
+tests/sweep/test_cli.py::test_python_m_sweep_is_the_command."""
 import json
 import subprocess
 import sys
@@ -76,13 +77,16 @@ def test_run_help_lists_every_field_with_default_and_units(run_main):
     assert "exit statuses: 0 success" in p.stdout
 
 
-def test_top_level_help_is_plain_text_and_versions_exist():
+def test_top_level_help_is_plain_text_and_versions_exist(run_main):
     top = subprocess.run([sys.executable, "-m", "floewave", "--help"], capture_output=True,
                          text=True, timeout=60)
     assert top.returncode == 0 and "``" not in top.stdout
-    for prog in ("floewave", "sweep"):
-        v = subprocess.run([sys.executable, "-m", prog, "--version"], capture_output=True,
-                           text=True, timeout=60)
+    # the versions in this process (``python -m sweep --version`` in a process of its own:
+    # tests/sweep/test_cli.py::test_python_m_sweep_is_the_command)
+    import sweep.cli
+
+    for prog, prog_main in (("floewave", main), ("sweep", sweep.cli.main)):
+        v = run_main(prog_main, ["--version"])
         assert v.returncode == 0 and "model version" in v.stdout, (prog, v.stderr)
 
 
@@ -96,8 +100,8 @@ def test_unknown_field_suggests_the_near_one(run, tmp_path):
 def test_run_says_it_compiles_first_and_its_rate_excludes_the_compilation(run, tmp_path,
                                                                           monkeypatch):
     """Issue 25: a word before the (silent) compilation, and a floe-steps/s of the point
-    alone. The warm-up is made to take 1.5 s here: none of it may reach the point's wall
-    time or rate."""
+    alone. The warm-up is made to take 0.5 s here (the point takes about 0.01 s): none of it
+    may reach the point's wall time or rate."""
     import re
     import time
 
@@ -106,8 +110,8 @@ def test_run_says_it_compiles_first_and_its_rate_excludes_the_compilation(run, t
     real = cli.warm_up
 
     def slow_warm_up(cfg):
-        time.sleep(1.5)
-        return real(cfg) + 1.5
+        time.sleep(0.5)
+        return real(cfg) + 0.5
 
     monkeypatch.setattr(cli, "warm_up", slow_warm_up)
     p = run(FAST + ["--json", "out.json"], tmp_path)
@@ -117,7 +121,7 @@ def test_run_says_it_compiles_first_and_its_rate_excludes_the_compilation(run, t
     assert re.match(r"floewave: kernels ready in \d+\.\d s", lines[1])
     assert "iteration" in lines[2]                   # the point's progress comes after
     result = json.loads((tmp_path / "out.json").read_text())["result"]
-    assert result["wall_time"] < 1.5
+    assert result["wall_time"] < 0.5
     rate = float(re.search(r"([0-9.]+) M floe-steps/s", p.stdout).group(1))
     assert rate == pytest.approx(result["floe_steps"] / result["wall_time"] / 1e6, abs=0.051)
     assert "not included" in p.stdout

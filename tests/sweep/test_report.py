@@ -99,7 +99,8 @@ def test_paper_check_table_and_missing_store(tmp_path, store, capsys):
     out = tmp_path / "r.html"
     empty = tmp_path / "paper"
     empty.mkdir()
-    assert main(["report", str(store), "--out", str(out), "--paper-check", str(empty)]) == 0
+    assert main(["report", str(store), "--out", str(out), "--paper-check", str(empty),
+                 "--max", "1"]) == 0  # every figure: the docs walks' `sweep report`
     html = out.read_text()
     assert ">Paper check</h2>" in html and 'href="#paper-check"' in html
     assert "inconclusive" in html

@@ -32,15 +32,14 @@ def test_schema_file_matches_code():
     assert doc == json.loads(json.dumps(schema_document()))
 
 
-def test_second_writer_refused_stale_lock_taken_over(tmp_path, campaign):
+def test_second_writer_refused_stale_lock_taken_over(tmp_path, campaign, run_main):
     path = tmp_path / "s.h5"
     with Store(path, campaign):
         with pytest.raises(sweep.StoreLockedError, match="live campaign"):
             Store(path, campaign)
         cfg = tmp_path / "c.toml"
         cfg.write_text(TOML)
-        proc = subprocess.run([sys.executable, "-m", "sweep", "run", str(cfg), "--store",
-                               str(path)], capture_output=True, text=True)
+        proc = run_main(main, ["run", cfg, "--store", path])  # the command line's refusal
         assert proc.returncode == 3 and "live campaign" in proc.stderr
     # a lock left by a killed writer: the file exists but nobody holds its flock
     holder = subprocess.Popen([sys.executable, "-c", "import sys, sweep;"
@@ -202,8 +201,28 @@ def test_merge_shards(tmp_path, campaign):
     assert not (tmp_path / "x.h5").exists()
 
 
+_FORKING_RUNS = """
+import json, os, sys, time
+import sweep.cli, sweep.run.launch, sweep.testing  # what `sweep run` imports, once
+for line in sys.stdin:  # a line: `sweep run ...` in a process of its own, forked from this one
+    pid = os.fork()
+    if pid == 0:
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, 1)
+        os.dup2(null, 2)
+        os._exit(sweep.cli.main(json.loads(line)))
+    print(pid, flush=True)
+    t0 = time.monotonic()
+    status = os.waitpid(pid, 0)[1]
+    print(status, time.monotonic() - t0, flush=True)
+"""
+
+
 def test_kill_9_torture(tmp_path, campaign):
-    """kill -9 the in-process campaign at random moments; the end equals a clean run."""
+    """kill -9 the in-process campaign at random moments; the end equals a clean run.
+    (The killed campaigns are processes forked by one that imported sweep once, so that
+    every kill falls in the campaign's own life: store open, points, commits; the last
+    run, which completes the store, is ``python -m sweep run``.)"""
     import random
 
     cfg = tmp_path / "c.toml"
@@ -211,23 +230,37 @@ def test_kill_9_torture(tmp_path, campaign):
         "[0.5, 1.5]", "[0.5, 1.0, 1.5, 3.0]"))
     ref, path = tmp_path / "ref.h5", tmp_path / "s.h5"
     args = ["--compute", "sweep.testing:fake_point", "--no-bar"]
-    subprocess.run([sys.executable, "-m", "sweep", "run", str(cfg), "--store", str(ref),
-                    *args], check=True, capture_output=True)
-    rng = random.Random(7)
-    kills = 0
-    for _ in range(10):
-        p = subprocess.Popen([sys.executable, "-m", "sweep", "run", str(cfg), "--store",
-                              str(path), *args], stdout=subprocess.DEVNULL,
-                             stderr=subprocess.DEVNULL)
-        time.sleep(rng.uniform(0.6, 1.2))
-        if p.poll() is None:
-            p.send_signal(signal.SIGKILL)
-            kills += 1
-        p.wait()
+    runs = subprocess.Popen([sys.executable, "-c", _FORKING_RUNS], stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE, text=True)
+
+    def start(store):
+        runs.stdin.write(json.dumps(["run", str(cfg), "--store", str(store), *args]) + "\n")
+        runs.stdin.flush()
+        return int(runs.stdout.readline())
+
+    def ended():
+        status, seconds = runs.stdout.readline().split()
+        return int(status), float(seconds)
+
+    try:
+        start(ref)
+        status, whole = ended()  # an uninterrupted run: the kills fall within its length
+        assert status == 0
+        rng = random.Random(7)
+        kills = 0
+        for _ in range(10):
+            pid = start(path)
+            time.sleep(rng.uniform(0.0, 1.0) * whole)
+            os.kill(pid, signal.SIGKILL)
+            status, _ = ended()
+            kills += os.WIFSIGNALED(status) and os.WTERMSIG(status) == signal.SIGKILL
+    finally:
+        runs.stdin.close()
+        runs.wait(timeout=60)
     proc = subprocess.run([sys.executable, "-m", "sweep", "run", str(cfg), "--store",
                            str(path), *args], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
-    assert kills >= 3
+    assert kills >= 5
     a = sweep.load(ref).set_index("hash").sort_index()
     b = sweep.load(path).set_index("hash").sort_index()
     assert b.index.is_unique and list(a.index) == list(b.index)

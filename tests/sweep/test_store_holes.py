@@ -249,28 +249,49 @@ def test_a_hard_link_is_refused_while_the_file_is_written(tmp_path, campaign):
     assert sweep.validate(path) == [] and len(sweep.load(path)) == 6
 
 
+GATED = """\
+import os, time
+from sweep.testing import fake_point
+
+
+def point(cfg):  # fake_point once the file named by $GATE exists (at most 60 s)
+    deadline = time.monotonic() + 60
+    while not os.path.exists(os.environ["GATE"]) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    return fake_point(cfg)
+"""
+
+
 def test_two_writers_through_a_symlink_never_ruin_the_store(tmp_path):
     """The issue's case, two ``sweep run`` at once, ``--store S.h5`` and ``--store A.h5``
     (a symlink to it): one is refused (exit 3) or finds everything stored, and the store
-    is whole."""
+    is whole. (The first one's points wait for a gate the test opens once the second has
+    ended: the first is live, holding its points, for the whole of the second.)"""
     cfg = tmp_path / "c.toml"
-    eps = ", ".join(str(round(0.04 * i, 2)) for i in range(1, 21))
-    cfg.write_text(TOML.replace("0.2, 0.4, 0.6", eps))  # 40 points of 0.2 s: 8 s
+    cfg.write_text(TOML)
+    (tmp_path / "gated.py").write_text(GATED)
+    gate = tmp_path / "gate"
+    env = _env(GATE=str(gate),
+               PYTHONPATH=os.pathsep.join([str(tmp_path), os.environ.get("PYTHONPATH", "")]))
     path, link = tmp_path / "s.h5", tmp_path / "a.h5"
     link.symlink_to(path.name)
-    cmd = [sys.executable, "-m", "sweep", "run", str(cfg), "--compute",
-           "sweep.testing:sleepy_point", "--no-bar", "--store"]
+    cmd = [sys.executable, "-m", "sweep", "run", str(cfg), "--compute", "gated:point",
+           "--no-bar", "--store"]
     a = subprocess.Popen([*cmd, str(path)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                         text=True, env=_env())
-    deadline = time.monotonic() + 60
-    while time.monotonic() < deadline and not (tmp_path / "s.h5.lock").exists():
-        time.sleep(0.01)
-    b = subprocess.run([*cmd, str(link)], capture_output=True, text=True, env=_env(),
-                       timeout=120)
-    a.communicate(timeout=120)
+                         text=True, env=env)
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and not (tmp_path / "s.h5.lock").exists():
+            time.sleep(0.01)
+        b = subprocess.run([*cmd, str(link)], capture_output=True, text=True, env=env,
+                           timeout=120)
+        assert a.poll() is None, "the first writer ended before the second one was refused"
+    finally:
+        gate.touch()
+        a.communicate(timeout=120)
     assert a.returncode == 0
     assert b.returncode == 3 and "live campaign" in b.stderr, b.stderr
-    assert len(sweep.load(path)) == 40 and sweep.validate(path) == []
+    assert len(sweep.load(path)) == 6 and sweep.validate(path) == []
 
 
 # ---------------------------------------------------------------- 6. what the schema cannot hold
@@ -392,6 +413,22 @@ def test_a_stop_during_the_compute_import_is_status_6(tmp_path):
     assert "Traceback" not in err
 
 
+def test_a_stop_wrapped_by_an_import_is_status_6(monkeypatch, capsys):
+    """A stop raised inside an import whose machinery wraps it (Python 3.11 turns an
+    exception in a dataclass field's ``__set_name__`` into a RuntimeError) is still the
+    stop: status 6, no traceback (seen in test_a_stop_in_the_first_instants_is_status_6)."""
+    import sweep.cli
+
+    def parser():  # the start-up handler ran inside an import; its Interrupted wrapped
+        sweep.cli._START_UP_STOP.append(signal.SIGINT)
+        raise RuntimeError("Error calling __set_name__ on 'Field' instance 'warnings'")
+
+    monkeypatch.setattr(sweep.cli, "build_parser", parser)
+    assert main(["run", "c.toml", "--store", "s.h5"]) == 6
+    err = capsys.readouterr().err
+    assert "stopped by SIGINT during start-up" in err and "Traceback" not in err
+
+
 @pytest.mark.parametrize("delay", [0.0, pytest.param(0.02, marks=pytest.mark.slow), 0.05,
                                    pytest.param(0.1, marks=pytest.mark.slow), 0.2,
                                    pytest.param(0.4, marks=pytest.mark.slow)])
@@ -502,7 +539,7 @@ def test_a_point_that_swallows_its_timeout_is_timeout_in_one_run(tmp_path):
     path = tmp_path / "s.h5"
     t0 = time.monotonic()
     p = _sweep("run", cfg, "--store", path, "--compute", "sweep.testing:stubborn_point",
-               "--no-bar")
+               "--no-bar", env=_env(SWEEP_CHILD_MARGIN="0.2"))  # killed 0.2 s after it
     assert p.returncode == 0, p.stderr
     assert time.monotonic() - t0 < 30
     df = sweep.load(path).set_index(["L_x", "eps"])
