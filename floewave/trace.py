@@ -80,15 +80,20 @@ def floes_at(x_mean: np.ndarray, distances: Sequence[float]) -> np.ndarray:
 
 
 def instantaneous(x: np.ndarray, u: np.ndarray, a: np.ndarray, wt: float, P: K.KernelParams,
-                  cfg: ModelConfig, xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+                  cfg: ModelConfig, xi: np.ndarray, only: np.ndarray | None = None
+                  ) -> tuple[np.ndarray, np.ndarray]:
     """(S_sd, F_c) of every floe at one state (see the module docstring).
 
     ``wt`` = omega t [rad] (taken modulo 2 pi as the kernel does); ``xi`` the cell
     midpoints relative to the floe centre (:func:`floewave.forces.cell_offsets`).
+    ``only``: indices of the floes whose S_sd is wanted (the others are NaN; each floe's
+    value is the same number either way: the cells of one floe are one row).
     """
-    th = P.k * (x[:, None] + xi[None, :]) - wt
-    u_rel = (a * P.u_amp)[:, None] * np.cos(th) - u[:, None]
-    S_sd = -cfg.rho_w * cfg.C_sd * np.mean(np.abs(u_rel) ** 3, axis=1)
+    S_sd = np.full(x.shape, np.nan)
+    rows = np.arange(len(x)) if only is None else np.asarray(only)
+    th = P.k * (x[rows, None] + xi[None, :]) - wt
+    u_rel = (a[rows] * P.u_amp)[:, None] * np.cos(th) - u[rows, None]
+    S_sd[rows] = -cfg.rho_w * cfg.C_sd * np.mean(np.abs(u_rel) ** 3, axis=1)
     pair = pair_contact(x, u, P, K.kernel_options(cfg, False))
     F_c = np.zeros_like(x)
     F_c[:-1] -= pair
@@ -143,7 +148,7 @@ def trace_point(cfg: ModelConfig, result: Any = None, *,
     for n in range(n_samples):
         chain.run(a, every)
         wt = two_pi_nt * (chain.istep % cfg.n_t)
-        S_all, F_all = instantaneous(chain.x, chain.u, a, wt, P, cfg, xi)
+        S_all, F_all = instantaneous(chain.x, chain.u, a, wt, P, cfg, xi, only=sel)
         t[n] = chain.istep * cfg.dt
         x[n], u[n] = chain.x[sel], chain.u[sel]
         S[n], F[n] = S_all[sel], F_all[sel]
