@@ -188,7 +188,6 @@ def pairs(pair_list: Sequence[tuple[Estimate, Estimate]]) -> tuple[str, str]:
     zs = [d.z for d in diffs]
     # an exact pair (SE 0) has z = +-inf; inf - inf (or a missing SE) leaves no combined z
     comb = sum(zs) / math.sqrt(len(zs)) if not any(math.isnan(z) for z in zs) else math.nan
-    comb = math.nan if math.isnan(comb) else comb
     zc = z_critical(min(d.dof for d in diffs))
     evidence = (f"pair z = {', '.join(_zs(z) for z in zs)}; combined z = {_zs(comb)}"
                 f" (z_c {zc:.2g}){gone_txt}"
