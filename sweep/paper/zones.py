@@ -69,27 +69,19 @@ def notes(parts: list[str]) -> str:
     return ("; " + "; ".join(got)) if got else ""
 
 
-def _break(t: Tables, row, lab: str) -> tuple[Estimate, str]:
+def _over_W_c(t: Tables, row, lab: str, which: str) -> tuple[Estimate, str]:
+    """x / W_c for ``which`` = ``x_b`` (the two-line knot) or ``x_r`` (where the local rate
+    reaches the compact zone's), its SE (x's and W_c's combined as if independent) and a
+    note with x itself."""
     p = t.prof("fig2", row)
     W, W_se = col(row, "W_c"), col(row, "W_c_stderr")
     if p is None or not math.isfinite(W) or not {"config_json", "k", "c_g"} <= set(row.index):
         return Estimate(lab, math.nan), ""
-    xb, xb_se, _, _ = break_estimate(row, p)
-    ratio = xb / W
-    se = math.hypot(xb_se / W, xb * (W_se if math.isfinite(W_se) else math.nan) / W ** 2)
-    return (Estimate(lab, ratio, se, "replicas" if math.isfinite(se) else "none"),
-            f"{lab}: x_b {xb:.2f} ± {xb_se:.2f} m, W_c {W:.2f} m")
-
-
-def _reach(t: Tables, row, lab: str) -> tuple[Estimate, str]:
-    p = t.prof("fig2", row)
-    W, W_se = col(row, "W_c"), col(row, "W_c_stderr")
-    if p is None or not math.isfinite(W) or not {"config_json", "k", "c_g"} <= set(row.index):
-        return Estimate(lab, math.nan), ""
-    xr, xr_se = reach_estimate(row, p)
-    se = math.hypot(xr_se / W, xr * (W_se if math.isfinite(W_se) else math.nan) / W ** 2)
-    return (Estimate(lab, xr / W, se, "replicas" if math.isfinite(se) else "none"),
-            f"{lab}: x_r {xr:.2f} ± {xr_se:.2f} m" if math.isfinite(xr) else "")
+    x, x_se = break_estimate(row, p)[:2] if which == "x_b" else reach_estimate(row, p)
+    se = math.hypot(x_se / W, x * (W_se if math.isfinite(W_se) else math.nan) / W ** 2)
+    return (Estimate(lab, x / W, se, "replicas" if math.isfinite(se) else "none"),
+            f"{lab}: {which} {x:.2f} ± {x_se:.2f} m" + (f", W_c {W:.2f} m" if which == "x_b"
+                                                          else "") if math.isfinite(x) else "")
 
 
 def zone_checks(t: Tables) -> None:
@@ -126,13 +118,13 @@ def zone_checks(t: Tables) -> None:
         t.add(make_check(claim, src, "fig2", pts, "1/a fits alpha [m^-2]: alpha_edge"
                          " (x < W_c) vs alpha_inner (compact zone)", "pairs: edge > inner",
                          [e for p_ in plist for e in p_], (verdict, evidence + notes(why))))
-        got = [_break(t, row, f"eps={e}") for row, e in zip(rows, eps, strict=True)]
+        got = [_over_W_c(t, row, f"eps={e}", "x_b") for row, e in zip(rows, eps, strict=True)]
         marg = [unless_marginal(t, "fig2", row, g[0]) for row, g in zip(rows, got, strict=True)]
         est = [m[0] for m in marg]
         verdict, evidence = in_range(est, *INNER_OVER_C)
         evidence += notes([m[1] for m in marg])
         detail = "; ".join(g[1] for g in got if g[1])
-        reach = [_reach(t, row, f"eps={e}") for row, e in zip(rows, eps, strict=True)]
+        reach = [_over_W_c(t, row, f"eps={e}", "x_r") for row, e in zip(rows, eps, strict=True)]
         marg_r = [unless_marginal(t, "fig2", row, g[0]) for row, g in zip(rows, reach,
                                                                           strict=True)]
         est_r = [m[0] for m in marg_r]
