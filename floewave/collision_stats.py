@@ -20,7 +20,7 @@ Definitions (``prof`` are the (R, N_f) time means over the averaging windows of 
     record that).
 
 Standard errors (``*_stderr``): the delete-one jackknife over replicas
-(:func:`floewave.ensemble.jackknife_se`'s formula; for the two means it is the standard
+(:func:`floewave.results.jackknife_se`; for the two means it is the standard
 error of the mean); NaN with one replica. Fixed floes (``confined``) have no collisions:
 every collision statistic is NaN.
 
@@ -37,27 +37,16 @@ import math
 import numpy as np
 
 from .config import ModelConfig
-from .results import compact_zones
+from .results import compact_zones, jackknife_se
 
 __all__ = ["COLLISION_COLUMNS", "GAP_AND_COLLISION_FIELDS", "collision_statistics",
-           "replica_collision_records", "gap_zone_width", "loo_se"]
+           "replica_collision_records", "gap_zone_width"]
 
 #: The point's collision statistics (each with a ``*_stderr``).
 COLLISION_COLUMNS = ("contact_fraction_mean", "collision_rate", "dissipation_per_collision")
 #: Every scalar this module adds to a point's result (the PointResult fields).
 GAP_AND_COLLISION_FIELDS = ("W_c_gap", "W_c_gap_stderr",
                             *(c for n in COLLISION_COLUMNS for c in (n, n + "_stderr")))
-
-
-def loo_se(values: np.ndarray) -> float:
-    """Delete-one jackknife standard error from R leave-one-out values (NaN if R < 2 or any
-    value is NaN)."""
-    v = np.asarray(values, dtype=float)
-    R = len(v)
-    if R < 2:
-        return math.nan
-    d = v - v.mean()
-    return float(np.sqrt((R - 1) / R * (d * d).sum()))
 
 
 def replica_collision_records(cfg: ModelConfig, prof: dict[str, np.ndarray]) -> dict:
@@ -93,11 +82,11 @@ def collision_statistics(cfg: ModelConfig, prof: dict[str, np.ndarray]) -> dict[
                       ("collision_rate", "rate")):
         v = rec[key]
         out[name] = float(v.mean())
-        out[name + "_stderr"] = loo_se(np.array([v[k].mean() for k in keep]))
+        out[name + "_stderr"] = float(jackknife_se(np.array([v[k].mean() for k in keep])))
     p, n = rec["power"], rec["frequency"]
     out["dissipation_per_collision"] = _ratio(p, n)
-    out["dissipation_per_collision_stderr"] = loo_se(np.array([_ratio(p[k], n[k])
-                                                               for k in keep]))
+    out["dissipation_per_collision_stderr"] = float(jackknife_se(
+        np.array([_ratio(p[k], n[k]) for k in keep])))
     return out
 
 

@@ -32,7 +32,15 @@ import numpy as np
 from ._march import march_coefficients
 from .collision_stats import collision_statistics, gap_zone_width
 from .config import G, ModelConfig
-from .results import LAYOUTS, Zones, compact_zones, fit_exponential, fit_inverse, zone_fits
+from .results import (
+    LAYOUTS,
+    Zones,
+    compact_zones,
+    fit_exponential,
+    fit_inverse,
+    jackknife_se,
+    zone_fits,
+)
 
 __all__ = ["initial_positions", "replica_seed_sequence", "march_rows", "Records",
            "estimate_point", "jackknife_se", "zone_of", "fit_zone", "coefficients",
@@ -181,17 +189,6 @@ class Records:
     compact_end: np.ndarray
     layouts: list[list[str]]
     C: np.ndarray | None = None
-
-
-def jackknife_se(loo: np.ndarray) -> np.ndarray:
-    """Delete-one jackknife standard error from the R leave-one-out values (axis 0);
-    NaN where any leave-one-out value is NaN or R < 2."""
-    loo = np.asarray(loo, dtype=float)
-    R = loo.shape[0]
-    if R < 2:
-        return np.full(loo.shape[1:], np.nan)
-    d = loo - loo.mean(axis=0)
-    return np.sqrt((R - 1) / R * (d * d).sum(axis=0))
 
 
 def zone_of(cfg: ModelConfig, x: np.ndarray, gap: np.ndarray) -> Zones:

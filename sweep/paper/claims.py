@@ -11,7 +11,6 @@ setup's (placement, edge spring) :mod:`sweep.paper.variants`'.
 """
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping, Sequence
 from typing import Any
@@ -32,6 +31,7 @@ from sweep.paper.points import (
     Tables,
     a_end,
     a_near,
+    config_of,
     force_decades,
     inner_over_c,
     label_of,
@@ -245,7 +245,6 @@ def w_c_definitions(t: Tables, rows: Sequence[pd.Series | None], eps: Sequence[A
     same replicas: ``W_c_replicas`` and :func:`floewave.collision_stats.gap_zone_width` of
     the replicas' stored mean gaps), mean ± SE over the replicas that have both."""
     from floewave.collision_stats import gap_zone_width
-    from floewave.config import ModelConfig
 
     parts = []
     for row, e in zip(rows, eps, strict=True):
@@ -253,7 +252,7 @@ def w_c_definitions(t: Tables, rows: Sequence[pd.Series | None], eps: Sequence[A
         if p is None or "config_json" not in row.index or not all(
                 k in p for k in ("W_c_replicas", "x_mean_replicas", "gap_mean_replicas")):
             continue
-        cfg = ModelConfig.from_dict(json.loads(str(row["config_json"])))
+        cfg = config_of(row)
         per_window = np.asarray(p["W_c_replicas"], dtype=float)
         averaged = gap_zone_width(cfg, np.asarray(p["x_mean_replicas"], dtype=float),
                                   np.asarray(p["gap_mean_replicas"], dtype=float))[2]

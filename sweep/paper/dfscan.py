@@ -4,7 +4,7 @@ changes the attenuation near the ice edge, and the collision statistics that go 
 :func:`d_f_scan` is a pure function of a store's table (``sweep.load``) and, optionally,
 a ``profile(campaign, hash)`` callable returning a point's profiles (a mapping with
 ``x_mean``, ``a``, ``a_stderr``, ``contact_fraction``, ``collisions``, ``S_sd``,
-``F_c_mean``: :func:`sweep.load_profile`, as :class:`sweep.paper.claims.Profile`).
+``F_c_mean``: :func:`sweep.load_profile`, as :data:`sweep.paper.points.Profile`).
 :func:`plot_d_f_scan` draws its table.
 
 Columns of the table (units in ``table.attrs["units"]``), one row per d_f:
@@ -37,14 +37,14 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from sweep.paper.points import X_NEAR
+from sweep.paper.points import X_NEAR, Profile, col
 
 __all__ = ["X_NEAR", "UNITS", "d_f_scan", "plot_d_f_scan"]
 
@@ -63,14 +63,6 @@ UNITS: dict[str, str] = {
     "impulse_per_collision": "N s", "impulse_per_collision_edge": "N s",
 }
 
-Profile = Callable[[str, str], Mapping[str, Any]]
-
-
-def _num(row: pd.Series, name: str) -> float:
-    try:
-        return float(row.get(name, math.nan))
-    except (TypeError, ValueError):
-        return math.nan
 
 
 def _config(row: pd.Series) -> dict[str, Any]:
@@ -84,7 +76,7 @@ def _region(p: Mapping[str, Any], row: pd.Series, cfg: dict[str, Any],
             floes: np.ndarray, pairs: np.ndarray) -> dict[str, float]:
     """Contact fraction, collision rate, dissipation and impulse per collision of the
     ``floes`` and ``pairs`` (boolean masks over the profile)."""
-    L_x, T = _num(row, "L_x"), _num(row, "T")
+    L_x, T = col(row, "L_x"), col(row, "T")
     L_y, nT = float(cfg.get("L_y", math.nan)), float(cfg.get("nT", math.nan))
     cf = np.asarray(p["contact_fraction"], dtype=float)
     coll = np.asarray(p["collisions"], dtype=float)
@@ -103,7 +95,7 @@ def _region(p: Mapping[str, Any], row: pd.Series, cfg: dict[str, Any],
 
 def _from_profile(p: Mapping[str, Any], row: pd.Series, x_near: float) -> dict[str, float]:
     cfg = _config(row)
-    a0, L_x = _num(row, "a0"), _num(row, "L_x")
+    a0, L_x = col(row, "a0"), col(row, "L_x")
     x = np.asarray(p["x_mean"], dtype=float)
     i = int(np.nanargmin(np.abs(x - x_near)))
     out = {"x_near": float(x[i]),
@@ -134,15 +126,15 @@ def d_f_scan(df: pd.DataFrame, profile: Profile | None = None, *, campaign: str 
         ok = str(row.get("status", "")) in _RESULT
         r: dict[str, Any] = {k: math.nan for k in UNITS}
         r.update(d_f=float(row["d_f"]), status=str(row.get("status", "")),
-                 replicas=_num(row, "replicas"))
+                 replicas=col(row, "replicas"))
         if ok:
-            a0 = _num(row, "a0")
-            r.update(a_end_rel=_num(row, "a_end") / a0,
-                     a_end_rel_stderr=_num(row, "a_end_stderr") / a0,
-                     W_c=_num(row, "W_c"), W_c_gap=_num(row, "W_c_gap"))
+            a0 = col(row, "a0")
+            r.update(a_end_rel=col(row, "a_end") / a0,
+                     a_end_rel_stderr=col(row, "a_end_stderr") / a0,
+                     W_c=col(row, "W_c"), W_c_gap=col(row, "W_c_gap"))
             for name in _COLLISION:
-                r[name] = _num(row, name)
-                r[name + "_stderr"] = _num(row, name + "_stderr")
+                r[name] = col(row, name)
+                r[name + "_stderr"] = col(row, name + "_stderr")
             if profile is not None:
                 try:
                     p = profile(campaign, str(row["hash"]))
@@ -175,8 +167,8 @@ def plot_d_f_scan(table: pd.DataFrame, path: str | Path) -> Path:
     fig, axes = plt.subplots(2, 3, figsize=(14, 7.5), sharex=True)
     edge = f"x ≤ {x_near:g} m (profiles)"
 
-    def draw(ax, col, se, label, colour, filled=True, marker="o"):
-        y = t[col].to_numpy(dtype=float)
+    def draw(ax, name, se, label, colour, filled=True, marker="o"):
+        y = t[name].to_numpy(dtype=float)
         if not np.isfinite(y).any():
             return
         e = t[se].to_numpy(dtype=float) if se else None
@@ -208,8 +200,8 @@ def plot_d_f_scan(table: pd.DataFrame, path: str | Path) -> Path:
     )
     for (i, j), title, ylabel, series in panels:
         ax = axes[i, j]
-        for col, se, label, colour, filled in series:
-            draw(ax, col, se, label, colour, filled)
+        for name, se, label, colour, filled in series:
+            draw(ax, name, se, label, colour, filled)
         ax.set_title(title, fontsize=10)
         ax.set_ylabel(ylabel, fontsize=9)
         ax.set_xscale("log")

@@ -7,6 +7,7 @@ else a stated floor (:data:`FLOORS`). :class:`Check` is one row of the table.
 """
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass
@@ -20,7 +21,7 @@ from sweep.paper.estimates import INCONCLUSIVE, Estimate
 __all__ = ["FLOORS", "X_NEAR", "Check", "Profile", "close", "point", "col", "label_of",
            "a_end", "a_near", "w_c", "inner_over_c", "force_decades", "make_check",
            "sorted_values", "M_OW", "INNER_OVER_C", "FORCE_DECADES", "M_CLOSE",
-           "NO_EFFECT", "Tables", "difference", "exact"]
+           "NO_EFFECT", "Tables", "difference", "exact", "config_of", "sheet_length"]
 
 #: Standard errors assumed where a store gives none (see the module docstring):
 #:
@@ -116,6 +117,19 @@ def col(row: pd.Series, name: str) -> float:
         return math.nan
     # -1 is the store's fill value of its integer columns (replicas, W_c_n): unknown
     return math.nan if (name in ("replicas", "W_c_n") and v < 0) else v
+
+
+def config_of(row: Mapping[str, Any]) -> Any:
+    """The point's :class:`floewave.ModelConfig`, from its ``config_json`` column."""
+    from floewave.config import ModelConfig
+
+    return ModelConfig.from_dict(json.loads(str(row["config_json"])))
+
+
+def sheet_length(row: pd.Series) -> float:
+    """The ice as placed [m]: N_f L_x + (N_f - 1) d_f."""
+    n = col(row, "n_floes")
+    return n * col(row, "L_x") + (n - 1) * col(row, "d_f")
 
 
 def label_of(row: pd.Series | None, key: str, value: Any) -> str:

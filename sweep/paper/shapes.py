@@ -27,14 +27,16 @@
 """
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
-__all__ = ["two_segment_break", "break_estimate", "threshold_crossing", "jackknife",
+from floewave.results import jackknife_se
+from sweep.paper.points import config_of
+
+__all__ = ["two_segment_break", "break_estimate", "threshold_crossing", "loo_amplitudes",
            "rate_reach", "reach_estimate", "REACH_HALF", "REACH_FACTOR", "REACH_HOLD"]
 
 #: Grid step of the break search [m].
@@ -99,10 +101,10 @@ def rate_reach(x: np.ndarray, a: np.ndarray, a0: float, alpha_inner: float) -> f
     return math.nan
 
 
-def _loo_amplitudes(row: Mapping[str, Any], profile: Mapping[str, Any], cfg: Any
-                    ) -> list[np.ndarray]:
+def loo_amplitudes(row: Mapping[str, Any], profile: Mapping[str, Any]) -> list[np.ndarray]:
     """Each replica left out in turn: a(x) re-marched from the other replicas' stored
-    dissipation coefficients (the module docstring); [] without S_sd_replicas."""
+    dissipation coefficients (the module docstring); [] without S_sd_replicas. Computed
+    once per point and passed to :func:`break_estimate` and :func:`reach_estimate`."""
     from floewave._march import march_coefficients
 
     a = np.asarray(profile["a"], dtype=float)
@@ -114,6 +116,7 @@ def _loo_amplitudes(row: Mapping[str, Any], profile: Mapping[str, Any], cfg: Any
         return []
     with np.errstate(divide="ignore", invalid="ignore"):
         C = np.where(a > 0, S / a ** 3, np.nan)
+    cfg = config_of(row)
     out = []
     for r in range(S.shape[0]):
         c = np.nanmean(np.delete(C, r, axis=0), axis=0)
@@ -122,54 +125,45 @@ def _loo_amplitudes(row: Mapping[str, Any], profile: Mapping[str, Any], cfg: Any
     return out
 
 
-def reach_estimate(row: Mapping[str, Any], profile: Mapping[str, Any]) -> tuple[float, float]:
+def reach_estimate(row: Mapping[str, Any], profile: Mapping[str, Any],
+                   loo_a: list[np.ndarray] | None = None) -> tuple[float, float]:
     """(x_r, its jackknife SE) of a stored point (:func:`rate_reach` of the stored a(x)
-    with the stored alpha_inner)."""
+    with the stored alpha_inner); ``loo_a``: :func:`loo_amplitudes` if already made."""
     a0, ai = float(row["a0"]), float(row.get("alpha_inner", math.nan))
     x = np.asarray(profile["x_mean"], dtype=float)
     xr = rate_reach(x, np.asarray(profile["a"], dtype=float), a0, ai)
     if not math.isfinite(xr):
         return xr, math.nan
-    loo = [rate_reach(x, a_r, a0, ai) for a_r in _loo_amplitudes(row, profile, _cfg(row))]
+    if loo_a is None:
+        loo_a = loo_amplitudes(row, profile)
+    loo = [rate_reach(x, a_r, a0, ai) for a_r in loo_a]
     if not loo:
         return xr, math.nan
     # x_r moves in steps of one floe: at least the rounding error of that grid
     grid = float(np.median(np.diff(x))) / math.sqrt(12.0)
-    return xr, max(jackknife(np.array(loo)), grid)
+    return xr, max(float(jackknife_se(np.array(loo))), grid)
 
 
-def jackknife(values: np.ndarray) -> float:
-    """Delete-one jackknife SE of leave-one-out values (NaN if any is NaN or fewer than 2)."""
-    v = np.asarray(values, dtype=float)
-    if len(v) < 2 or not np.all(np.isfinite(v)):
-        return math.nan
-    d = v - v.mean()
-    return float(math.sqrt((len(v) - 1) / len(v) * np.sum(d * d)))
-
-
-def _cfg(row: Mapping[str, Any]) -> Any:
-    from floewave.config import ModelConfig
-
-    return ModelConfig.from_dict(json.loads(str(row["config_json"])))
-
-
-def break_estimate(row: Mapping[str, Any], profile: Mapping[str, Any]
-                   ) -> tuple[float, float, float, float]:
+def break_estimate(row: Mapping[str, Any], profile: Mapping[str, Any],
+                   loo_a: list[np.ndarray] | None = None) -> tuple[float, float, float, float]:
     """(x_b, its jackknife SE, slope before, slope after) of a stored point
     (:func:`two_segment_break` of the stored a(x) up to ``compact_end``; SE as the module
-    docstring says, NaN without ``S_sd_replicas`` or with one replica)."""
+    docstring says, NaN without ``S_sd_replicas`` or with one replica); ``loo_a``:
+    :func:`loo_amplitudes` if already made."""
     a0 = float(row["a0"])
     end = float(row.get("compact_end", math.nan))
     x_max = end if math.isfinite(end) else math.inf
     x = np.asarray(profile["x_mean"], dtype=float)
     a = np.asarray(profile["a"], dtype=float)
-    cfg = _cfg(row)
+    cfg = config_of(row)
     xb, s1, s2 = two_segment_break(x, a, a0, min_floes=cfg.fit_min_floes, x_max=x_max)
     if not math.isfinite(xb):
         return xb, math.nan, s1, s2
+    if loo_a is None:
+        loo_a = loo_amplitudes(row, profile)
     loo = [two_segment_break(x, a_r, a0, min_floes=cfg.fit_min_floes, x_max=x_max)[0]
-           for a_r in _loo_amplitudes(row, profile, cfg)]
-    return xb, jackknife(np.array(loo)) if loo else math.nan, s1, s2
+           for a_r in loo_a]
+    return xb, float(jackknife_se(np.array(loo))) if loo else math.nan, s1, s2
 
 
 def threshold_crossing(x: np.ndarray, gap: np.ndarray, threshold: float) -> float:

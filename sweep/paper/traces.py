@@ -17,15 +17,14 @@ collision. Floes far from the ice edge experience very low, periodically varying
 """
 from __future__ import annotations
 
-import json
 import math
 from types import SimpleNamespace
 
 import numpy as np
 
+from floewave.results import jackknife_se
 from sweep.paper.estimates import Estimate, in_range
-from sweep.paper.points import INNER_OVER_C, Tables, make_check, point
-from sweep.paper.shapes import jackknife
+from sweep.paper.points import INNER_OVER_C, Tables, config_of, make_check, point
 
 __all__ = ["SPIKE", "PERIODS", "SPIN_UP", "NEAR", "FAR", "spike_rate", "trace_checks"]
 
@@ -73,10 +72,9 @@ def trace_checks(t: Tables) -> None:
     ratio = Estimate(f"S_sd({FAR:g} m) / S_sd({NEAR:g} m)", math.nan)
     detail = ""
     if t.trace and p is not None and {"config_json", "k"} <= set(row.index):
-        from floewave.config import ModelConfig
         from floewave.trace import trace_point
 
-        cfg = ModelConfig.from_dict(json.loads(str(row["config_json"])))
+        cfg = config_of(row)
         res = SimpleNamespace(a=np.asarray(p["a"], dtype=float), k=float(row["k"]),
                               x_mean=np.asarray(p["x_mean"], dtype=float))
         every = 10
@@ -100,7 +98,7 @@ def trace_checks(t: Tables) -> None:
         loo = [np.delete(S, r_, 0).mean(0) for r_ in range(S.shape[0])]
         ratio = Estimate(f"S_sd({x[j]:.1f} m) / S_sd({x[i]:.1f} m)",
                          float(S[:, j].mean() / S[:, i].mean()),
-                         jackknife(np.array([v[j] / v[i] for v in loo])), "replicas")
+                         float(jackknife_se(np.array([v[j] / v[i] for v in loo]))), "replicas")
     verdict, evidence = in_range([rate], *INNER_OVER_C)
     t.add(make_check(claims[0], src, "fig2", pts, q1, "range", [rate],
                      (verdict, evidence + detail)))

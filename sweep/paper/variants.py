@@ -28,6 +28,7 @@ from sweep.paper.points import (
     difference,
     make_check,
     point,
+    sheet_length,
     sorted_values,
 )
 
@@ -99,8 +100,7 @@ def variant_checks(t: Tables) -> None:
     verdict, evidence = in_range([drift], -math.inf, 0.0)
     extra = ""
     if row is not None:
-        n = col(row, "n_floes")
-        start = n * col(row, "L_x") + (n - 1) * col(row, "d_f")
+        start = sheet_length(row)
         extra = (f"; status {row.get('status', '?')}, ice extent"
                  f" {col(row, 'ice_extent'):.1f} m ({start:.1f} m at the start)")
     t.add(make_check(claim, "§4.2, §5", "spring_none", "ml eps 0.6 (Fig. 2), k_s = 0", q,

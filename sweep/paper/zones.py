@@ -20,9 +20,16 @@ from sweep.paper.points import (
     label_of,
     make_check,
     point,
+    sheet_length,
     sorted_values,
 )
-from sweep.paper.shapes import REACH_FACTOR, break_estimate, reach_estimate, threshold_crossing
+from sweep.paper.shapes import (
+    REACH_FACTOR,
+    break_estimate,
+    loo_amplitudes,
+    reach_estimate,
+    threshold_crossing,
+)
 
 __all__ = ["zone_checks", "MARGINAL", "marginal", "unless_marginal", "notes"]
 
@@ -41,8 +48,7 @@ def marginal(t: Tables, name: str, row) -> str:
     p = t.prof(name, row)
     if p is None:
         return ""
-    n = col(row, "n_floes")
-    sheet = n * col(row, "L_x") + (n - 1) * col(row, "d_f")
+    sheet = sheet_length(row)
     cross = (threshold_crossing(np.asarray(p["x_mean"], dtype=float), p["gap_mean"], 1e-4)
              if "gap_mean" in p else math.nan)
     start = col(row, "W_c")
@@ -69,19 +75,24 @@ def notes(parts: list[str]) -> str:
     return ("; " + "; ".join(got)) if got else ""
 
 
-def _over_W_c(t: Tables, row, lab: str, which: str) -> tuple[Estimate, str]:
-    """x / W_c for ``which`` = ``x_b`` (the two-line knot) or ``x_r`` (where the local rate
-    reaches the compact zone's), its SE (x's and W_c's combined as if independent) and a
-    note with x itself."""
+def _over_W_c(t: Tables, row, lab: str) -> dict[str, tuple[Estimate, str]]:
+    """x / W_c for x = ``x_b`` (the two-line knot) and ``x_r`` (where the local rate
+    reaches the compact zone's), each with its SE (x's and W_c's combined as if
+    independent) and a note with x itself; the replicas' re-marched a(x) made once."""
     p = t.prof("fig2", row)
     W, W_se = col(row, "W_c"), col(row, "W_c_stderr")
     if p is None or not math.isfinite(W) or not {"config_json", "k", "c_g"} <= set(row.index):
-        return Estimate(lab, math.nan), ""
-    x, x_se = break_estimate(row, p)[:2] if which == "x_b" else reach_estimate(row, p)
-    se = math.hypot(x_se / W, x * (W_se if math.isfinite(W_se) else math.nan) / W ** 2)
-    return (Estimate(lab, x / W, se, "replicas" if math.isfinite(se) else "none"),
-            f"{lab}: {which} {x:.2f} ± {x_se:.2f} m" + (f", W_c {W:.2f} m" if which == "x_b"
-                                                          else "") if math.isfinite(x) else "")
+        return {"x_b": (Estimate(lab, math.nan), ""), "x_r": (Estimate(lab, math.nan), "")}
+    loo_a = loo_amplitudes(row, p)
+    out = {}
+    for which, (x, x_se) in (("x_b", break_estimate(row, p, loo_a)[:2]),
+                             ("x_r", reach_estimate(row, p, loo_a))):
+        se = math.hypot(x_se / W, x * (W_se if math.isfinite(W_se) else math.nan) / W ** 2)
+        note = (f"{lab}: {which} {x:.2f} ± {x_se:.2f} m"
+                + (f", W_c {W:.2f} m" if which == "x_b" else "")) if math.isfinite(x) else ""
+        out[which] = (Estimate(lab, x / W, se, "replicas" if math.isfinite(se) else "none"),
+                      note)
+    return out
 
 
 def zone_checks(t: Tables) -> None:
@@ -118,13 +129,14 @@ def zone_checks(t: Tables) -> None:
         t.add(make_check(claim, src, "fig2", pts, "1/a fits alpha [m^-2]: alpha_edge"
                          " (x < W_c) vs alpha_inner (compact zone)", "pairs: edge > inner",
                          [e for p_ in plist for e in p_], (verdict, evidence + notes(why))))
-        got = [_over_W_c(t, row, f"eps={e}", "x_b") for row, e in zip(rows, eps, strict=True)]
+        both = [_over_W_c(t, row, f"eps={e}") for row, e in zip(rows, eps, strict=True)]
+        got = [b["x_b"] for b in both]
         marg = [unless_marginal(t, "fig2", row, g[0]) for row, g in zip(rows, got, strict=True)]
         est = [m[0] for m in marg]
         verdict, evidence = in_range(est, *INNER_OVER_C)
         evidence += notes([m[1] for m in marg])
         detail = "; ".join(g[1] for g in got if g[1])
-        reach = [_over_W_c(t, row, f"eps={e}", "x_r") for row, e in zip(rows, eps, strict=True)]
+        reach = [b["x_r"] for b in both]
         marg_r = [unless_marginal(t, "fig2", row, g[0]) for row, g in zip(rows, reach,
                                                                           strict=True)]
         est_r = [m[0] for m in marg_r]
