@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 
 from sweep.analysis.stats import derived
-from sweep.paper.estimates import in_range, ordering, pairs
+from sweep.paper.estimates import FAILS, in_range, ordering, pairs
 from sweep.paper.exponents import exponent_checks
 from sweep.paper.points import (
     FLOORS,
@@ -40,7 +40,7 @@ from sweep.paper.points import (
     sorted_values,
     w_c,
 )
-from sweep.paper.scan import scan_checks
+from sweep.paper.scan import scan_checks, scan_explanation
 from sweep.paper.traces import trace_checks
 from sweep.paper.variants import variant_checks
 from sweep.paper.zones import notes, unless_marginal, zone_checks
@@ -81,6 +81,7 @@ def paper_checks(tables: Mapping[str, pd.DataFrame | None],
     t = Tables(d, profile, missing, [], trace)
     checks = t.checks
     unavailable = t.unavailable
+    scan = scan_explanation(t)       # quoted by the Fig. 6a row and the scan's own
 
     # ---- Fig. 2: restitution coefficient
     for disp in ("ml", "ep"):
@@ -155,10 +156,13 @@ def paper_checks(tables: Mapping[str, pd.DataFrame | None],
         for T in Ts:
             est = [a_near(point(df, T=T, d_f=v), f"d_f={v}", profile, "fig6a")
                    for v in sorted_values(df, "d_f", T=T)]
+            verdict, evidence = ordering(est, increasing=True)
+            if verdict == FAILS and scan[2] and math.isclose(T, scan[1]):
+                evidence += f"; the d_f scan: {scan[2]}"
             checks.append(make_check("smaller d_f attenuates more near the edge",
-                                 "§4.2, Fig. 6a", "fig6a", f"T {T} s, d_f 0.005-0.05 m",
-                                 near, "chain, increasing in d_f", est,
-                                 ordering(est, increasing=True)))
+                                     "§4.2, Fig. 6a", "fig6a", f"T {T} s, d_f 0.005-0.05 m",
+                                     near, "chain, increasing in d_f", est,
+                                     (verdict, evidence)))
         if len(Ts) >= 2:
             for T, claim, reverse in (
                     (Ts[0], "Fig. 6a reversal: far downwave smaller d_f attenuates less"
@@ -233,7 +237,7 @@ def paper_checks(tables: Mapping[str, pd.DataFrame | None],
                              pairs(plist)))
     zone_checks(t)
     exponent_checks(t)
-    scan_checks(t)
+    scan_checks(t, scan)
     trace_checks(t)
     variant_checks(t)
     return checks

@@ -5,19 +5,20 @@ what the collision statistics say about where it reverses (docs/dfscan.md).
 The claim is the chain rule on a/a0 at 5 m; the evidence names the d_f of the strongest
 near-edge attenuation and, below it, how the ice-wide contact fraction and collision rate
 change (stored columns with their replicas' SEs, :mod:`floewave.collision_stats`). The
-same explanation is appended to the Fig. 6a T = 1.8 s row, which fails for that reason.
+same explanation (:func:`scan_explanation`, made once) is quoted by the Fig. 6a row of the
+same period when it fails.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
+import pandas as pd
 
-from sweep.paper.estimates import FAILS, Estimate, ordering
+from sweep.paper.estimates import Estimate, ordering
 from sweep.paper.points import X_NEAR, Tables, make_check
 
-__all__ = ["scan_checks"]
+__all__ = ["scan_checks", "scan_explanation"]
 
 
 def _why(table) -> str:
@@ -53,29 +54,32 @@ def _why(table) -> str:
             f" ({both('dissipation_per_collision', '.3g', ' J')}); docs/dfscan.md")
 
 
-def scan_checks(t: Tables) -> None:
-    """Append the d_f-scan claim to ``t`` and its explanation to the Fig. 6a T 1.8 s row."""
+def scan_explanation(t: Tables) -> tuple[pd.DataFrame | None, float, str]:
+    """(the d_f scan's table, its period T [s], why its near-edge chain reverses: "" if it
+    does not) — (None, NaN, "") without the ``dfscan`` campaign. Made once: the scan's row
+    and the Fig. 6a row of the same period both quote it."""
     from sweep.paper.dfscan import d_f_scan
 
-    claim = "smaller d_f attenuates more near the edge (long waves, d_f scan)"
-    q = f"a/a0 at x = {X_NEAR:g} m"
     if "dfscan" not in t.d:
-        t.unavailable("dfscan", claim, "§4.2, Fig. 6a", "T 1.8 s, d_f 2-50 mm", q, "chain")
-        return
+        return None, math.nan, ""
     df = t.d["dfscan"]
     table = d_f_scan(df, t.profile, campaign="dfscan")
+    T = float(df["T"].iloc[0]) if len(df) else math.nan
+    return table, T, _why(table)
+
+
+def scan_checks(t: Tables, scan: tuple[pd.DataFrame | None, float, str]) -> None:
+    """Append the d_f-scan claim to ``t`` (``scan``: :func:`scan_explanation`)."""
+    claim = "smaller d_f attenuates more near the edge (long waves, d_f scan)"
+    q = f"a/a0 at x = {X_NEAR:g} m"
+    table, T, why = scan
+    if table is None:
+        t.unavailable("dfscan", claim, "§4.2, Fig. 6a", "T 1.8 s, d_f 2-50 mm", q, "chain")
+        return
     est = [Estimate(f"d_f={r.d_f:g}", r.a_near_rel, r.a_near_rel_stderr,
                     "profile" if math.isfinite(r.a_near_rel_stderr) else "none")
            for r in table.itertuples()]
     verdict, evidence = ordering(est, increasing=True)
-    why = _why(table)
-    T = float(df["T"].iloc[0]) if len(df) else math.nan
     t.add(make_check(claim, "§4.2, Fig. 6a", "dfscan", f"T {T:g} s, d_f 2-50 mm", q,
                      "chain, increasing in d_f", est,
                      (verdict, evidence + (f"; {why}" if why else ""))))
-    if not why:
-        return
-    for i, c in enumerate(t.checks):
-        if (c.campaign == "fig6a" and c.claim.startswith("smaller d_f attenuates more near")
-                and f"T {T:g} s" in c.points and c.verdict == FAILS):
-            t.checks[i] = replace(c, evidence=f"{c.evidence}; the d_f scan: {why}")
