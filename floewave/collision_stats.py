@@ -1,5 +1,6 @@
-"""Ice-wide collision statistics of a point and the collision-zone width of the time-mean
-gaps (issue 23): per replica from what its averaging windows recorded, then over the
+"""Ice-wide collision statistics of a point, the compact-zone rule of a configuration
+(:func:`zone_of`, used per window by the ensemble) and the collision-zone width of the
+time-mean gaps (issue 23): per replica from what its averaging windows recorded, then over the
 replicas with a delete-one jackknife standard error (docs/output.md, docs/dfscan.md).
 
 Definitions (``prof`` are the (R, N_f) time means over the averaging windows of the
@@ -37,10 +38,10 @@ import math
 import numpy as np
 
 from .config import ModelConfig
-from .results import compact_zones, jackknife_se
+from .results import Zones, compact_zones, jackknife_se
 
 __all__ = ["COLLISION_COLUMNS", "GAP_AND_COLLISION_FIELDS", "collision_statistics",
-           "replica_collision_records", "gap_zone_width"]
+           "replica_collision_records", "gap_zone_width", "zone_of"]
 
 #: The point's collision statistics (each with a ``*_stderr``).
 COLLISION_COLUMNS = ("contact_fraction_mean", "collision_rate", "dissipation_per_collision")
@@ -90,16 +91,19 @@ def collision_statistics(cfg: ModelConfig, prof: dict[str, np.ndarray]) -> dict[
     return out
 
 
+def zone_of(cfg: ModelConfig, x: np.ndarray, gap: np.ndarray) -> Zones:
+    """:func:`floewave.results.compact_zones` with the configuration's rule."""
+    return compact_zones(x, gap, cfg.L_x, gap_threshold=cfg.gap_threshold,
+                         min_pairs=cfg.compact_min_pairs, min_length=cfg.compact_min_length,
+                         bridge=cfg.compact_bridge, bridge_gap=cfg.compact_bridge_gap)
+
+
 def gap_zone_width(cfg: ModelConfig, x_r: np.ndarray,
                    gap_r: np.ndarray) -> tuple[float, float, np.ndarray]:
     """(W_c_gap, W_c_gap_stderr, per-replica values) from the replicas' time-mean positions
     ``x_r`` and gaps ``gap_r`` (R, N_f): the compact-zone rule per replica, the mean over
     the replicas with a compact zone and the standard error of that mean (NaN if < 2)."""
-    W = np.array([compact_zones(x, g, cfg.L_x, gap_threshold=cfg.gap_threshold,
-                                min_pairs=cfg.compact_min_pairs,
-                                min_length=cfg.compact_min_length,
-                                bridge=cfg.compact_bridge,
-                                bridge_gap=cfg.compact_bridge_gap).W_c
+    W = np.array([zone_of(cfg, x, g).W_c
                   for x, g in zip(np.atleast_2d(x_r), np.atleast_2d(gap_r), strict=True)])
     has = np.isfinite(W)
     m = int(has.sum())

@@ -30,12 +30,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._march import march_coefficients
-from .collision_stats import collision_statistics, gap_zone_width
+from .collision_stats import collision_statistics, gap_zone_width, zone_of
 from .config import G, ModelConfig
 from .results import (
     LAYOUTS,
     Zones,
-    compact_zones,
     fit_exponential,
     fit_inverse,
     jackknife_se,
@@ -189,13 +188,6 @@ class Records:
     compact_end: np.ndarray
     layouts: list[list[str]]
     C: np.ndarray | None = None
-
-
-def zone_of(cfg: ModelConfig, x: np.ndarray, gap: np.ndarray) -> Zones:
-    """:func:`floewave.results.compact_zones` with the configuration's rule."""
-    return compact_zones(x, gap, cfg.L_x, gap_threshold=cfg.gap_threshold,
-                         min_pairs=cfg.compact_min_pairs, min_length=cfg.compact_min_length,
-                         bridge=cfg.compact_bridge, bridge_gap=cfg.compact_bridge_gap)
 
 
 def fit_zone(x: np.ndarray, L_x: float, layout: str, W_c: float, end: float,
