@@ -22,6 +22,7 @@ from sweep.analysis.status import status_report
 from sweep.errors import CampaignMismatchError
 from sweep.store.campaign_check import check_campaign
 from sweep.store.lock import Lock, lock_path
+from tests import forkserver
 
 ROOT = Path(__file__).resolve().parents[2]
 TOML = "[base]\nL_sheet = 6.0\n[sweep]\neps = [0.2, 0.4]\n"
@@ -60,13 +61,15 @@ def test_abbreviated_options_are_refused(tmp_path, run_main):
     assert ok.store == Path("x.h5")
 
 
-def _closed_stdout(cmd, cwd):
-    """Run ``cmd`` with stdout a pipe whose reader has gone (``cmd | head -0``)."""
+def _closed_stdout(module, args, cwd):
+    """``python -m MODULE ARGS`` with stdout a pipe whose reader has gone
+    (``… | head -0``), forked from an interpreter that imported sweep once
+    (tests/forkserver.py)."""
     r, w = os.pipe()
     os.close(r)
     try:
-        return subprocess.run(cmd, stdout=w, stderr=subprocess.PIPE, text=True, cwd=cwd,
-                              timeout=300)
+        return forkserver.run(args, module=module, stdout=w, stderr=subprocess.PIPE,
+                              text=True, cwd=cwd, timeout=300)
     finally:
         os.close(w)
 
@@ -75,14 +78,13 @@ def test_a_reader_that_stops_early_gets_no_traceback(tmp_path, store):
     """``floewave figures --out figs | head -1`` and ``sweep status S.h5 | head -2``:
     status 0, no BrokenPipeError, and the files are still written."""
     pytest.importorskip("matplotlib")
-    p = _closed_stdout([sys.executable, "-m", "floewave", "figures", "--out", "figs"],
-                       tmp_path)
+    p = _closed_stdout("floewave", ["figures", "--out", "figs"], tmp_path)
     assert p.returncode == 0 and "Traceback" not in p.stderr, p.stderr
     assert (tmp_path / "figs" / "fig1_dispersion.png").exists()
     for argv in (["status", str(store)], ["status", str(store), "--json"],
                  ["plan", str(tmp_path / "c.toml"), "--rate", "1e8"]):
         (tmp_path / "c.toml").write_text(TOML)
-        p = _closed_stdout([sys.executable, "-m", "sweep", *argv], tmp_path)
+        p = _closed_stdout("sweep", argv, tmp_path)
         assert p.returncode == 0 and "Traceback" not in p.stderr, (argv, p.stderr)
 
 
@@ -115,8 +117,8 @@ def _as_killed(path, pid):
 
 
 def test_status_does_not_show_a_killed_run_as_running(store, run_main):
-    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
-                          capture_output=True, text=True).stdout.strip()
+    dead = forkserver.run([], code="import os; print(os.getpid())", capture_output=True,
+                          text=True).stdout.strip()
     _as_killed(store, int(dead))
     p = run_main(sweep.cli.main, ["status", str(store)])
     assert p.returncode == 0

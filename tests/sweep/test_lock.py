@@ -10,6 +10,7 @@ import pytest
 
 from sweep.errors import StoreLockedError
 from sweep.store.lock import Lock, lock_path, pid_alive
+from tests import forkserver
 
 
 def test_a_second_writer_is_refused_while_the_first_holds_the_lock(tmp_path):
@@ -28,9 +29,9 @@ def test_a_second_writer_is_refused_while_the_first_holds_the_lock(tmp_path):
 
 def test_a_lock_held_by_another_process_is_refused(tmp_path):
     path = lock_path(tmp_path / "s.h5")
-    holder = subprocess.Popen(
-        [sys.executable, "-c", "import sys, time; from sweep.store.lock import Lock;"
-         f" Lock({str(path)!r}).acquire(); print('held', flush=True); time.sleep(60)"],
+    holder = forkserver.popen(
+        [], code="import sys, time; from sweep.store.lock import Lock;"
+        f" Lock({str(path)!r}).acquire(); print('held', flush=True); time.sleep(60)",
         stdout=subprocess.PIPE, text=True)
     try:
         assert holder.stdout.readline().strip() == "held"
@@ -47,7 +48,7 @@ def test_a_lock_held_by_another_process_is_refused(tmp_path):
 
 def test_pid_alive():
     assert pid_alive(os.getpid())
-    p = subprocess.Popen([sys.executable, "-c", "pass"])
+    p = forkserver.popen([], code="pass")
     p.wait()
     assert not pid_alive(p.pid)
 

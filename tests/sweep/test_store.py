@@ -18,6 +18,7 @@ from sweep.cli import main
 from sweep.store.document import schema_document
 from sweep.store.schema import SCHEMA_VERSION
 from sweep.store.store import Store
+from tests import forkserver
 
 ROOT = Path(__file__).resolve().parents[2]
 TOML = "[base]\nL_sheet = 6.0\n[sweep]\nL_x = [0.5, 1.5]\neps = [0.2, 0.4, 0.6]\n"
@@ -42,10 +43,10 @@ def test_second_writer_refused_stale_lock_taken_over(tmp_path, campaign, run_mai
         proc = run_main(main, ["run", cfg, "--store", path])  # the command line's refusal
         assert proc.returncode == 3 and "live campaign" in proc.stderr
     # a lock left by a killed writer: the file exists but nobody holds its flock
-    holder = subprocess.Popen([sys.executable, "-c", "import sys, sweep;"
-                               "from sweep.store.store import Store;"
-                               f"s = Store({str(path)!r}, sweep.parse_campaign({TOML!r}));"
-                               "print('locked', flush=True); sys.stdin.read()"],
+    holder = forkserver.popen([], code="import sys, sweep;"
+                              "from sweep.store.store import Store;"
+                              f"s = Store({str(path)!r}, sweep.parse_campaign({TOML!r}));"
+                              "print('locked', flush=True); sys.stdin.read()",
                               stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
     assert holder.stdout.readline().strip() == "locked"
     os.kill(holder.pid, signal.SIGKILL)
@@ -201,28 +202,11 @@ def test_merge_shards(tmp_path, campaign):
     assert not (tmp_path / "x.h5").exists()
 
 
-_FORKING_RUNS = """
-import json, os, sys, time
-import sweep.cli, sweep.run.launch, sweep.testing  # what `sweep run` imports, once
-for line in sys.stdin:  # a line: `sweep run ...` in a process of its own, forked from this one
-    pid = os.fork()
-    if pid == 0:
-        null = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(null, 1)
-        os.dup2(null, 2)
-        os._exit(sweep.cli.main(json.loads(line)))
-    print(pid, flush=True)
-    t0 = time.monotonic()
-    status = os.waitpid(pid, 0)[1]
-    print(status, time.monotonic() - t0, flush=True)
-"""
-
-
 def test_kill_9_torture(tmp_path, campaign):
     """kill -9 the in-process campaign at random moments; the end equals a clean run.
-    (The killed campaigns are processes forked by one that imported sweep once, so that
-    every kill falls in the campaign's own life: store open, points, commits; the last
-    run, which completes the store, is ``python -m sweep run``.)"""
+    (The campaigns are ``python -m sweep run`` forked by an interpreter that imported
+    sweep once (tests/forkserver.py), so that every kill falls in the campaign's own life:
+    store open, points, commits.)"""
     import random
 
     cfg = tmp_path / "c.toml"
@@ -230,35 +214,24 @@ def test_kill_9_torture(tmp_path, campaign):
         "[0.5, 1.5]", "[0.5, 1.0, 1.5, 3.0]"))
     ref, path = tmp_path / "ref.h5", tmp_path / "s.h5"
     args = ["--compute", "sweep.testing:fake_point", "--no-bar"]
-    runs = subprocess.Popen([sys.executable, "-c", _FORKING_RUNS], stdin=subprocess.PIPE,
-                            stdout=subprocess.PIPE, text=True)
 
     def start(store):
-        runs.stdin.write(json.dumps(["run", str(cfg), "--store", str(store), *args]) + "\n")
-        runs.stdin.flush()
-        return int(runs.stdout.readline())
+        return forkserver.popen(["run", cfg, "--store", store, *args],
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
-    def ended():
-        status, seconds = runs.stdout.readline().split()
-        return int(status), float(seconds)
-
-    try:
-        start(ref)
-        status, whole = ended()  # an uninterrupted run: the kills fall within its length
-        assert status == 0
-        rng = random.Random(7)
-        kills = 0
-        for _ in range(10):
-            pid = start(path)
-            time.sleep(rng.uniform(0.0, 1.0) * whole)
-            os.kill(pid, signal.SIGKILL)
-            status, _ = ended()
-            kills += os.WIFSIGNALED(status) and os.WTERMSIG(status) == signal.SIGKILL
-    finally:
-        runs.stdin.close()
-        runs.wait(timeout=60)
-    proc = subprocess.run([sys.executable, "-m", "sweep", "run", str(cfg), "--store",
-                           str(path), *args], capture_output=True, text=True)
+    forkserver.prestart(wait=True)
+    t0 = time.monotonic()
+    assert start(ref).wait(timeout=120) == 0
+    whole = time.monotonic() - t0  # an uninterrupted run: the kills fall within its length
+    rng = random.Random(7)
+    kills = 0
+    for _ in range(10):
+        run = start(path)
+        time.sleep(rng.uniform(0.0, 1.0) * whole)
+        run.kill()
+        kills += run.wait(timeout=120) == -signal.SIGKILL
+    proc = forkserver.run(["run", cfg, "--store", path, *args], capture_output=True,
+                          text=True)
     assert proc.returncode == 0, proc.stderr
     assert kills >= 5
     a = sweep.load(ref).set_index("hash").sort_index()

@@ -17,6 +17,7 @@ from sweep.cli import main
 from sweep.store.journal import journal_path, rejected_path
 from sweep.store.store import Store
 from sweep.testing import find_mpiexec
+from tests import forkserver
 from tests.sweep.helpers import make_unclean, partial_shard, table
 
 TOML = "[base]\nL_sheet = 6.0\n[sweep]\nL_x = [0.5, 1.5]\neps = [0.2, 0.4, 0.6]\n"
@@ -33,9 +34,12 @@ def _env(**extra):
 
 
 def _sweep(*args, mpi=0, env=None, timeout=120):
-    cmd = [sys.executable, "-m", "sweep", *map(str, args)]
-    if mpi:
-        cmd = [MPIEXEC, "-n", str(mpi), *cmd]
+    """``python -m sweep ARGS`` (under ``mpiexec -n MPI``); a singleton is forked from an
+    interpreter that imported sweep once (tests/forkserver.py)."""
+    if not mpi:
+        return forkserver.run(args, capture_output=True, text=True, timeout=timeout,
+                              env=env or _env())
+    cmd = [MPIEXEC, "-n", str(mpi), sys.executable, "-m", "sweep", *map(str, args)]
     return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout,
                           env=env or _env())
 
@@ -79,8 +83,8 @@ def test_the_guard_passes_on_status_and_signals(tmp_path):
     slow = tmp_path / "slow.toml"
     slow.write_text(TOML.replace("0.6]", "0.6, 0.7, 0.8, 0.9]") + "[run]\ngrace_period = 30\n")
     store = tmp_path / "slow.h5"
-    p = subprocess.Popen([sys.executable, "-m", "sweep", "run", str(slow), "--store",
-                          str(store), "--compute", "sweep.testing:sleepy_point", "--no-bar"],
+    p = forkserver.popen(["run", slow, "--store", store, "--compute",
+                          "sweep.testing:sleepy_point", "--no-bar"],
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                          env=_env(), start_new_session=True)
     journal = journal_path(store)
@@ -275,15 +279,14 @@ def test_two_writers_through_a_symlink_never_ruin_the_store(tmp_path):
                PYTHONPATH=os.pathsep.join([str(tmp_path), os.environ.get("PYTHONPATH", "")]))
     path, link = tmp_path / "s.h5", tmp_path / "a.h5"
     link.symlink_to(path.name)
-    cmd = [sys.executable, "-m", "sweep", "run", str(cfg), "--compute", "gated:point",
-           "--no-bar", "--store"]
-    a = subprocess.Popen([*cmd, str(path)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+    cmd = ["run", cfg, "--compute", "gated:point", "--no-bar", "--store"]
+    a = forkserver.popen([*cmd, path], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                          text=True, env=env)
     try:
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline and not (tmp_path / "s.h5.lock").exists():
             time.sleep(0.01)
-        b = subprocess.run([*cmd, str(link)], capture_output=True, text=True, env=env,
+        b = forkserver.run([*cmd, link], capture_output=True, text=True, env=env,
                            timeout=120)
         assert a.poll() is None, "the first writer ended before the second one was refused"
     finally:

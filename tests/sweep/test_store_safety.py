@@ -18,6 +18,7 @@ from sweep.cli import main
 from sweep.store.journal import Journal, decode, encode, journal_path, rejected_path
 from sweep.store.store import Store
 from sweep.testing import catches_signal
+from tests import forkserver
 from tests.sweep.helpers import make_unclean, table
 
 TOML = "[base]\nL_sheet = 6.0\n[sweep]\nL_x = [0.5, 1.5]\neps = [0.2, 0.4, 0.6, 0.8]\n"
@@ -125,8 +126,8 @@ def test_stop_signal_during_rebuild_is_deferred_then_exit_6(tmp_path, sig):
     cfg, path = _big(tmp_path)
     ref = table(path)
     make_unclean(path)
-    p = subprocess.Popen([sys.executable, "-c", _OPEN_SCRIPT, "run", str(path), str(cfg)],
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    p = forkserver.popen(["run", path, cfg], code=_OPEN_SCRIPT, stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True)
     assert p.stdout.readline().strip() == "writing"
     p.send_signal(sig)
     out, err = p.communicate(timeout=120)
@@ -201,9 +202,9 @@ def test_what_is_not_a_damaged_store_is_never_touched(tmp_path, campaign):
     # another reader holding the store open (with HDF5 file locking) is no corruption
     path = tmp_path / "s.h5"
     run_campaign(campaign.shard(0, 2), str(path), compute=FAKE)
-    reader = subprocess.Popen([sys.executable, "-c", "import sys, h5py;"
-                               f"f = h5py.File({str(path)!r}, 'r'); print('open', flush=True);"
-                               "sys.stdin.read()"], stdin=subprocess.PIPE,
+    reader = forkserver.popen([], code="import sys, h5py;"
+                              f"f = h5py.File({str(path)!r}, 'r'); print('open', flush=True);"
+                              "sys.stdin.read()", stdin=subprocess.PIPE,
                               stdout=subprocess.PIPE, text=True)
     try:
         assert reader.stdout.readline().strip() == "open"
@@ -246,8 +247,8 @@ sys.stdin.read()
 def test_deleting_the_lock_file_does_not_admit_a_second_writer(tmp_path, campaign):
     path = tmp_path / "s.h5"
     run_campaign(campaign, str(path), compute=FAKE)
-    holder = subprocess.Popen([sys.executable, "-c", _HOLD, str(path), TOML],
-                              stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    holder = forkserver.popen([path, TOML], code=_HOLD, stdin=subprocess.PIPE,
+                              stdout=subprocess.PIPE, text=True)
     try:
         assert holder.stdout.readline().strip() == "locked"
         with pytest.raises(sweep.StoreLockedError, match=f"pid {holder.pid}"):
@@ -404,9 +405,9 @@ def test_a_point_that_kills_its_process_is_recorded_crashed(tmp_path):
     path = tmp_path / "s.h5"
     statuses = []
     for _ in range(5):
-        p = subprocess.run([sys.executable, "-m", "sweep", "run", str(cfg), "--store",
-                            str(path), "--compute", "sweep.testing:crashing_point",
-                            "--no-bar"], capture_output=True, text=True, timeout=120)
+        p = forkserver.run(["run", cfg, "--store", path, "--compute",
+                            "sweep.testing:crashing_point", "--no-bar"],
+                           capture_output=True, text=True, timeout=120)
         statuses.append(p.returncode)
         if p.returncode == 0:
             break
@@ -451,12 +452,12 @@ def test_point_stuck_in_native_code_is_stored_timeout_in_one_run(tmp_path):
     cfg.write_text(TOML.replace("[0.5, 1.5]", "[0.5]").replace("0.6, 0.8", "0.6")
                    + "[run]\npoint_timeout = 0.5\nmax_attempts = 2\n")
     path = tmp_path / "s.h5"
-    cmd = [sys.executable, "-m", "sweep", "run", str(cfg), "--store", str(path), "--compute",
-           "sweep.testing:native_stuck_point", "--no-bar"]
+    cmd = ["run", cfg, "--store", path, "--compute", "sweep.testing:native_stuck_point",
+           "--no-bar"]
     env = dict(os.environ, SWEEP_CHILD_MARGIN="0.3")  # killed 0.3 s after its limit
     env.pop("SLURM_NTASKS", None)
     t0 = time.monotonic()
-    proc = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=120)
+    proc = forkserver.run(cmd, env=env, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     assert time.monotonic() - t0 < 30
     df = sweep.load(path).set_index("eps")
@@ -480,8 +481,8 @@ def test_merge_refuses_itself_and_other_versions_and_stops_with_6(tmp_path):
     statuses = []
     for k in range(2):
         out = tmp_path / f"merged{k}.h5"
-        p = subprocess.Popen([sys.executable, "-m", "sweep", "merge", str(out), a],
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        p = forkserver.popen(["merge", out, a], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True)
         while p.poll() is None and not catches_signal(p.pid, signal.SIGTERM):
             time.sleep(0.002)
         time.sleep(0.05 * k)
@@ -516,10 +517,9 @@ def test_reads_during_writes(tmp_path):
     cfg = tmp_path / "c.toml"
     cfg.write_text(f"[base]\nL_sheet = 6.0\n[sweep]\neps = [{eps}]\n")
     path = tmp_path / "s.h5"
-    p = subprocess.Popen([sys.executable, "-m", "sweep", "run", str(cfg), "--store",
-                          str(path), "--compute", "sweep.testing:sleepy_trivial_point",
-                          "--no-bar"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                         text=True)
+    p = forkserver.popen(["run", cfg, "--store", path, "--compute",
+                          "sweep.testing:sleepy_trivial_point", "--no-bar"],
+                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     sizes = []
     try:
         deadline = time.monotonic() + 60

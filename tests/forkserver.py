@@ -1,0 +1,335 @@
+"""``python -m sweep ARGS`` as a process of its own, forked from an interpreter that imported
+sweep once, for the tests whose subject is the command's life, not the interpreter's start-up.
+
+A fresh ``python -m sweep run`` spends about 0.6 s importing numpy, numba, scipy, h5py and
+sweep before it reads its arguments; a test that runs the command a few times to see its exit
+statuses, messages, signals and store spends most of its time there. :func:`run` and
+:func:`popen` (the shapes of :func:`subprocess.run` and :class:`subprocess.Popen`) hand the
+command to a server that did those imports once (one per pytest process and per
+import-time environment, :data:`IMPORT_TIME`) and forks a child for each command. The child
+takes the command's standard streams, working directory, environment and ``sys.argv``, runs
+``sweep/__main__.py`` as ``python -m sweep`` does (the guard of ``sweep run`` included), and
+exits as the interpreter would (``atexit`` handlers, streams flushed: status 120 if that
+fails). Its pid is the command's: signals are sent to it, and its status is
+``os.waitstatus_to_exitcode``'s, negative for a signal.
+
+Not the same as a fresh interpreter, and so not used by the tests of these: a stop signal
+during the interpreter's start-up or an import (tests/sweep/test_store_holes.py keeps
+``python -m sweep`` for those), what a command imports (tests/sweep/test_api.py), and the
+console script itself (tests/sweep/test_cli.py). The slow tier runs fresh interpreters
+throughout (the MPI torture, Slurm, the docs' launcher walks).
+"""
+from __future__ import annotations
+
+import atexit
+import json
+import os
+import selectors
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+#: Environment variables read when a module is imported (numba's and Python's; sweep's own
+#: are read when used): a command whose values differ from a server's gets a server of its
+#: own, started with them. (``PYTHONPATH``'s entries are put on the child's ``sys.path``.)
+IMPORT_TIME = ("NUMBA_", "PYTHON")
+
+_SERVER = r"""
+import atexit, json, os, runpy, select, signal, socket, sys, traceback
+# what `python -m sweep` imports for run, status, validate and merge, once
+import scipy.optimize, h5py, numba, numpy
+import sweep, sweep.cli, sweep.run.launch, sweep.run.compute, sweep.testing, sweep.store.store
+import sweep.analysis.status
+
+sock = socket.socket(fileno=int(sys.argv[1]))
+started_with = set(sys.path)
+
+
+def child(request, fds):
+    sock.close()
+    for target, fd in enumerate(fds):
+        os.dup2(fd, target)
+    for fd in set(fds):
+        if fd > 2:
+            os.close(fd)
+    if request["new_session"]:
+        os.setsid()
+    os.chdir(request["cwd"])
+    os.environ.clear()
+    os.environ.update(request["env"])
+    # python -m puts the working directory first, python -c "", then PYTHONPATH's entries
+    sys.path[0] = "" if request["code"] is not None else os.getcwd()
+    sys.path[1:1] = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep)
+                     if p and p not in started_with]
+    code = 1
+    try:
+        if request["code"] is None:
+            sys.argv = [None, *request["args"]]  # runpy sets [0]: the module's __main__.py
+            runpy.run_module(request["module"], run_name="__main__", alter_sys=True)
+        else:
+            sys.argv = ["-c", *request["args"]]
+            exec(compile(request["code"], "<string>", "exec"), {"__name__": "__main__"})
+        code = 0
+    except SystemExit as exc:
+        code = exc.code if isinstance(exc.code, int) else (
+            0 if exc.code is None else (print(exc.code, file=sys.stderr) or 1))
+    except KeyboardInterrupt:
+        traceback.print_exc()
+        code = -signal.SIGINT
+    except BaseException:
+        traceback.print_exc()
+    try:
+        atexit._run_exitfuncs()
+    except BaseException:
+        pass
+    for stream in (sys.stdout, sys.stderr):
+        if stream is None or stream.closed:  # as the interpreter skips them at exit
+            continue
+        try:
+            stream.flush()
+        except Exception:
+            code = 120 if code == 0 else code
+    if code == -signal.SIGINT:  # as the interpreter ends on an uncaught KeyboardInterrupt
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
+        os.kill(os.getpid(), signal.SIGINT)
+    os._exit(code & 0xFF)
+
+
+sock.send(json.dumps({"ready": os.getpid()}).encode())
+children = set()
+while True:
+    ready, _, _ = select.select([sock], [], [], 0.005 if children else None)
+    if ready:
+        message, fds, _, _ = socket.recv_fds(sock, 1 << 20, 3)
+        if not message:
+            break
+        pid = os.fork()
+        if pid == 0:
+            child(json.loads(message), fds)
+        for fd in fds:
+            os.close(fd)
+        children.add(pid)
+        sock.send(json.dumps({"started": pid}).encode())
+    while children:
+        pid, status = os.waitpid(-1, os.WNOHANG)
+        if pid == 0:
+            break
+        children.discard(pid)
+        sock.send(json.dumps({"ended": pid, "status": status}).encode())
+"""
+
+
+class _Server:
+    """One forking interpreter and the socket to it."""
+
+    def __init__(self, env: dict[str, str]):
+        self.sock, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
+        self.proc = subprocess.Popen(
+            [sys.executable, "-c", _SERVER, str(theirs.fileno())], pass_fds=[theirs.fileno()],
+            env=env, cwd=Path(__file__).resolve().parent.parent,
+            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL)
+        theirs.close()
+        self.status: dict[int, int] = {}
+        self.ready = False
+
+    def start(self, request: dict, fds: list[int]) -> int:
+        socket.send_fds(self.sock, [json.dumps(request).encode()], fds)
+        while True:
+            message = self._receive(None)
+            if "started" in message:
+                return message["started"]
+
+    def _receive(self, timeout: float | None) -> dict | None:
+        self.sock.settimeout(timeout)
+        try:
+            data = self.sock.recv(1 << 16)
+        except TimeoutError:
+            return None
+        if not data:
+            raise RuntimeError(f"the fork server ended (status {self.proc.poll()})")
+        message = json.loads(data)
+        self.ready = True
+        if "ended" in message:
+            self.status[message["ended"]] = message["status"]
+        return message
+
+    def wait(self, pid: int, timeout: float | None) -> int | None:
+        """The wait status of ``pid``, or ``None`` after ``timeout`` seconds."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while pid not in self.status:
+            left = None if deadline is None else deadline - time.monotonic()
+            if left is not None and left <= 0:
+                return None
+            self._receive(left)
+        return self.status[pid]
+
+    def close(self) -> None:
+        self.sock.close()
+        try:
+            self.proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+
+
+_servers: dict[tuple, _Server] = {}
+
+
+def _server(env: dict[str, str]) -> _Server:
+    key = tuple(sorted((k, v) for k, v in env.items()
+                       if k.startswith(IMPORT_TIME) and k != "PYTHONPATH"))
+    if key not in _servers:
+        if not _servers:
+            atexit.register(lambda: [s.close() for s in _servers.values()])
+        _servers[key] = _Server(env)
+    return _servers[key]
+
+
+def prestart(env: dict[str, str] | None = None, wait: bool = False) -> None:
+    """Start the server for ``env`` (default: this process's) now, so that its imports
+    overlap other work; with ``wait``, return once it has imported them (so that a test
+    can time a command without them)."""
+    server = _server(dict(os.environ if env is None else env))
+    while wait and not server.ready:
+        server._receive(None)
+
+
+class Forked:
+    """A running ``python -m sweep`` command: the parts of :class:`subprocess.Popen` the
+    tests use (``pid``, ``stdout``, ``stderr``, ``returncode``, ``poll``, ``wait``,
+    ``communicate``, ``send_signal``, ``terminate``, ``kill``)."""
+
+    def __init__(self, args, *, module="sweep", code=None, env=None, cwd=None, stdin=None,
+                 stdout=None, stderr=None, text=False, start_new_session=False):
+        env = dict(os.environ if env is None else env)
+        self.args = ["python", *(["-c", "CODE"] if code is not None else ["-m", module]),
+                     *map(str, args)]
+        self._server = _server(env)
+        self.returncode: int | None = None
+        ours, theirs, self._close = {}, [], []
+        for fd, how in enumerate((stdin, stdout, stderr)):
+            if how is None:
+                theirs.append(fd)
+            elif how == subprocess.DEVNULL:
+                null = os.open(os.devnull, os.O_RDWR)
+                theirs.append(null)
+                self._close.append(null)
+            elif how == subprocess.PIPE:
+                r, w = os.pipe()
+                parent, child = (w, r) if fd == 0 else (r, w)
+                ours[fd] = parent
+                theirs.append(child)
+                self._close.append(child)
+            elif how == subprocess.STDOUT and fd == 2:
+                theirs.append(theirs[1])
+            else:
+                theirs.append(how if isinstance(how, int) else how.fileno())
+        try:
+            self.pid = self._server.start(
+                {"args": [str(a) for a in args], "module": module, "code": code, "env": env,
+                 "cwd": str(Path.cwd() if cwd is None else cwd),
+                 "new_session": bool(start_new_session)}, theirs)
+        finally:
+            for fd in self._close:
+                os.close(fd)
+        self._text = text
+
+        def stream(fd):
+            if fd not in ours:
+                return None
+            return open(ours[fd], ("w" if fd == 0 else "r") + ("" if text else "b"))
+
+        self.stdin, self.stdout, self.stderr = stream(0), stream(1), stream(2)
+
+    def _set(self, status: int | None) -> int | None:
+        if status is not None:
+            self.returncode = os.waitstatus_to_exitcode(status)
+        return self.returncode
+
+    def poll(self) -> int | None:
+        if self.returncode is None:
+            self._set(self._server.wait(self.pid, 0))
+        return self.returncode
+
+    def wait(self, timeout: float | None = None) -> int:
+        if self.returncode is None and self._set(self._server.wait(self.pid, timeout)) is None:
+            raise subprocess.TimeoutExpired(self.args, timeout)
+        return self.returncode
+
+    def communicate(self, input=None, timeout: float | None = None):
+        deadline = None if timeout is None else time.monotonic() + timeout
+        if self.stdin is not None:
+            if input:
+                self.stdin.write(input)
+            self.stdin.close()
+        out = {self.stdout: [], self.stderr: []}
+        sel = selectors.DefaultSelector()
+        for f in (self.stdout, self.stderr):
+            if f is not None:
+                sel.register(f.fileno(), selectors.EVENT_READ, f)
+        while sel.get_map():
+            left = None if deadline is None else deadline - time.monotonic()
+            if left is not None and left <= 0:
+                raise subprocess.TimeoutExpired(self.args, timeout)
+            for key, _ in sel.select(left):
+                data = os.read(key.fd, 1 << 16)
+                if not data:
+                    sel.unregister(key.fd)
+                else:
+                    out[key.data].append(data)
+        self.wait(None if deadline is None else max(0.0, deadline - time.monotonic()))
+        def joined(f):
+            if f is None:
+                return None
+            f.close()
+            data = b"".join(out[f])
+            return data.decode() if self._text else data
+
+        return joined(self.stdout), joined(self.stderr)
+
+    def send_signal(self, sig: int) -> None:
+        if self.poll() is None:
+            os.kill(self.pid, sig)
+
+    def terminate(self) -> None:
+        self.send_signal(15)
+
+    def kill(self) -> None:
+        self.send_signal(9)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        for f in (self.stdin, self.stdout, self.stderr):
+            if f is not None and not f.closed:
+                f.close()
+        self.wait()
+
+
+def popen(args, **kw) -> Forked:
+    """``subprocess.Popen([python, -m, sweep, *args], **kw)``, forked; with ``module=NAME``,
+    ``python -m NAME *args``; with ``code=TEXT``, ``python -c TEXT *args`` (``env``, ``cwd``,
+    ``stdin``/``stdout``/``stderr`` as None, ``DEVNULL``, ``PIPE``, a file or fd,
+    ``text`` and ``start_new_session``)."""
+    return Forked(args, **kw)
+
+
+def run(args, *, module="sweep", code=None, env=None, cwd=None, timeout=None, capture_output=False,
+        text=False, input=None, stdout=None, stderr=None) -> subprocess.CompletedProcess:
+    """``subprocess.run([python, -m, sweep, *args], ...)`` (or ``python -c code``), forked,
+    with subprocess's defaults; on ``timeout`` the command is killed and
+    :class:`subprocess.TimeoutExpired` raised, as subprocess does."""
+    if capture_output:
+        stdout = stderr = subprocess.PIPE
+    p = Forked(args, module=module, code=code, env=env, cwd=cwd,
+               stdin=subprocess.PIPE if input is not None else None, stdout=stdout,
+               stderr=stderr, text=text)
+    try:
+        out, err = p.communicate(input, timeout)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        p.wait()
+        raise
+    return subprocess.CompletedProcess(p.args, p.returncode, out, err)
