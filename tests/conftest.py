@@ -15,6 +15,7 @@ same kernels at the same time.
 module, default ``t.toml``). ``power_store``: a store of a campaign computed by the hand-set
 ``sweep.testing:power_point`` (each TOML text run once per session). ``run_main``: a
 command-line ``main(argv)`` run in-process as a subprocess would run it.
+``refused_at_once``: no wait for a killed writer before a live one is refused.
 """
 from __future__ import annotations
 
@@ -71,6 +72,17 @@ def run_main(capsys, monkeypatch):
         return subprocess.CompletedProcess(argv, code, out.out, out.err)
 
     return call
+
+
+@pytest.fixture
+def refused_at_once(monkeypatch):
+    """A store held by a live writer is refused after 0.05 s instead of
+    :data:`sweep.store.lock.KILLED_WRITER_WAIT` (1 s, the time a writer killed a moment
+    ago may take to exit: tests/sweep/test_lock.py proves that wait), in this process:
+    for the tests whose holder is alive throughout."""
+    import sweep.store.lock
+
+    monkeypatch.setattr(sweep.store.lock, "KILLED_WRITER_WAIT", 0.05)
 
 
 # ------------------------------------------------------------------ parallel runs (xdist)

@@ -22,8 +22,8 @@ from typing import Any
 import h5py
 
 from sweep.errors import SchemaVersionError, StoreError, StoreLockedError
+from sweep.store import lock
 from sweep.store.cells import text
-from sweep.store.lock import KILLED_WRITER_WAIT
 from sweep.store.migrate import migration_steps
 from sweep.store.schema import FORMAT
 from sweep.store.writer import HDF5_SIGNATURE
@@ -171,7 +171,7 @@ class InodeLock:
         except OSError:
             return  # inspect_file says why the path cannot be used
         arg = struct.pack("hhqqi4x", fcntl.F_WRLCK, os.SEEK_SET, 0, 0, 0)
-        deadline = time.monotonic() + KILLED_WRITER_WAIT
+        deadline = time.monotonic() + lock.KILLED_WRITER_WAIT
         while True:
             try:
                 fcntl.fcntl(fd, cmd, arg)

@@ -3,17 +3,19 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import subprocess
-import sys
+import threading
+import time
 
 import pytest
 
 from sweep.errors import StoreLockedError
-from sweep.store.lock import Lock, lock_path, pid_alive
+from sweep.store.lock import KILLED_WRITER_WAIT, Lock, lock_path, pid_alive
 from tests import forkserver
 
 
-def test_a_second_writer_is_refused_while_the_first_holds_the_lock(tmp_path):
+def test_a_second_writer_is_refused_while_the_first_holds_the_lock(tmp_path, refused_at_once):
     path = lock_path(tmp_path / "s.h5")
     first = Lock(path)
     first.acquire()
@@ -27,7 +29,7 @@ def test_a_second_writer_is_refused_while_the_first_holds_the_lock(tmp_path):
     second.release()
 
 
-def test_a_lock_held_by_another_process_is_refused(tmp_path):
+def test_a_lock_held_by_another_process_is_refused(tmp_path, refused_at_once):
     path = lock_path(tmp_path / "s.h5")
     holder = forkserver.popen(
         [], code="import sys, time; from sweep.store.lock import Lock;"
@@ -44,6 +46,26 @@ def test_a_lock_held_by_another_process_is_refused(tmp_path):
     lock.acquire()
     assert str(holder.pid) in lock.stale_owner
     lock.release()
+
+
+def test_a_holder_killed_during_the_wait_is_not_refused(tmp_path):
+    """A held lock is tried again for KILLED_WRITER_WAIT (1 s) before it is refused: a
+    holder killed 0.3 s into the wait (a writer still exiting) lets the next one in."""
+    path = lock_path(tmp_path / "s.h5")
+    holder = forkserver.popen(
+        [], code="import sys, time; from sweep.store.lock import Lock;"
+        f" Lock({str(path)!r}).acquire(); print('held', flush=True); time.sleep(60)",
+        stdout=subprocess.PIPE, text=True)
+    assert holder.stdout.readline().strip() == "held"
+    killer = threading.Timer(0.3, os.kill, (holder.pid, signal.SIGKILL))
+    t0 = time.monotonic()
+    killer.start()
+    lock = Lock(path)
+    lock.acquire()
+    waited = time.monotonic() - t0
+    lock.release()
+    assert holder.wait(timeout=60) == -signal.SIGKILL
+    assert 0.25 < waited < KILLED_WRITER_WAIT, waited
 
 
 def test_pid_alive():

@@ -33,7 +33,7 @@ def test_schema_file_matches_code():
     assert doc == json.loads(json.dumps(schema_document()))
 
 
-def test_second_writer_refused_stale_lock_taken_over(tmp_path, campaign, run_main):
+def test_second_writer_refused_stale_lock_taken_over(tmp_path, campaign, run_main, refused_at_once):
     path = tmp_path / "s.h5"
     with Store(path, campaign):
         with pytest.raises(sweep.StoreLockedError, match="live campaign"):

@@ -219,7 +219,7 @@ def test_a_replayed_block_of_old_lines_does_not_revert_retried_points(tmp_path, 
 
 
 # ---------------------------------------------------------------- 4. other names, one file
-def test_a_symlink_names_the_same_store(tmp_path, campaign):
+def test_a_symlink_names_the_same_store(tmp_path, campaign, refused_at_once):
     """The lock and journal are named after the file reached: a writer through a
     symlink is refused while another writes the target, and the journal is the
     target's."""
@@ -237,7 +237,7 @@ def test_a_symlink_names_the_same_store(tmp_path, campaign):
     assert len(sweep.load(link)) == 6 and sweep.validate(path) == []
 
 
-def test_a_hard_link_is_refused_while_the_file_is_written(tmp_path, campaign):
+def test_a_hard_link_is_refused_while_the_file_is_written(tmp_path, campaign, refused_at_once):
     """A hard link shares no name with the store: the flock on the file itself refuses
     the second writer (nothing of it is written)."""
     path, link = tmp_path / "s.h5", tmp_path / "h.h5"
@@ -284,7 +284,9 @@ def test_two_writers_through_a_symlink_never_ruin_the_store(tmp_path):
                          text=True, env=env)
     try:
         deadline = time.monotonic() + 60
-        while time.monotonic() < deadline and not (tmp_path / "s.h5.lock").exists():
+        journal = journal_path(path)  # the first has opened the store and handed out points
+        while time.monotonic() < deadline and not (journal.exists()
+                                                   and b'"handout"' in journal.read_bytes()):
             time.sleep(0.01)
         b = forkserver.run([*cmd, link], capture_output=True, text=True, env=env,
                            timeout=120)

@@ -244,7 +244,7 @@ sys.stdin.read()
 """
 
 
-def test_deleting_the_lock_file_does_not_admit_a_second_writer(tmp_path, campaign):
+def test_deleting_the_lock_file_does_not_admit_a_second_writer(tmp_path, campaign, refused_at_once):
     path = tmp_path / "s.h5"
     run_campaign(campaign, str(path), compute=FAKE)
     holder = forkserver.popen([path, TOML], code=_HOLD, stdin=subprocess.PIPE,
