@@ -29,7 +29,8 @@ class ModelConfig(Protocol):
 G = 9.81  # [m s^-2] acceleration due to gravity (docs/model.md §2)
 
 __all__ = ["G", "coefficients", "dispersion_residual", "omega_of_k", "group_velocity",
-           "solve_dispersion", "alpha_confined", "confined_rate_factor", "DispersionError"]
+           "solve_dispersion", "solve_dispersion_omega", "alpha_confined",
+           "confined_rate_factor", "DispersionError"]
 
 
 def coefficients(cfg: ModelConfig) -> tuple[float, float]:
@@ -108,6 +109,15 @@ def solve_dispersion(cfg: ModelConfig) -> tuple[float, float]:
     b1, b2 = coefficients(cfg)
     what = f"dispersion {cfg.dispersion!r} at T = {cfg.T!r} s"
     return _solve(cfg.omega, cfg.h, b1, b2, what)
+
+
+def solve_dispersion_omega(cfg: ModelConfig, omega: float) -> tuple[float, float]:
+    """k [m^-1] and c_g [m s^-1] at the angular frequency ``omega`` [rad s^-1] for
+    ``cfg``'s dispersion, ice and depth (``cfg.T`` is not read): :func:`solve_dispersion`
+    without a configuration per frequency (a curve of many frequencies)."""
+    b1, b2 = coefficients(cfg)
+    what = f"dispersion {cfg.dispersion!r} at omega = {omega!r} rad/s"
+    return _solve(omega, cfg.h, b1, b2, what)
 
 
 def confined_rate_factor(omega, k, c_g, h):

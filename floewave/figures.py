@@ -49,7 +49,7 @@ from typing import Any
 import numpy as np
 
 from .config import G, ModelConfig
-from .dispersion import DispersionError, confined_rate_factor, solve_dispersion
+from .dispersion import DispersionError, confined_rate_factor, solve_dispersion_omega
 from .results import power_law
 
 __all__ = ["LAB", "FIELD", "F_RANGE", "LSWICE_F", "TAIL_OCTAVES", "ML_CUTOFF_FRACTION",
@@ -104,9 +104,10 @@ def dispersion_curves(params: ModelConfig | Mapping[str, Any], f: Iterable[float
 
     ``params`` supplies h, h_i, rho_i, rho_w, E, nu (a :class:`ModelConfig`, a mapping or
     any object with those attributes); its ``dispersion`` and ``T`` are ignored. Each
-    point is solved with :func:`floewave.dispersion.solve_dispersion`; where eq. 6 has no
-    admissible root (``ml`` at or beyond omega^2 = g rho_w / (rho_i h_i)) k, c_g and R are
-    NaN. Returns ``{dispersion: Curve}``.
+    point is solved with :func:`floewave.dispersion.solve_dispersion_omega` (the k and c_g
+    of a configuration with T = 1 / f, bit for bit); where eq. 6 has no admissible root
+    (``ml`` at or beyond omega^2 = g rho_w / (rho_i h_i)) k, c_g and R are NaN.
+    Returns ``{dispersion: Curve}``.
     """
     cfg = _as_config(params)
     f = np.asarray(list(f) if not isinstance(f, np.ndarray) else f, dtype=float)
@@ -119,8 +120,9 @@ def dispersion_curves(params: ModelConfig | Mapping[str, Any], f: Iterable[float
         k = np.full_like(f, np.nan)
         cg = np.full_like(f, np.nan)
         for i, fi in enumerate(f):
-            try:
-                k[i], cg[i] = solve_dispersion(base.replace(T=1.0 / float(fi)))
+            try:  # omega as ModelConfig.omega computes it from T = 1 / f
+                k[i], cg[i] = solve_dispersion_omega(base,
+                                                     2.0 * math.pi / (1.0 / float(fi)))
             except DispersionError:
                 pass
         with np.errstate(invalid="ignore"):

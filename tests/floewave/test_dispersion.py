@@ -5,7 +5,8 @@ import pytest
 
 from floewave import DispersionError, ModelConfig, alpha_confined, solve_dispersion
 from floewave.config import G
-from floewave.dispersion import coefficients, dispersion_residual, omega_of_k
+from floewave.dispersion import (coefficients, dispersion_residual, omega_of_k,
+                                 solve_dispersion_omega)
 
 PERIODS = (1.1, 1.2, 1.4, 1.5, 1.6, 1.8, 2.0)
 
@@ -21,6 +22,22 @@ def test_eq6_residual_and_group_velocity(disp, T):
     dk = 1e-5 * k
     num = (omega_of_k(k + dk, cfg.h, b1, b2) - omega_of_k(k - dk, cfg.h, b1, b2)) / (2 * dk)
     assert cg == pytest.approx(num, rel=1e-6)
+
+
+@pytest.mark.parametrize("disp", ["ep", "ml", "ow"])
+def test_solving_at_an_omega_is_solving_its_configuration(disp):
+    """solve_dispersion_omega(cfg, omega) (a curve of many frequencies, Fig. 1) is
+    solve_dispersion of the configuration with that period, bit for bit; ml beyond its
+    cutoff is refused by both."""
+    for T in (*PERIODS, 0.4, 7.0):
+        cfg = ModelConfig(T=T, dispersion=disp)
+        assert solve_dispersion_omega(cfg.replace(T=99.0), cfg.omega) == solve_dispersion(cfg)
+    if disp == "ml":
+        cfg = ModelConfig(T=0.05, dispersion="ml")
+        for solve in (lambda: solve_dispersion(cfg),
+                      lambda: solve_dispersion_omega(cfg, cfg.omega)):
+            with pytest.raises(DispersionError, match="cutoff"):
+                solve()
 
 
 def test_field_scale_example():
