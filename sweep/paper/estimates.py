@@ -50,6 +50,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from functools import cache
 
 import numpy as np
 
@@ -98,6 +99,7 @@ class Estimate:
         return f"{self.label}: {self.value:.{digits}f} ± {self.se:.{digits}f}{mark}"
 
 
+@cache
 def z_critical(dof: float) -> float:
     """The critical |z|: :data:`Z_CRIT` for a known SE, the Student-t value with the same
     one-sided tail probability for an SE estimated with ``dof`` degrees of freedom."""

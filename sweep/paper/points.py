@@ -18,7 +18,7 @@ import pandas as pd
 
 from sweep.paper.estimates import INCONCLUSIVE, Estimate
 
-__all__ = ["FLOORS", "X_NEAR", "Check", "Profile", "close", "point", "col", "label_of",
+__all__ = ["FLOORS", "X_NEAR", "Check", "Profile", "point", "col", "label_of",
            "a_end", "a_near", "w_c", "inner_over_c", "force_decades", "make_check",
            "sorted_values", "M_OW", "INNER_OVER_C", "FORCE_DECADES", "M_CLOSE",
            "NO_EFFECT", "Tables", "difference", "exact", "config_of", "sheet_length"]
@@ -92,20 +92,24 @@ class Check:
 Profile = Callable[[str, str], Mapping[str, Any]]
 
 
-def close(series: pd.Series, value: Any) -> pd.Series:
+def _close(series: pd.Series, value: Any) -> np.ndarray:
+    """Where ``series`` equals ``value`` (text), or is within 1e-9 of it (numbers)."""
     if isinstance(value, str):
-        return series.astype(str) == value
-    return pd.Series(np.isclose(series.astype(float), float(value), rtol=1e-9, atol=0.0),
-                     index=series.index)
+        return (series.astype(str) == value).to_numpy(dtype=bool)
+    return np.isclose(series.to_numpy(dtype=float), float(value), rtol=1e-9, atol=0.0)
+
+
+def _where(df: pd.DataFrame, values: Mapping[str, Any]) -> np.ndarray:
+    mask = np.ones(len(df), dtype=bool)
+    for k, v in values.items():
+        mask &= _close(df[k], v)
+    return mask
 
 
 def point(df: pd.DataFrame, **values: Any) -> pd.Series | None:
     """The row of ``df`` with these swept values (None if absent or without result)."""
-    mask = pd.Series(True, index=df.index)
-    for k, v in values.items():
-        mask &= close(df[k], v)
-    rows = df[mask]
-    return None if rows.empty else rows.iloc[0]
+    rows = np.flatnonzero(_where(df, values))
+    return None if rows.size == 0 else df.iloc[rows[0]]
 
 
 def col(row: pd.Series, name: str) -> float:
@@ -237,10 +241,7 @@ def make_check(claim: str, source: str, campaign: str, points: str, quantity: st
 
 def sorted_values(df: pd.DataFrame, key: str, **fixed: Any) -> list[Any]:
     """The sorted distinct values of ``key`` among the rows with these ``fixed`` values."""
-    mask = pd.Series(True, index=df.index)
-    for k, v in fixed.items():
-        mask &= close(df[k], v)
-    return sorted(df.loc[mask, key].unique().tolist())
+    return sorted(df.loc[_where(df, fixed), key].unique().tolist())
 
 
 def difference(lo: Estimate, hi: Estimate, label: str) -> Estimate:
