@@ -290,7 +290,10 @@ class Forked:
 
     def send_signal(self, sig: int) -> None:
         if self.poll() is None:
-            os.kill(self.pid, sig)
+            try:
+                os.kill(self.pid, sig)
+            except ProcessLookupError:  # ended (and reaped by the server) since the poll,
+                pass                    # as subprocess.Popen.send_signal allows
 
     def terminate(self) -> None:
         self.send_signal(15)

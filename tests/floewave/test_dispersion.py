@@ -5,8 +5,12 @@ import pytest
 
 from floewave import DispersionError, ModelConfig, alpha_confined, solve_dispersion
 from floewave.config import G
-from floewave.dispersion import (coefficients, dispersion_residual, omega_of_k,
-                                 solve_dispersion_omega)
+from floewave.dispersion import (
+    coefficients,
+    dispersion_residual,
+    omega_of_k,
+    solve_dispersion_omega,
+)
 
 PERIODS = (1.1, 1.2, 1.4, 1.5, 1.6, 1.8, 2.0)
 

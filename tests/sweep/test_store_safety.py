@@ -53,30 +53,11 @@ def _big(tmp_path):
     return cfg, path
 
 
-_FORKING_SCRIPT = """
-import os, sys, time, sweep
-from sweep.store.store import Store
-from sweep.store.writer import H5Writer
-real = H5Writer.write_many
-def slow(self, records):  # a rebuild that takes long enough to be hit
-    print("writing", os.getpid(), flush=True)
-    time.sleep(0.02)
-    real(self, records)
-H5Writer.write_many = slow
-campaign = sweep.load_campaign(sys.argv[2])
-for _ in sys.stdin:  # a line: one open (and so rebuild) of the store, in a process of its own
-    pid = os.fork()
-    if pid == 0:
-        Store(sys.argv[1], campaign).close()
-        os._exit(0)
-    print("ended", os.waitpid(pid, 0)[1], flush=True)
-"""
-
-
 def test_kill_9_during_rebuild_never_ruins_the_store(tmp_path):
     """SIGKILL at random instants of the rebuild: the store path always holds the old
     (unclean) file or the complete new one, never a half-built one that looks clean.
-    (Each rebuild is a process forked by one that imported sweep once.)"""
+    (Each rebuild is a process forked by an interpreter that imported sweep once:
+    tests/forkserver.py.)"""
     cfg, path = _big(tmp_path)
     ref = table(path)
     with h5py.File(path, "r", locking=False) as f:
@@ -84,32 +65,24 @@ def test_kill_9_during_rebuild_never_ruins_the_store(tmp_path):
     make_unclean(path)
     rng = random.Random(15)
     hit = left = 0
-    opener = subprocess.Popen([sys.executable, "-c", _FORKING_SCRIPT, str(path), str(cfg)],
-                              stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
-    try:
-        for _ in range(6):
-            opener.stdin.write("open\n")
-            opener.stdin.flush()
-            word, pid = opener.stdout.readline().split()
-            assert word == "writing"
-            time.sleep(rng.uniform(0.0, 0.02))
-            os.kill(int(pid), signal.SIGKILL)
-            while not (line := opener.stdout.readline()).startswith("ended"):
-                assert line.startswith("writing"), line
-            status = int(line.split()[1])
-            hit += os.WIFSIGNALED(status) and os.WTERMSIG(status) == signal.SIGKILL
-            with h5py.File(path, "r", locking=False) as f:  # old file or the whole new one
-                if not f.attrs["writer_open"]:
-                    assert int(f["table"].attrs["n_rows"]) == n_ref
-                    assert "rebuilt_from_journal" in f.attrs
-            # the temporary file of a killed rebuild stays until the next open removes it:
-            # at most this process's own is left, never an earlier one's
-            temps = {t.name for t in tmp_path.glob(".s.h5.rebuild-*")}
-            assert temps <= {f".s.h5.rebuild-{pid}.tmp"}, temps
-            left += bool(temps)
-    finally:
-        opener.stdin.close()
-        opener.wait(timeout=60)
+    for _ in range(6):
+        opener = forkserver.popen(["open", path, cfg], code=_OPEN_SCRIPT,
+                                  stdout=subprocess.PIPE, text=True)
+        assert opener.stdout.readline().strip() == "writing"
+        time.sleep(rng.uniform(0.0, 0.02))
+        opener.kill()
+        opener.communicate(timeout=60)
+        pid = opener.pid
+        hit += opener.returncode == -signal.SIGKILL
+        with h5py.File(path, "r", locking=False) as f:  # old file or the whole new one
+            if not f.attrs["writer_open"]:
+                assert int(f["table"].attrs["n_rows"]) == n_ref
+                assert "rebuilt_from_journal" in f.attrs
+        # the temporary file of a killed rebuild stays until the next open removes it:
+        # at most this process's own is left, never an earlier one's
+        temps = {t.name for t in tmp_path.glob(".s.h5.rebuild-*")}
+        assert temps <= {f".s.h5.rebuild-{pid}.tmp"}, temps
+        left += bool(temps)
     assert hit >= 4
     assert left >= 1  # a killed rebuild did leave its temporary file (removed below)
     s = run_campaign(sweep.load_campaign(cfg), str(path), compute="sweep.testing:raising_point")
