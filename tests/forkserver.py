@@ -11,7 +11,9 @@ takes the command's standard streams, working directory, environment and ``sys.a
 ``sweep/__main__.py`` as ``python -m sweep`` does (the guard of ``sweep run`` included), and
 exits as the interpreter would (``atexit`` handlers, streams flushed: status 120 if that
 fails). Its pid is the command's: signals are sent to it, and its status is
-``os.waitstatus_to_exitcode``'s, negative for a signal.
+``os.waitstatus_to_exitcode``'s, negative for a signal. ``module=`` runs another module
+(``python -m floewave``), ``code=`` a ``python -c`` script. tests/test_forkserver.py checks
+it against a fresh interpreter.
 
 Not the same as a fresh interpreter, and so not used by the tests of these: a stop signal
 during the interpreter's start-up or an import (tests/sweep/test_store_holes.py keeps

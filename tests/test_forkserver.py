@@ -1,0 +1,71 @@
+"""tests/forkserver.py: a forked ``python -m sweep`` is the command as a fresh interpreter
+runs it (exit statuses, streams, environment, working directory, signals, the store)."""
+import os
+import signal
+import subprocess
+import sys
+
+import pytest
+
+import sweep
+from tests import forkserver
+from tests.sweep.helpers import table
+
+TOML = "[base]\nL_sheet = 6.0\n[sweep]\nL_x = [0.5, 1.5]\neps = [0.2, 0.4]\n"
+ARGS = ["--compute", "sweep.testing:fake_point", "--no-bar"]
+
+
+def test_a_forked_run_is_a_fresh_interpreters_run(tmp_path):
+    """The same campaign by ``python -m sweep run`` and by the fork server: status 0,
+    the same summary and the same stored table; a bad campaign file is status 2 with the
+    same one-line message in both."""
+    (tmp_path / "c.toml").write_text(TOML)
+    fresh = subprocess.run([sys.executable, "-m", "sweep", "run", "c.toml", "--store",
+                            "a.h5", *ARGS], capture_output=True, text=True, cwd=tmp_path)
+    forked = forkserver.run(["run", "c.toml", "--store", "b.h5", *ARGS],
+                            capture_output=True, text=True, cwd=tmp_path)
+    assert fresh.returncode == forked.returncode == 0, (fresh.stderr, forked.stderr)
+    assert fresh.stdout.split(" in ")[0] == forked.stdout.split(" in ")[0]
+    assert table(tmp_path / "a.h5").equals(table(tmp_path / "b.h5"))
+    assert len(sweep.load(tmp_path / "b.h5")) == 4
+    (tmp_path / "bad.toml").write_text("[base]\nnope = 1\n")
+    bad = [forkserver.run(["run", "bad.toml", "--store", "c.h5"], capture_output=True,
+                          text=True, cwd=tmp_path),
+           subprocess.run([sys.executable, "-m", "sweep", "run", "bad.toml", "--store",
+                           "c.h5"], capture_output=True, text=True, cwd=tmp_path)]
+    assert [p.returncode for p in bad] == [2, 2]
+    assert bad[0].stderr == bad[1].stderr and "[base] nope = 1: unknown parameter" in bad[0].stderr
+    assert not (tmp_path / "c.h5").exists()
+
+
+def test_environment_arguments_streams_and_status(tmp_path):
+    """``python -c``: its argv, the request's environment (not the server's), ``''`` first
+    on sys.path and PYTHONPATH's entries after it, stdin, exit status, an uncaught
+    exception's traceback and status 1."""
+    (tmp_path / "mod_here.py").write_text("WHERE = 'pythonpath'\n")
+    code = ("import os, sys, mod_here; print(sys.argv[1:], os.environ['FORKED_X'],"
+            " sys.path[0] == '', mod_here.WHERE, os.getcwd(), sys.stdin.read().strip());"
+            " sys.exit(7)")
+    env = dict(os.environ, FORKED_X="yes", PYTHONPATH=str(tmp_path))
+    p = forkserver.run(["a", "b"], code=code, env=env, cwd=tmp_path, input="in",
+                       capture_output=True, text=True)
+    assert p.returncode == 7, p.stderr
+    assert p.stdout.split() == ["['a',", "'b']", "yes", "True", "pythonpath", str(tmp_path),
+                                "in"]
+    p = forkserver.run([], code="raise ValueError('boom')", capture_output=True, text=True)
+    assert p.returncode == 1 and "ValueError: boom" in p.stderr and "Traceback" in p.stderr
+
+
+def test_signals_reach_the_command_and_end_it_as_they_would(tmp_path):
+    """Its pid is the command's: SIGKILL ends it with -9, SIGTERM without a handler -15,
+    an uncaught KeyboardInterrupt (SIGINT) -2, as for a fresh interpreter."""
+    for sig in (signal.SIGKILL, signal.SIGTERM, signal.SIGINT):
+        p = forkserver.popen([], code="import time; print('up', flush=True); time.sleep(60)",
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        assert p.stdout.readline() == "up\n"
+        p.send_signal(sig)
+        _, err = p.communicate(timeout=60)
+        assert p.returncode == -sig, (sig, err)
+    assert "KeyboardInterrupt" in err
+    with pytest.raises(subprocess.TimeoutExpired):
+        forkserver.run([], code="import time; time.sleep(60)", timeout=0.2)
