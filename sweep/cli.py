@@ -17,6 +17,7 @@ from typing import Any
 
 from sweep.arguments import count, kind_list, plural, positive_number, seconds, shard
 from sweep.errors import EXIT_INTERNAL, EXIT_OK, EXIT_STORE, ConfigError, Interrupted, SweepError
+from sweep.system import note_start_up_stop, take_start_up_stop
 
 __all__ = ["main", "build_parser"]
 
@@ -148,15 +149,18 @@ def _stop_during_start_up(signum: int, frame: Any) -> None:
     if _START_UP_STOP:  # a repeat (the guard forwards what the group got too): once
         return
     _START_UP_STOP.append(signum)
+    note_start_up_stop(signal.Signals(signum).name)  # taken up if this raise is lost
     raise Interrupted(f"stopped by {signal.Signals(signum).name} during start-up, before"
                       " the store was opened; nothing was changed — the campaign is resumable: run"
                       " the same command again")
 
 
-def _catch_stops_at_start_up(argv: Sequence[str]) -> None:
+def _catch_stops_at_start_up(argv: Sequence[str], command_line: bool) -> None:
     """``run`` and ``merge``: a stop signal before the store is opened ends the command
     with status 6 (nothing was changed). Not under an MPI launcher: there rank 0 alone
-    leaving would leave the workers waiting; the default action ends the job."""
+    leaving would leave the workers waiting; the default action ends the job. A stop whose
+    exception Python could not raise (in a weakref callback or finaliser) is taken up by
+    the campaign's or merge's handlers (:func:`sweep.system.take_start_up_stop`)."""
     if not argv or argv[0] not in ("run", "merge"):
         return
     from sweep.run import signals
@@ -165,10 +169,25 @@ def _catch_stops_at_start_up(argv: Sequence[str]) -> None:
     signals.campaign_over = False  # a new command: its stops stop it
     _START_UP_STOP.clear()
     _LATE_STOP.clear()
+    take_start_up_stop()
     if launched():
         return
+    if command_line and sys.unraisablehook is not _lost_stop_is_quiet:
+        _UNRAISABLE[:] = [sys.unraisablehook]
+        sys.unraisablehook = _lost_stop_is_quiet
     for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1):
         signal.signal(sig, _stop_during_start_up)
+
+
+_UNRAISABLE: list[Any] = []  # the unraisable hook _lost_stop_is_quiet passes others to
+
+
+def _lost_stop_is_quiet(unraisable: Any) -> None:
+    """``sys.unraisablehook`` of a command: the lost start-up stop is not reported as
+    "Exception ignored" (it is taken up later); any other exception is, as before."""
+    if isinstance(unraisable.exc_value, Interrupted) and _START_UP_STOP:
+        return
+    _UNRAISABLE[0](unraisable)
 
 
 def cmd_run(args: argparse.Namespace) -> int:
@@ -358,7 +377,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     from sweep.run import guard
 
     args_ = list(sys.argv[1:] if argv is None else argv)
-    _catch_stops_at_start_up(args_)  # first: a stop from the first instants is status 6
+    _catch_stops_at_start_up(args_, argv is None)  # first: a stop from the first instants
     try:
         child = argv is None and bool(args_) and args_[0] == "run" and guard.guarded()
         guard.unblock()
@@ -378,6 +397,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                          " start-up; the campaign is resumable: run the same command"
                          " again"))
         status = Interrupted.exit_status
+    take_start_up_stop()  # this command's: not for a later one in this process
     try:
         sys.stdout.flush()
     except BrokenPipeError:

@@ -9,17 +9,19 @@ command to a server that did those imports once (one per pytest process and per
 import-time environment, :data:`IMPORT_TIME`) and forks a child for each command. The child
 takes the command's standard streams, working directory, environment and ``sys.argv``, runs
 ``sweep/__main__.py`` as ``python -m sweep`` does (the guard of ``sweep run`` included), and
-exits as the interpreter would (``atexit`` handlers, streams flushed: status 120 if that
-fails). Its pid is the command's: signals are sent to it, and its status is
+ends by the interpreter's own exit: the command's ``SystemExit`` or exception leaves through
+the server's loop to the top level (a traceback then shows two frames of the server). Its
+pid is the command's: signals are sent to it, and its status is
 ``os.waitstatus_to_exitcode``'s, negative for a signal. ``module=`` runs another module
 (``python -m floewave``), ``code=`` a ``python -c`` script. tests/test_forkserver.py checks
 it against a fresh interpreter.
 
 Not the same as a fresh interpreter, and so not used by the tests of these: a stop signal
-during the interpreter's start-up or an import (tests/sweep/test_store_holes.py keeps
-``python -m sweep`` for those), what a command imports (tests/sweep/test_api.py), and the
-console script itself (tests/sweep/test_cli.py). The slow tier runs fresh interpreters
-throughout (the MPI torture, Slurm, the docs' launcher walks).
+during the interpreter's start-up or an import (tests/sweep/test_store_holes.py, and
+test_store_safety.py's start-up stop and merge stop, keep fresh interpreters for those),
+what a command imports (tests/sweep/test_api.py), and the console script itself
+(tests/sweep/test_cli.py). The slow tier runs fresh interpreters throughout (the MPI
+torture, Slurm, the docs' launcher walks).
 """
 from __future__ import annotations
 
@@ -33,13 +35,14 @@ import sys
 import time
 from pathlib import Path
 
-#: Environment variables read when a module is imported (numba's and Python's; sweep's own
-#: are read when used): a command whose values differ from a server's gets a server of its
-#: own, started with them. (``PYTHONPATH``'s entries are put on the child's ``sys.path``.)
-IMPORT_TIME = ("NUMBA_", "PYTHON")
+#: Environment variables read when a module is imported (numba's, Python's, and sweep's
+#: ``SWEEP_CHILD_MARGIN`` and ``SWEEP_HARD_TIMEOUT_MIN`` in sweep/run/compute.py): a command
+#: whose values differ from a server's gets a server of its own, started with them.
+#: (``PYTHONPATH``'s entries are put on the child's ``sys.path``.)
+IMPORT_TIME = ("NUMBA_", "PYTHON", "SWEEP_CHILD_MARGIN", "SWEEP_HARD_TIMEOUT_MIN")
 
 _SERVER = r"""
-import atexit, json, os, runpy, select, signal, socket, sys, traceback
+import json, os, runpy, select, socket, sys
 # what `python -m sweep` imports for run, status, validate and merge, once
 import scipy.optimize, h5py, numba, numpy
 import sweep, sweep.cli, sweep.run.launch, sweep.run.compute, sweep.testing, sweep.store.store
@@ -65,38 +68,17 @@ def child(request, fds):
     sys.path[0] = "" if request["code"] is not None else os.getcwd()
     sys.path[1:1] = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep)
                      if p and p not in started_with]
-    code = 1
-    try:
-        if request["code"] is None:
-            sys.argv = [None, *request["args"]]  # runpy sets [0]: the module's __main__.py
-            runpy.run_module(request["module"], run_name="__main__", alter_sys=True)
-        else:
-            sys.argv = ["-c", *request["args"]]
-            exec(compile(request["code"], "<string>", "exec"), {"__name__": "__main__"})
-        code = 0
-    except SystemExit as exc:
-        code = exc.code if isinstance(exc.code, int) else (
-            0 if exc.code is None else (print(exc.code, file=sys.stderr) or 1))
-    except KeyboardInterrupt:
-        traceback.print_exc()
-        code = -signal.SIGINT
-    except BaseException:
-        traceback.print_exc()
-    try:
-        atexit._run_exitfuncs()
-    except BaseException:
-        pass
-    for stream in (sys.stdout, sys.stderr):
-        if stream is None or stream.closed:  # as the interpreter skips them at exit
-            continue
-        try:
-            stream.flush()
-        except Exception:
-            code = 120 if code == 0 else code
-    if code == -signal.SIGINT:  # as the interpreter ends on an uncaught KeyboardInterrupt
-        signal.signal(signal.SIGINT, signal.SIG_DFL)
-        os.kill(os.getpid(), signal.SIGINT)
-    os._exit(code & 0xFF)
+    if request["code"] is None:
+        sys.argv = [None, *request["args"]]  # runpy sets [0]: the module's __main__.py
+        runpy.run_module(request["module"], run_name="__main__", alter_sys=True)
+    else:
+        sys.argv = ["-c", *request["args"]]
+        exec(compile(request["code"], "<string>", "exec"), {"__name__": "__main__"})
+    # the end of the script; an exception (SystemExit included) leaves by the same road: up
+    # through the server's loop to the interpreter, which ends this child as it ends any
+    # (a traceback and 1, SIGINT for KeyboardInterrupt, non-daemon threads joined, atexit
+    # handlers, finalisation, the streams flushed: 120 if that fails)
+    raise SystemExit(0)
 
 
 sock.send(json.dumps({"ready": os.getpid()}).encode())
@@ -144,10 +126,10 @@ class _Server:
                 return message["started"]
 
     def _receive(self, timeout: float | None) -> dict | None:
-        self.sock.settimeout(timeout)
+        self.sock.settimeout(timeout)  # 0: only what has arrived
         try:
             data = self.sock.recv(1 << 16)
-        except TimeoutError:
+        except (TimeoutError, BlockingIOError):
             return None
         if not data:
             raise RuntimeError(f"the fork server ended (status {self.proc.poll()})")
@@ -158,14 +140,14 @@ class _Server:
         return message
 
     def wait(self, pid: int, timeout: float | None) -> int | None:
-        """The wait status of ``pid``, or ``None`` after ``timeout`` seconds."""
+        """The wait status of ``pid``, or ``None`` if it has not ended after ``timeout``
+        seconds (0: the messages the server has sent so far are read, none awaited)."""
         deadline = None if timeout is None else time.monotonic() + timeout
         while pid not in self.status:
-            left = None if deadline is None else deadline - time.monotonic()
-            if left is not None and left <= 0:
-                return None
-            self._receive(left)
-        return self.status[pid]
+            left = None if deadline is None else max(0.0, deadline - time.monotonic())
+            if self._receive(left) is None:
+                break
+        return self.status.get(pid)
 
     def close(self) -> None:
         self.sock.close()

@@ -4,7 +4,9 @@ import os
 import signal
 import subprocess
 import sys
+import time
 
+import h5py
 import pytest
 
 import sweep
@@ -69,3 +71,28 @@ def test_signals_reach_the_command_and_end_it_as_they_would(tmp_path):
     assert "KeyboardInterrupt" in err
     with pytest.raises(subprocess.TimeoutExpired):
         forkserver.run([], code="import time; time.sleep(60)", timeout=0.2)
+
+
+def test_poll_sees_an_end_and_the_exit_is_the_interpreters(tmp_path):
+    """poll() reports a command that has ended (without a wait); the exit is the
+    interpreter's own: sys.exit(-2) is 254, a non-daemon thread is joined and a finaliser
+    runs before the end, an HDF5 file left open in a global is closed whole."""
+    p = forkserver.popen([], code="pass")
+    deadline = time.monotonic() + 60
+    while p.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert p.returncode == 0
+    assert forkserver.run([], code="import sys; sys.exit(-2)").returncode == 254
+    code = ("import threading, time\n"
+            "class Last:\n"
+            "    def __del__(self): print('finalised', flush=True)\n"
+            "last = Last()\n"
+            "threading.Thread(target=lambda: (time.sleep(0.2), print('joined', flush=True))"
+            ").start()\n"
+            "import h5py\n"
+            f"f = h5py.File({str(tmp_path / 'x.h5')!r}, 'w')\n"
+            "f['d'] = list(range(10))\n")
+    p = forkserver.run([], code=code, capture_output=True, text=True)
+    assert p.returncode == 0 and p.stdout.split() == ["joined", "finalised"], p
+    with h5py.File(tmp_path / "x.h5", "r") as f:
+        assert list(f["d"][:]) == list(range(10))

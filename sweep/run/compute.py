@@ -47,18 +47,9 @@ class PointTimeout(BaseException):
 #: The hard limit of a point stuck in native code: ``point_timeout`` plus this much
 #: (at least ``_HARD_MIN`` s) later the process ends (``faulthandler``; exit 1 and a
 #: traceback; under MPI the job ends with it) and the point counts as an attempt.
-#: ``SWEEP_HARD_TIMEOUT_MIN`` (seconds, read when a point starts) overrides the minimum
-#: margin (tests).
+#: ``SWEEP_HARD_TIMEOUT_MIN`` (seconds) overrides the minimum margin (tests).
 _HARD_FACTOR = 1.0
-_HARD_MIN = 30.0
-
-
-def _margin(name: str, default: float) -> float:
-    """``float(os.environ[name])``, or ``default`` when unset (read when used, not when
-    this module is imported)."""
-    return float(os.environ.get(name, default))
-
-
+_HARD_MIN = float(os.environ.get("SWEEP_HARD_TIMEOUT_MIN", "30"))
 _TIMEOUT_SIGNAL = signal.SIGUSR2
 
 
@@ -91,8 +82,7 @@ class _Deadline:
                                       args=(main, _TIMEOUT_SIGNAL))
         self._timer.daemon = True
         self._timer.start()
-        hard = self.seconds + max(_margin("SWEEP_HARD_TIMEOUT_MIN", _HARD_MIN),
-                                  _HARD_FACTOR * self.seconds)
+        hard = self.seconds + max(_HARD_MIN, _HARD_FACTOR * self.seconds)
         faulthandler.dump_traceback_later(min(hard, _MAX_TIMER), exit=True)
         return self
 
@@ -191,9 +181,8 @@ def compute_point(task: Task, fn: Callable[[ModelConfig], Any], rank: int = 0) -
 
 #: In-process, a point with a ``point_timeout`` runs in a child process killed this long
 #: after its limit if it has not returned (its soft timeout ignored, as by a point that
-#: catches ``BaseException`` in a loop): max(_CHILD_MARGIN, 5 % of the limit) [s];
-#: ``SWEEP_CHILD_MARGIN`` (seconds, read when a point starts) overrides it (tests).
-_CHILD_MARGIN = 1.0
+#: catches ``BaseException`` in a loop): max(_CHILD_MARGIN, 5 % of the limit) [s].
+_CHILD_MARGIN = float(os.environ.get("SWEEP_CHILD_MARGIN", "1.0"))
 
 
 def compute_in_child(task: Task, fn: Callable[[ModelConfig], Any], rank: int = 0) -> Outcome:
@@ -208,7 +197,7 @@ def compute_in_child(task: Task, fn: Callable[[ModelConfig], Any], rank: int = 0
     import sys
 
     limit = float(task.timeout or 0.0)
-    hard = limit + max(_margin("SWEEP_CHILD_MARGIN", _CHILD_MARGIN), 0.05 * limit)
+    hard = limit + max(_CHILD_MARGIN, 0.05 * limit)
     sys.stdout.flush()
     sys.stderr.flush()
     r, w = os.pipe()

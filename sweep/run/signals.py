@@ -14,6 +14,8 @@ import sys
 import time
 from typing import Any
 
+from sweep.system import take_start_up_stop
+
 __all__ = ["StopSignals", "GraceExpired", "MAX_TIMER", "REPEAT_WINDOW"]
 
 #: Longest interval [s] given to ``setitimer`` (larger values overflow it).
@@ -45,6 +47,7 @@ class StopSignals:
         self._last: tuple[int, float] = (0, -1.0)
 
     def __enter__(self) -> StopSignals:
+        self.requested = take_start_up_stop()  # a start-up stop whose exception was lost
         for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1):
             with contextlib.suppress(ValueError):  # not the main thread
                 self._old[sig] = signal.signal(sig, self._handle)

@@ -50,22 +50,26 @@ def test_a_lock_held_by_another_process_is_refused(tmp_path, refused_at_once):
 
 def test_a_holder_killed_during_the_wait_is_not_refused(tmp_path):
     """A held lock is tried again for KILLED_WRITER_WAIT (1 s) before it is refused: a
-    holder killed 0.3 s into the wait (a writer still exiting) lets the next one in."""
+    holder killed 0.8 s into the wait (a writer still exiting) lets the next one in.
+    (That the wait ends: the refusals of a live holder, here and in test_store*.py.)"""
     path = lock_path(tmp_path / "s.h5")
     holder = forkserver.popen(
         [], code="import sys, time; from sweep.store.lock import Lock;"
         f" Lock({str(path)!r}).acquire(); print('held', flush=True); time.sleep(60)",
         stdout=subprocess.PIPE, text=True)
-    assert holder.stdout.readline().strip() == "held"
-    killer = threading.Timer(0.3, os.kill, (holder.pid, signal.SIGKILL))
-    t0 = time.monotonic()
-    killer.start()
-    lock = Lock(path)
-    lock.acquire()
-    waited = time.monotonic() - t0
-    lock.release()
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        killer = threading.Timer(0.8, os.kill, (holder.pid, signal.SIGKILL))
+        t0 = time.monotonic()
+        killer.start()
+        lock = Lock(path)
+        lock.acquire()
+        waited = time.monotonic() - t0
+        lock.release()
+    finally:
+        holder.kill()
     assert holder.wait(timeout=60) == -signal.SIGKILL
-    assert 0.25 < waited < KILLED_WRITER_WAIT, waited
+    assert 0.75 < waited < KILLED_WRITER_WAIT, waited
 
 
 def test_pid_alive():

@@ -206,7 +206,8 @@ def test_kill_9_torture(tmp_path, campaign):
     """kill -9 the in-process campaign at random moments; the end equals a clean run.
     (The campaigns are ``python -m sweep run`` forked by an interpreter that imported
     sweep once (tests/forkserver.py), so that every kill falls in the campaign's own life:
-    store open, points, commits.)"""
+    store open, points, commits; without the guard, so that the kill is the campaign's
+    own.)"""
     import random
 
     cfg = tmp_path / "c.toml"
@@ -217,7 +218,8 @@ def test_kill_9_torture(tmp_path, campaign):
 
     def start(store):
         return forkserver.popen(["run", cfg, "--store", store, *args],
-                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                env=dict(os.environ, SWEEP_NO_GUARD="1"))
 
     forkserver.prestart(wait=True)
     t0 = time.monotonic()

@@ -454,8 +454,12 @@ def test_merge_refuses_itself_and_other_versions_and_stops_with_6(tmp_path):
     statuses = []
     for k in range(2):
         out = tmp_path / f"merged{k}.h5"
-        p = forkserver.popen(["merge", out, a], stdout=subprocess.PIPE,
-                             stderr=subprocess.PIPE, text=True)
+        if k == 0:  # the stop lands in a fresh interpreter's imports
+            p = subprocess.Popen([sys.executable, "-m", "sweep", "merge", str(out), a],
+                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        else:  # in the merge itself
+            p = forkserver.popen(["merge", out, a], stdout=subprocess.PIPE,
+                                 stderr=subprocess.PIPE, text=True)
         while p.poll() is None and not catches_signal(p.pid, signal.SIGTERM):
             time.sleep(0.002)
         time.sleep(0.05 * k)
