@@ -9,10 +9,12 @@ command to a server that did those imports once (one per pytest process and per
 import-time environment, :data:`IMPORT_TIME`) and forks a child for each command. The child
 takes the command's standard streams, working directory, environment and ``sys.argv``, runs
 ``sweep/__main__.py`` as ``python -m sweep`` does (the guard of ``sweep run`` included), and
-ends by the interpreter's own exit: the command's ``SystemExit`` or exception leaves through
-the server's loop to the top level (a traceback then shows two frames of the server). Its
-pid is the command's: signals are sent to it, and its status is
-``os.waitstatus_to_exitcode``'s, negative for a signal. ``module=`` runs another module
+exits as the interpreter does (the status of its ``SystemExit``, a traceback and 1 for an
+exception, SIGINT for KeyboardInterrupt; non-daemon threads joined, ``atexit`` handlers,
+a ``-c`` script's globals released, the streams flushed: 120 if that fails), except that
+the modules are not torn down one by one (0.2 s a child). Its pid is the command's:
+signals are sent to it, and its status is ``os.waitstatus_to_exitcode``'s, negative for a
+signal. ``module=`` runs another module
 (``python -m floewave``), ``code=`` a ``python -c`` script. tests/test_forkserver.py checks
 it against a fresh interpreter.
 
@@ -42,7 +44,7 @@ from pathlib import Path
 IMPORT_TIME = ("NUMBA_", "PYTHON", "SWEEP_CHILD_MARGIN", "SWEEP_HARD_TIMEOUT_MIN")
 
 _SERVER = r"""
-import json, os, runpy, select, socket, sys
+import atexit, gc, json, os, runpy, select, signal, socket, sys, threading
 # what `python -m sweep` imports for run, status, validate and merge, once
 import scipy.optimize, h5py, numba, numpy
 import sweep, sweep.cli, sweep.run.launch, sweep.run.compute, sweep.testing, sweep.store.store
@@ -68,17 +70,41 @@ def child(request, fds):
     sys.path[0] = "" if request["code"] is not None else os.getcwd()
     sys.path[1:1] = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep)
                      if p and p not in started_with]
-    if request["code"] is None:
-        sys.argv = [None, *request["args"]]  # runpy sets [0]: the module's __main__.py
-        runpy.run_module(request["module"], run_name="__main__", alter_sys=True)
-    else:
-        sys.argv = ["-c", *request["args"]]
-        exec(compile(request["code"], "<string>", "exec"), {"__name__": "__main__"})
-    # the end of the script; an exception (SystemExit included) leaves by the same road: up
-    # through the server's loop to the interpreter, which ends this child as it ends any
-    # (a traceback and 1, SIGINT for KeyboardInterrupt, non-daemon threads joined, atexit
-    # handlers, finalisation, the streams flushed: 120 if that fails)
-    raise SystemExit(0)
+    namespace = {"__name__": "__main__"}
+    code, interrupted = 0, False
+    try:
+        if request["code"] is None:
+            sys.argv = [None, *request["args"]]  # runpy sets [0]: the module's __main__.py
+            runpy.run_module(request["module"], run_name="__main__", alter_sys=True)
+        else:
+            sys.argv = ["-c", *request["args"]]
+            exec(compile(request["code"], "<string>", "exec"), namespace)  # noqa: S102
+    except SystemExit as exc:  # as the interpreter reads it
+        if exc.code is None or isinstance(exc.code, int):
+            code = exc.code or 0
+        else:
+            print(exc.code, file=sys.stderr)
+            code = 1
+    except BaseException as exc:  # the traceback, then 1 (KeyboardInterrupt: SIGINT)
+        sys.excepthook(type(exc), exc, exc.__traceback__)
+        code, interrupted = 1, isinstance(exc, KeyboardInterrupt)
+    # the interpreter's exit, short of tearing down every module (0.2 s in a child that
+    # shares the server's pages): non-daemon threads joined, atexit handlers, the script's
+    # globals released (finalisers, files closed), the streams flushed (120 if that fails)
+    threading._shutdown()
+    atexit._run_exitfuncs()
+    namespace.clear()
+    gc.collect()
+    for stream in (sys.stdout, sys.stderr):
+        if stream is not None and not stream.closed:
+            try:
+                stream.flush()
+            except Exception:  # noqa: BLE001
+                code = code or 120
+    if interrupted:
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
+        os.kill(os.getpid(), signal.SIGINT)
+    os._exit(code & 0xFF)
 
 
 sock.send(json.dumps({"ready": os.getpid()}).encode())
