@@ -107,6 +107,7 @@ def child(request, fds):
     os._exit(code & 0xFF)
 
 
+gc.freeze()  # the children's collections leave the server's objects (and pages) alone
 sock.send(json.dumps({"ready": os.getpid()}).encode())
 children = set()
 while True:
