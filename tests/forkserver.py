@@ -2,21 +2,20 @@
 sweep once, for the tests whose subject is the command's life, not the interpreter's start-up.
 
 A fresh ``python -m sweep run`` spends about 0.6 s importing numpy, numba, scipy, h5py and
-sweep before it reads its arguments; a test that runs the command a few times to see its exit
-statuses, messages, signals and store spends most of its time there. :func:`run` and
+sweep before it reads its arguments; a test that runs the command a few times to see its
+exit statuses, messages, signals and store spends most of its time there. :func:`run` and
 :func:`popen` (the shapes of :func:`subprocess.run` and :class:`subprocess.Popen`) hand the
-command to a server that did those imports once (one per pytest process and per
-import-time environment, :data:`IMPORT_TIME`) and forks a child for each command. The child
-takes the command's standard streams, working directory, environment and ``sys.argv``, runs
-``sweep/__main__.py`` as ``python -m sweep`` does (the guard of ``sweep run`` included), and
-exits as the interpreter does (the status of its ``SystemExit``, a traceback and 1 for an
-exception, SIGINT for KeyboardInterrupt; non-daemon threads joined, ``atexit`` handlers,
-a ``-c`` script's globals released, the streams flushed: 120 if that fails), except that
-the modules are not torn down one by one (0.2 s a child). Its pid is the command's:
-signals are sent to it, and its status is ``os.waitstatus_to_exitcode``'s, negative for a
-signal. ``module=`` runs another module
-(``python -m floewave``), ``code=`` a ``python -c`` script. tests/test_forkserver.py checks
-it against a fresh interpreter.
+command to a server that did those imports once (one per pytest process; a command whose
+import-time environment, :data:`IMPORT_TIME`, differs runs fresh) and forks a child for each
+command. The child takes the command's standard streams, working directory, environment and
+``sys.argv``, runs ``sweep/__main__.py`` as ``python -m sweep`` does (the guard of
+``sweep run`` included), and exits as the interpreter does (the status of its ``SystemExit``, a
+traceback and 1 for an exception, SIGINT for KeyboardInterrupt; non-daemon threads joined,
+``atexit`` handlers, a ``-c`` script's globals released, the streams flushed: 120 if that
+fails), except that the modules are not torn down one by one (0.2 s a child). Its pid is the
+command's: signals are sent to it, and its status is ``os.waitstatus_to_exitcode``'s,
+negative for a signal. ``module=`` runs another module (``python -m floewave``), ``code=`` a
+``python -c`` script. tests/test_forkserver.py checks it against a fresh interpreter.
 
 Not the same as a fresh interpreter, and so not used by the tests of these: a stop signal
 during the interpreter's start-up or an import (tests/sweep/test_store_holes.py, and
@@ -35,11 +34,12 @@ import socket
 import subprocess
 import sys
 import time
+from collections.abc import Mapping
 from pathlib import Path
 
 #: Environment variables read when a module is imported (numba's, Python's, and sweep's
 #: ``SWEEP_CHILD_MARGIN`` and ``SWEEP_HARD_TIMEOUT_MIN`` in sweep/run/compute.py): a command
-#: whose values differ from a server's gets a server of its own, started with them.
+#: whose values differ from the server's runs in a fresh interpreter.
 #: (``PYTHONPATH``'s entries are put on the child's ``sys.path``.)
 IMPORT_TIME = ("NUMBA_", "PYTHON", "SWEEP_CHILD_MARGIN", "SWEEP_HARD_TIMEOUT_MIN")
 
@@ -144,6 +144,7 @@ class _Server:
         theirs.close()
         self.status: dict[int, int] = {}
         self.ready = False
+        self.env = env
 
     def start(self, request: dict, fds: list[int]) -> int:
         socket.send_fds(self.sock, [json.dumps(request).encode()], fds)
@@ -184,25 +185,37 @@ class _Server:
             self.proc.kill()
 
 
-_servers: dict[tuple, _Server] = {}
+_server_of_this_process: list[_Server] = []
 
 
-def _server(env: dict[str, str]) -> _Server:
-    key = tuple(sorted((k, v) for k, v in env.items()
-                       if k.startswith(IMPORT_TIME) and k != "PYTHONPATH"))
-    if key not in _servers:
-        if not _servers:
-            atexit.register(lambda: [s.close() for s in _servers.values()])
-        _servers[key] = _Server(env)
-    return _servers[key]
+def _import_time(env: Mapping[str, str]) -> tuple:
+    return tuple(sorted((k, v) for k, v in env.items()
+                        if k.startswith(IMPORT_TIME) and k != "PYTHONPATH"))
+
+
+def _server(env: Mapping[str, str]) -> _Server | None:
+    """This process's server (started with its environment on first use), or ``None`` for
+    an ``env`` whose import-time variables differ: such a command needs a fresh
+    interpreter."""
+    if not _server_of_this_process:
+        _server_of_this_process.append(_Server(dict(os.environ)))
+        atexit.register(_server_of_this_process[0].close)
+    server = _server_of_this_process[0]
+    return server if _import_time(env) == _import_time(server.env) else None
+
+
+def _command(args, module: str, code: str | None) -> list[str]:
+    """The fresh interpreter's command line."""
+    return [sys.executable, *(["-c", code] if code is not None else ["-m", module]),
+            *map(str, args)]
 
 
 def prestart(env: dict[str, str] | None = None, wait: bool = False) -> None:
     """Start the server for ``env`` (default: this process's) now, so that its imports
     overlap other work; with ``wait``, return once it has imported them (so that a test
     can time a command without them)."""
-    server = _server(dict(os.environ if env is None else env))
-    while wait and not server.ready:
+    server = _server(os.environ if env is None else env)
+    while wait and server is not None and not server.ready:
         server._receive(None)
 
 
@@ -216,7 +229,11 @@ class Forked:
         env = dict(os.environ if env is None else env)
         self.args = ["python", *(["-c", "CODE"] if code is not None else ["-m", module]),
                      *map(str, args)]
-        self._server = _server(env)
+        server = _server(env)
+        if server is None:
+            raise ValueError("a fresh interpreter's command (its import-time environment"
+                             " differs from the server's): use popen() or run()")
+        self._server = server
         self.returncode: int | None = None
         ours, theirs, self._close = {}, [], []
         for fd, how in enumerate((stdin, stdout, stderr)):
@@ -322,21 +339,27 @@ class Forked:
         self.wait()
 
 
-def popen(args, **kw) -> Forked:
+def popen(args, *, module="sweep", code=None, **kw) -> Forked | subprocess.Popen:
     """``subprocess.Popen([python, -m, sweep, *args], **kw)``, forked; with ``module=NAME``,
     ``python -m NAME *args``; with ``code=TEXT``, ``python -c TEXT *args`` (``env``, ``cwd``,
     ``stdin``/``stdout``/``stderr`` as None, ``DEVNULL``, ``PIPE``, a file or fd,
-    ``text`` and ``start_new_session``)."""
-    return Forked(args, **kw)
+    ``text`` and ``start_new_session``). An ``env`` whose import-time variables
+    (:data:`IMPORT_TIME`) differ from this process's runs it in a fresh interpreter."""
+    if _server(os.environ if kw.get("env") is None else kw["env"]) is None:
+        return subprocess.Popen(_command(args, module, code), **kw)
+    return Forked(args, module=module, code=code, **kw)
 
 
 def run(args, *, module="sweep", code=None, env=None, cwd=None, timeout=None, capture_output=False,
         text=False, input=None, stdout=None, stderr=None) -> subprocess.CompletedProcess:
-    """``subprocess.run([python, -m, sweep, *args], ...)`` (or ``python -c code``), forked,
-    with subprocess's defaults; on ``timeout`` the command is killed and
-    :class:`subprocess.TimeoutExpired` raised, as subprocess does."""
+    """``subprocess.run([python, -m, sweep, *args], ...)`` (or ``python -c code``), forked
+    (or fresh, as :func:`popen`), with subprocess's defaults; on ``timeout`` the command is
+    killed and :class:`subprocess.TimeoutExpired` raised, as subprocess does."""
     if capture_output:
         stdout = stderr = subprocess.PIPE
+    if _server(os.environ if env is None else env) is None:
+        return subprocess.run(_command(args, module, code), env=env, cwd=cwd, timeout=timeout,
+                              text=text, input=input, stdout=stdout, stderr=stderr)
     p = Forked(args, module=module, code=code, env=env, cwd=cwd,
                stdin=subprocess.PIPE if input is not None else None, stdout=stdout,
                stderr=stderr, text=text)
