@@ -16,6 +16,10 @@ module, default ``t.toml``). ``power_store``: a store of a campaign computed by 
 ``sweep.testing:power_point`` (each TOML text run once per session). ``run_main``: a
 command-line ``main(argv)`` run in-process as a subprocess would run it.
 ``refused_at_once``: no wait for a killed writer before a live one is refused.
+
+**Commands in processes of their own** (``python -m sweep …``) are forked from an interpreter
+that imported sweep once (tests/forkserver.py) where the test is about the command's life,
+not the interpreter's start-up.
 """
 from __future__ import annotations
 
