@@ -29,14 +29,20 @@ def test_a_second_writer_is_refused_while_the_first_holds_the_lock(tmp_path, ref
     second.release()
 
 
-def test_a_lock_held_by_another_process_is_refused(tmp_path, refused_at_once):
-    path = lock_path(tmp_path / "s.h5")
+def _holder(path):
+    """Another process that holds the lock ``path`` (for 60 s), once it holds it."""
     holder = forkserver.popen(
         [], code="import sys, time; from sweep.store.lock import Lock;"
         f" Lock({str(path)!r}).acquire(); print('held', flush=True); time.sleep(60)",
         stdout=subprocess.PIPE, text=True)
+    assert holder.stdout.readline().strip() == "held"
+    return holder
+
+
+def test_a_lock_held_by_another_process_is_refused(tmp_path, refused_at_once):
+    path = lock_path(tmp_path / "s.h5")
+    holder = _holder(path)
     try:
-        assert holder.stdout.readline().strip() == "held"
         with pytest.raises(StoreLockedError):
             Lock(path).acquire()
     finally:
@@ -53,12 +59,8 @@ def test_a_holder_killed_during_the_wait_is_not_refused(tmp_path):
     holder killed 0.8 s into the wait (a writer still exiting) lets the next one in.
     (That the wait ends: the refusals of a live holder, here and in test_store*.py.)"""
     path = lock_path(tmp_path / "s.h5")
-    holder = forkserver.popen(
-        [], code="import sys, time; from sweep.store.lock import Lock;"
-        f" Lock({str(path)!r}).acquire(); print('held', flush=True); time.sleep(60)",
-        stdout=subprocess.PIPE, text=True)
+    holder = _holder(path)
     try:
-        assert holder.stdout.readline().strip() == "held"
         killer = threading.Timer(0.8, os.kill, (holder.pid, signal.SIGKILL))
         t0 = time.monotonic()
         killer.start()
