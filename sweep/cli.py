@@ -13,11 +13,10 @@ import sys
 import traceback
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
 
 from sweep.arguments import count, kind_list, plural, positive_number, seconds, shard
 from sweep.errors import EXIT_INTERNAL, EXIT_OK, EXIT_STORE, ConfigError, Interrupted, SweepError
-from sweep.system import note_start_up_stop, take_start_up_stop
+from sweep.run import startup
 
 __all__ = ["main", "build_parser"]
 
@@ -136,60 +135,6 @@ def _err(message: str | BaseException) -> None:
 
 
 # ---------------------------------------------------------------------- commands
-_START_UP_STOP: list[int] = []  # the first stop signal of the start-up (raised once)
-_LATE_STOP: list[int] = []  # stop signals after the campaign's own handlers were done
-
-
-def _stop_during_start_up(signum: int, frame: Any) -> None:
-    from sweep.run import signals
-
-    if signals.campaign_over:  # nothing left to stop: the command ends as it would
-        _LATE_STOP.append(signum)
-        return
-    if _START_UP_STOP:  # a repeat (the guard forwards what the group got too): once
-        return
-    _START_UP_STOP.append(signum)
-    note_start_up_stop(signal.Signals(signum).name)  # taken up if this raise is lost
-    raise Interrupted(f"stopped by {signal.Signals(signum).name} during start-up, before"
-                      " the store was opened; nothing was changed — the campaign is resumable: run"
-                      " the same command again")
-
-
-def _catch_stops_at_start_up(argv: Sequence[str], command_line: bool) -> None:
-    """``run`` and ``merge``: a stop signal before the store is opened ends the command
-    with status 6 (nothing was changed). Not under an MPI launcher: there rank 0 alone
-    leaving would leave the workers waiting; the default action ends the job. A stop whose
-    exception Python could not raise (in a weakref callback or finaliser) is taken up by
-    the campaign's or merge's handlers (:func:`sweep.system.take_start_up_stop`)."""
-    if not argv or argv[0] not in ("run", "merge"):
-        return
-    from sweep.run import signals
-    from sweep.run.mpi import launched
-
-    signals.campaign_over = False  # a new command: its stops stop it
-    _START_UP_STOP.clear()
-    _LATE_STOP.clear()
-    take_start_up_stop()
-    if launched():
-        return
-    if command_line and sys.unraisablehook is not _lost_stop_is_quiet:
-        _UNRAISABLE[:] = [sys.unraisablehook]
-        sys.unraisablehook = _lost_stop_is_quiet
-    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1):
-        signal.signal(sig, _stop_during_start_up)
-
-
-_UNRAISABLE: list[Any] = []  # the unraisable hook _lost_stop_is_quiet passes others to
-
-
-def _lost_stop_is_quiet(unraisable: Any) -> None:
-    """``sys.unraisablehook`` of a command: the lost start-up stop is not reported as
-    "Exception ignored" (it is taken up later); any other exception is, as before."""
-    if isinstance(unraisable.exc_value, Interrupted) and _START_UP_STOP:
-        return
-    _UNRAISABLE[0](unraisable)
-
-
 def cmd_run(args: argparse.Namespace) -> int:
     from sweep.config import load_campaign
     from sweep.run.launch import run_campaign
@@ -377,7 +322,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     from sweep.run import guard
 
     args_ = list(sys.argv[1:] if argv is None else argv)
-    _catch_stops_at_start_up(args_, argv is None)  # first: a stop from the first instants
+    startup.catch(args_, argv is None)  # first: a stop from the first instants is status 6
     try:
         child = argv is None and bool(args_) and args_[0] == "run" and guard.guarded()
         guard.unblock()
@@ -390,14 +335,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         _err(exc)
         status = exc.exit_status
         child = False
-    if _START_UP_STOP and status not in (EXIT_OK, Interrupted.exit_status):
+    if startup.FIRST and status not in (EXIT_OK, Interrupted.exit_status):
         # a stop raised inside an import can surface as another error (an ImportError,
         # a --compute that "cannot be imported"): it was the stop
-        _err(Interrupted(f"stopped by {signal.Signals(_START_UP_STOP[0]).name} during"
+        _err(Interrupted(f"stopped by {signal.Signals(startup.FIRST[0]).name} during"
                          " start-up; the campaign is resumable: run the same command"
                          " again"))
         status = Interrupted.exit_status
-    take_start_up_stop()  # this command's: not for a later one in this process
     try:
         sys.stdout.flush()
     except BrokenPipeError:
@@ -408,8 +352,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     if argv is None:  # the command line: a stop from now on cannot kill the exit
         for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1):
             signal.signal(sig, signal.SIG_IGN)
-    if _LATE_STOP and status == EXIT_OK:
-        print(f"sweep: {signal.Signals(_LATE_STOP[0]).name} arrived after the campaign had"
+    else:  # in-process: the caller's handlers back, its later stops not this command's
+        startup.release()
+    if startup.LATE and status == EXIT_OK:
+        print(f"sweep: {signal.Signals(startup.LATE[0]).name} arrived after the campaign had"
               " finished: nothing was left to stop", file=sys.stderr)
     if child:
         guard.report_status(status)
@@ -423,7 +369,7 @@ def _main(argv: Sequence[str] | None) -> int:
         _err(exc)
         return exc.exit_status
     except Exception:  # the stop wrapped by an import (a dataclass's __set_name__ makes
-        if _START_UP_STOP:  # it a RuntimeError): main says "stopped" and returns 6
+        if startup.FIRST:  # it a RuntimeError): main says "stopped" and returns 6
             return EXIT_INTERNAL
         raise
     try:
@@ -439,7 +385,7 @@ def _main(argv: Sequence[str] | None) -> int:
         quiet_stdout()
         return EXIT_OK
     except Exception:  # noqa: BLE001 - a bug: show it
-        if _START_UP_STOP:  # an import cut short by the stop, not a bug
+        if startup.FIRST:  # an import cut short by the stop, not a bug
             return EXIT_INTERNAL  # main says "stopped" and returns 6
         traceback.print_exc()
         return EXIT_INTERNAL

@@ -96,7 +96,8 @@ GROUPED = ("tests/test_slurm.py",  # one Slurm cluster and one reference job per
            "tests/paper/test_herman2019_qualitative.py", "tests/floewave/test_iteration.py",
            "tests/sweep/test_papercheck.py", "tests/sweep/test_ensemble_store.py",
            "tests/sweep/test_config.py", "tests/sweep/test_stats.py",
-           "tests/sweep/test_figures.py")
+           "tests/sweep/test_figures.py",
+           "tests/sweep/test_report.py")  # its report page, built once
 #: Modules that call jitted kernels directly (not through ``run_point``, whose kernels the
 #: controller compiles first: :func:`pytest_sessionstart`): numba compiles each such entry
 #: point for its own signature, so they run on one worker, which compiles each once.

@@ -48,6 +48,8 @@ class StopSignals:
 
     def __enter__(self) -> StopSignals:
         self.requested = take_start_up_stop()  # a start-up stop whose exception was lost
+        if self.requested:  # the guard's copy of it, if it comes now, is the same request
+            self._last = (signal.Signals[self.requested].value, time.monotonic())
         for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1):
             with contextlib.suppress(ValueError):  # not the main thread
                 self._old[sig] = signal.signal(sig, self._handle)

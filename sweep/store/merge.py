@@ -122,6 +122,7 @@ def merge(output: str | Path, inputs: list[str | Path]) -> str:
     info["command"] = f"sweep merge {output} " + " ".join(map(str, inputs))
     stop = _Stop()
     with stop, Store(output, campaign, run_info=info) as store:
+        stop.check(0)  # a start-up stop whose exception was lost: nothing merged
         for path in inputs:
             # group commits of _BATCH points within an input (a store holds each hash
             # once, so no staged record can shadow another) and at its end (the next
