@@ -27,6 +27,7 @@ torture, Slurm, the docs' launcher walks).
 from __future__ import annotations
 
 import atexit
+import contextlib
 import json
 import os
 import selectors
@@ -44,7 +45,8 @@ from pathlib import Path
 IMPORT_TIME = ("NUMBA_", "PYTHON", "SWEEP_CHILD_MARGIN", "SWEEP_HARD_TIMEOUT_MIN")
 
 _SERVER = r"""
-import atexit, gc, json, os, runpy, select, signal, socket, sys, threading
+import atexit, contextlib, gc, json, os, runpy, select, signal, socket, sys, threading
+import traceback
 # what `python -m sweep` imports for run, status, validate and merge, once
 import scipy.optimize, h5py, numba, numpy
 import sweep, sweep.cli, sweep.run.launch, sweep.run.compute, sweep.testing, sweep.store.store
@@ -55,6 +57,17 @@ started_with = set(sys.path)
 
 
 def child(request, fds):
+    code = 1
+    try:
+        code = command(request, fds)
+    except BaseException:  # the set-up or the exit sequence itself failed
+        with contextlib.suppress(BaseException):
+            traceback.print_exc()
+    finally:
+        os._exit(code & 0xFF)
+
+
+def command(request, fds):
     sock.close()
     for target, fd in enumerate(fds):
         os.dup2(fd, target)
@@ -85,26 +98,37 @@ def child(request, fds):
         else:
             print(exc.code, file=sys.stderr)
             code = 1
-    except BaseException as exc:  # the traceback, then 1 (KeyboardInterrupt: SIGINT)
-        sys.excepthook(type(exc), exc, exc.__traceback__)
-        code, interrupted = 1, isinstance(exc, KeyboardInterrupt)
+    except BaseException as exc:  # the traceback (from the command's frame), then 1
+        sys.excepthook(type(exc), exc, exc.__traceback__.tb_next)
+        code, interrupted = 1, isinstance(exc, KeyboardInterrupt)  # SIGINT, below
     # the interpreter's exit, short of tearing down every module (0.2 s in a child that
     # shares the server's pages): non-daemon threads joined, atexit handlers, the script's
-    # globals released (finalisers, files closed), the streams flushed (120 if that fails)
-    threading._shutdown()
+    # globals released (finalisers), HDF5 files still open closed (as HDF5's own exit
+    # handler does), the streams flushed (120 if that fails)
+    try:
+        threading._shutdown()
+    except BaseException:  # a stop while waiting for the threads: reported, not fatal
+        print("Exception ignored on threading shutdown:", file=sys.stderr)
+        traceback.print_exc()
     atexit._run_exitfuncs()
-    namespace.clear()
+    del namespace
     gc.collect()
+    for fid in h5py.h5f.get_obj_ids(types=h5py.h5f.OBJ_FILE):
+        with contextlib.suppress(Exception):
+            h5py.File(fid).close()
     for stream in (sys.stdout, sys.stderr):
         if stream is not None and not stream.closed:
             try:
                 stream.flush()
-            except Exception:  # noqa: BLE001
-                code = code or 120
+            except Exception as exc:  # noqa: BLE001
+                with contextlib.suppress(Exception):
+                    print(f"Exception ignored in: {stream!r}\n{type(exc).__name__}: {exc}",
+                          file=sys.__stderr__)
+                code = 120
     if interrupted:
         signal.signal(signal.SIGINT, signal.SIG_DFL)
         os.kill(os.getpid(), signal.SIGINT)
-    os._exit(code & 0xFF)
+    return code
 
 
 gc.freeze()  # the children's collections leave the server's objects (and pages) alone
@@ -262,6 +286,7 @@ class Forked:
             for fd in self._close:
                 os.close(fd)
         self._text = text
+        self._read: dict = {}  # what communicate() has read, by stream
 
         def stream(fd):
             if fd not in ours:
@@ -286,35 +311,49 @@ class Forked:
         return self.returncode
 
     def communicate(self, input=None, timeout: float | None = None):
+        """As :meth:`subprocess.Popen.communicate`: ``input`` to stdin, then stdout and
+        stderr read to their ends; after a :class:`subprocess.TimeoutExpired` (whose
+        ``stdout``/``stderr`` hold what was read) a call again goes on where it stopped."""
         deadline = None if timeout is None else time.monotonic() + timeout
-        if self.stdin is not None:
-            if input:
-                self.stdin.write(input)
-            self.stdin.close()
-        out = {self.stdout: [], self.stderr: []}
+        if self.stdin is not None and not self.stdin.closed:
+            with contextlib.suppress(BrokenPipeError):  # it ended without reading: as Popen
+                if input:
+                    self.stdin.write(input)
+                self.stdin.close()
+        out = self._read
         sel = selectors.DefaultSelector()
         for f in (self.stdout, self.stderr):
-            if f is not None:
+            if f is not None and not f.closed:
+                out.setdefault(f, [])
                 sel.register(f.fileno(), selectors.EVENT_READ, f)
         while sel.get_map():
             left = None if deadline is None else deadline - time.monotonic()
             if left is not None and left <= 0:
-                raise subprocess.TimeoutExpired(self.args, timeout)
+                raise subprocess.TimeoutExpired(self.args, timeout, *self._joined(out, False))
             for key, _ in sel.select(left):
                 data = os.read(key.fd, 1 << 16)
                 if not data:
                     sel.unregister(key.fd)
+                    key.data.close()
                 else:
                     out[key.data].append(data)
         self.wait(None if deadline is None else max(0.0, deadline - time.monotonic()))
-        def joined(f):
+        return self._joined(out, True)
+
+    def _joined(self, out: dict, text: bool) -> tuple:
+        def one(f):
             if f is None:
                 return None
-            f.close()
-            data = b"".join(out[f])
-            return data.decode() if self._text else data
+            data = b"".join(out.get(f, []))
+            return data.decode() if text and self._text else data
 
-        return joined(self.stdout), joined(self.stderr)
+        return one(self.stdout), one(self.stderr)
+
+    def close(self) -> None:
+        """Close this side of its pipes."""
+        for f in (self.stdin, self.stdout, self.stderr):
+            if f is not None and not f.closed:
+                f.close()
 
     def send_signal(self, sig: int) -> None:
         if self.poll() is None:
@@ -333,9 +372,7 @@ class Forked:
         return self
 
     def __exit__(self, *exc):
-        for f in (self.stdin, self.stdout, self.stderr):
-            if f is not None and not f.closed:
-                f.close()
+        self.close()
         self.wait()
 
 
@@ -368,5 +405,6 @@ def run(args, *, module="sweep", code=None, env=None, cwd=None, timeout=None, ca
     except subprocess.TimeoutExpired:
         p.kill()
         p.wait()
+        p.close()
         raise
     return subprocess.CompletedProcess(p.args, p.returncode, out, err)

@@ -27,6 +27,7 @@ def test_a_forked_run_is_a_fresh_interpreters_run(tmp_path):
     forked = forkserver.run(["run", "c.toml", "--store", "b.h5", *ARGS],
                             capture_output=True, text=True, cwd=tmp_path)
     assert fresh.returncode == forked.returncode == 0, (fresh.stderr, forked.stderr)
+    assert forked.args[0] == "python"  # forked: the fresh one's is sys.executable
     assert fresh.stdout.split(" in ")[0] == forked.stdout.split(" in ")[0]
     assert table(tmp_path / "a.h5").equals(table(tmp_path / "b.h5"))
     assert len(sweep.load(tmp_path / "b.h5")) == 4
@@ -51,7 +52,7 @@ def test_environment_arguments_streams_and_status(tmp_path):
     env = dict(os.environ, FORKED_X="yes", PYTHONPATH=str(tmp_path))
     p = forkserver.run(["a", "b"], code=code, env=env, cwd=tmp_path, input="in",
                        capture_output=True, text=True)
-    assert p.returncode == 7, p.stderr
+    assert p.returncode == 7 and p.args[0] == "python", p.stderr
     assert p.stdout.split() == ["['a',", "'b']", "yes", "True", "pythonpath", str(tmp_path),
                                 "in"]
     p = forkserver.run([], code="raise ValueError('boom')", capture_output=True, text=True)
@@ -64,7 +65,7 @@ def test_signals_reach_the_command_and_end_it_as_they_would(tmp_path):
     for sig in (signal.SIGKILL, signal.SIGTERM, signal.SIGINT):
         p = forkserver.popen([], code="import time; print('up', flush=True); time.sleep(60)",
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        assert p.stdout.readline() == "up\n"
+        assert isinstance(p, forkserver.Forked) and p.stdout.readline() == "up\n"
         p.send_signal(sig)
         _, err = p.communicate(timeout=60)
         assert p.returncode == -sig, (sig, err)
@@ -78,6 +79,7 @@ def test_poll_sees_an_end_and_the_exit_is_the_interpreters(tmp_path):
     interpreter's own: sys.exit(-2) is 254, a non-daemon thread is joined and a finaliser
     runs before the end, an HDF5 file left open in a global is closed whole."""
     p = forkserver.popen([], code="pass")
+    assert isinstance(p, forkserver.Forked)
     deadline = time.monotonic() + 60
     while p.poll() is None and time.monotonic() < deadline:
         time.sleep(0.01)
@@ -96,3 +98,15 @@ def test_poll_sees_an_end_and_the_exit_is_the_interpreters(tmp_path):
     assert p.returncode == 0 and p.stdout.split() == ["joined", "finalised"], p
     with h5py.File(tmp_path / "x.h5", "r") as f:
         assert list(f["d"][:]) == list(range(10))
+
+
+def test_an_import_time_variable_of_its_own_runs_fresh():
+    """A command whose import-time environment differs from the server's (a variable numba
+    or sweep reads when imported) cannot be forked from it: it runs in a fresh
+    interpreter, which reads it."""
+    env = dict(os.environ, SWEEP_CHILD_MARGIN="0.25")
+    code = "import sweep.run.compute as c; print(c._CHILD_MARGIN)"
+    p = forkserver.run([], code=code, env=env, capture_output=True, text=True)
+    assert p.args[0] == sys.executable and p.stdout.strip() == "0.25", p
+    p = forkserver.popen([], code=code, env=env, stdout=subprocess.PIPE, text=True)
+    assert not isinstance(p, forkserver.Forked) and p.communicate()[0].strip() == "0.25"
