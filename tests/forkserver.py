@@ -11,9 +11,10 @@ command. The child takes the command's standard streams, working directory, envi
 ``sys.argv``, runs ``sweep/__main__.py`` as ``python -m sweep`` does (the guard of
 ``sweep run`` included), and exits as the interpreter does (the status of its ``SystemExit``, a
 traceback and 1 for an exception, SIGINT for KeyboardInterrupt; non-daemon threads joined,
-``atexit`` handlers, a ``-c`` script's globals released, the streams flushed: 120 if that
-fails), except that the modules are not torn down one by one (0.2 s a child). Its pid is the
-command's: signals are sent to it, and its status is ``os.waitstatus_to_exitcode``'s,
+``atexit`` handlers, a ``-c`` script's globals released, HDF5 files still open closed, the
+streams flushed: 120 if that fails), except that the modules are not torn down one by one
+(0.2 s a child) and C-level exit handlers other than HDF5's close are skipped. Its pid is
+the command's: signals are sent to it, and its status is ``os.waitstatus_to_exitcode``'s,
 negative for a signal. ``module=`` runs another module (``python -m floewave``), ``code=`` a
 ``python -c`` script. tests/test_forkserver.py checks it against a fresh interpreter.
 
