@@ -17,6 +17,7 @@ from pathlib import Path
 from sweep.arguments import count, kind_list, plural, positive_number, seconds, shard
 from sweep.errors import EXIT_INTERNAL, EXIT_OK, EXIT_STORE, ConfigError, Interrupted, SweepError
 from sweep.run import startup
+from sweep.system import STOP_SIGNALS
 
 __all__ = ["main", "build_parser"]
 
@@ -350,7 +351,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (OSError, ValueError):
         pass
     if argv is None:  # the command line: a stop from now on cannot kill the exit
-        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1):
+        for sig in STOP_SIGNALS:
             signal.signal(sig, signal.SIG_IGN)
     else:  # in-process: the caller's handlers back, its later stops not this command's
         startup.release()

@@ -11,13 +11,16 @@ import signal
 from collections.abc import Iterator
 from pathlib import Path
 
-__all__ = ["utc_now", "fsync_path", "fsync_dir", "signals_deferred", "DEFERRED_SIGNALS",
-           "note_start_up_stop", "take_start_up_stop"]
+__all__ = ["utc_now", "fsync_path", "fsync_dir", "signals_deferred", "STOP_SIGNALS",
+           "DEFERRED_SIGNALS", "note_start_up_stop", "take_start_up_stop"]
 
+#: The signals that ask a command to stop (Ctrl-C, ``kill``, Slurm's warning signal), in
+#: the order their handlers are installed.
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1)
 #: Signals whose Python handlers must not run in the middle of a commit, an open or a
 #: rebuild (the in-process grace timer raises from its handler; a default action would
 #: kill the process half-way): they are delivered when that is done.
-DEFERRED_SIGNALS = frozenset({signal.SIGINT, signal.SIGTERM, signal.SIGUSR1, signal.SIGALRM})
+DEFERRED_SIGNALS = frozenset({*STOP_SIGNALS, signal.SIGALRM})
 
 
 #: The stop signal a command received during its start-up, by name (see
@@ -27,7 +30,7 @@ _start_up_stop: list[str] = []
 
 def note_start_up_stop(name: str) -> None:
     """Record the stop signal ``name`` that arrived during a command's start-up. Its handler
-    raises (``sweep.cli``), but an exception raised where Python can only report it (in a
+    raises (:mod:`sweep.run.startup`), but an exception raised where Python can only report it (in a
     weakref callback or a finaliser that runs inside an import) is lost: the campaign's and
     the merge's own stop handlers then take it up (:func:`take_start_up_stop`) as their
     first request."""

@@ -29,7 +29,7 @@ from sweep.protocol import Outcome, Task, plain
 from sweep.provenance import host
 from sweep.run.signals import GraceExpired
 from sweep.store.schema import PROFILE_VARS, REPLICA_VARS
-from sweep.system import utc_now
+from sweep.system import STOP_SIGNALS, utc_now
 
 __all__ = ["DEFAULT_COMPUTE", "MODEL_STATUSES", "PointTimeout", "resolve_compute",
            "compute_point", "compute_in_child"]
@@ -207,7 +207,7 @@ def compute_in_child(task: Task, fn: Callable[[ModelConfig], Any], rank: int = 0
         code = 0
         try:
             os.close(r)
-            for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1):
+            for sig in STOP_SIGNALS:
                 signal.signal(sig, signal.SIG_IGN)
             with contextlib.suppress(Exception):
                 import ctypes

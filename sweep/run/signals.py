@@ -14,7 +14,7 @@ import sys
 import time
 from typing import Any
 
-from sweep.system import take_start_up_stop
+from sweep.system import STOP_SIGNALS, take_start_up_stop
 
 __all__ = ["StopSignals", "GraceExpired", "MAX_TIMER", "REPEAT_WINDOW"]
 
@@ -50,7 +50,7 @@ class StopSignals:
         self.requested = take_start_up_stop()  # a start-up stop whose exception was lost
         if self.requested:  # the guard's copy of it, if it comes now, is the same request
             self._last = (signal.Signals[self.requested].value, time.monotonic())
-        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1):
+        for sig in STOP_SIGNALS:
             with contextlib.suppress(ValueError):  # not the main thread
                 self._old[sig] = signal.signal(sig, self._handle)
         if self.in_process:

@@ -21,7 +21,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from sweep.errors import Interrupted
-from sweep.system import note_start_up_stop, take_start_up_stop
+from sweep.system import STOP_SIGNALS, note_start_up_stop, take_start_up_stop
 
 __all__ = ["FIRST", "LATE", "catch", "release"]
 
@@ -30,7 +30,6 @@ __all__ = ["FIRST", "LATE", "catch", "release"]
 FIRST: list[int] = []
 #: Stop signals after the campaign's own handlers were done.
 LATE: list[int] = []
-_STOPS = (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1)
 _CALLERS: dict[int, Any] = {}  # the handlers catch() replaced, for release()
 _UNRAISABLE: list[Any] = []  # the unraisable hook _quiet passes the others to
 
@@ -74,7 +73,7 @@ def catch(argv: Sequence[str], command_line: bool) -> None:
     if command_line and sys.unraisablehook is not _quiet:
         _UNRAISABLE[:] = [sys.unraisablehook]
         sys.unraisablehook = _quiet
-    for sig in _STOPS:
+    for sig in STOP_SIGNALS:
         old = signal.signal(sig, _handle)
         _CALLERS.setdefault(sig, old)
 

@@ -19,6 +19,7 @@ from sweep.provenance import environment, host
 from sweep.run.compute import DEFAULT_COMPUTE, compute_point, resolve_compute
 from sweep.run.transport import wait_message
 from sweep.run.warmup import warm_up
+from sweep.system import STOP_SIGNALS
 
 __all__ = ["worker_loop"]
 
@@ -28,7 +29,7 @@ def worker_loop(comm: Any, compute: str = DEFAULT_COMPUTE) -> None:
 
     Stop signals are ignored here: the master decides when to stop (grace period).
     """
-    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1):
+    for sig in STOP_SIGNALS:
         with contextlib.suppress(ValueError, OSError):
             signal.signal(sig, signal.SIG_IGN)
     rank = comm.Get_rank()

@@ -18,7 +18,7 @@ from sweep.store.migrate import migration_steps
 from sweep.store.record import Record
 from sweep.store.schema import SCHEMA_VERSION
 from sweep.store.store import Store
-from sweep.system import take_start_up_stop
+from sweep.system import STOP_SIGNALS, take_start_up_stop
 
 __all__ = ["merge", "iter_records"]
 
@@ -42,7 +42,7 @@ class _Stop:
 
     def __enter__(self) -> _Stop:
         self.requested = take_start_up_stop()  # a start-up stop whose exception was lost
-        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1):
+        for sig in STOP_SIGNALS:
             with contextlib.suppress(ValueError):  # not the main thread
                 self._old[sig] = signal.signal(sig, self._handle)
         return self
