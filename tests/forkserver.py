@@ -235,12 +235,12 @@ def _command(args, module: str, code: str | None) -> list[str]:
             *map(str, args)]
 
 
-def prestart(env: dict[str, str] | None = None, wait: bool = False) -> None:
-    """Start the server for ``env`` (default: this process's) now, so that its imports
-    overlap other work; with ``wait``, return once it has imported them (so that a test
-    can time a command without them)."""
-    server = _server(os.environ if env is None else env)
-    while wait and server is not None and not server.ready:
+def prestart(wait: bool = False) -> None:
+    """Start this process's server now, so that its imports overlap other work; with
+    ``wait``, return once it has imported them (so that a test can time a command without
+    them)."""
+    server = _server(os.environ)
+    while wait and not server.ready:
         server._receive(None)
 
 
@@ -260,20 +260,20 @@ class Forked:
                              " differs from the server's): use popen() or run()")
         self._server = server
         self.returncode: int | None = None
-        ours, theirs, self._close = {}, [], []
+        ours, theirs, close = {}, [], []
         for fd, how in enumerate((stdin, stdout, stderr)):
             if how is None:
                 theirs.append(fd)
             elif how == subprocess.DEVNULL:
                 null = os.open(os.devnull, os.O_RDWR)
                 theirs.append(null)
-                self._close.append(null)
+                close.append(null)
             elif how == subprocess.PIPE:
                 r, w = os.pipe()
                 parent, child = (w, r) if fd == 0 else (r, w)
                 ours[fd] = parent
                 theirs.append(child)
-                self._close.append(child)
+                close.append(child)
             elif how == subprocess.STDOUT and fd == 2:
                 theirs.append(theirs[1])
             else:
@@ -284,7 +284,7 @@ class Forked:
                  "cwd": str(Path.cwd() if cwd is None else cwd),
                  "new_session": bool(start_new_session)}, theirs)
         finally:
-            for fd in self._close:
+            for fd in close:
                 os.close(fd)
         self._text = text
         self._read: dict = {}  # what communicate() has read, by stream

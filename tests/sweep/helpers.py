@@ -1,5 +1,6 @@
-"""Shared helpers of the store tests: a store's table without what differs between runs, and
-a store marked unclean (a writer that did not close it)."""
+"""Shared helpers of the store tests: a store's table without what differs between runs, a
+store marked unclean (a writer that did not close it), and another process holding a store
+open as its writer."""
 from __future__ import annotations
 
 import h5py
@@ -41,3 +42,25 @@ def split_shards(campaign) -> list:
         if sum(1 for p in parts if p.points()) >= 2:
             return parts
     raise AssertionError("no shard count splits these points")
+
+
+_HOLD = """
+import sys, sweep
+from sweep.store.store import Store
+s = Store(sys.argv[1], sweep.parse_campaign(sys.argv[2]))
+print("locked", flush=True)
+sys.stdin.read()
+"""
+
+
+def store_holder(path, toml: str):
+    """Another process (tests/forkserver.py) that has opened the store ``path`` of the
+    campaign ``toml`` as its writer and holds it until killed or its stdin closes."""
+    import subprocess
+
+    from tests import forkserver
+
+    holder = forkserver.popen([path, toml], code=_HOLD, stdin=subprocess.PIPE,
+                              stdout=subprocess.PIPE, text=True)
+    assert holder.stdout.readline().strip() == "locked"
+    return holder

@@ -19,6 +19,7 @@ from sweep.store.document import schema_document
 from sweep.store.schema import SCHEMA_VERSION
 from sweep.store.store import Store
 from tests import forkserver
+from tests.sweep.helpers import store_holder
 
 ROOT = Path(__file__).resolve().parents[2]
 TOML = "[base]\nL_sheet = 6.0\n[sweep]\nL_x = [0.5, 1.5]\neps = [0.2, 0.4, 0.6]\n"
@@ -43,12 +44,7 @@ def test_second_writer_refused_stale_lock_taken_over(tmp_path, campaign, run_mai
         proc = run_main(main, ["run", cfg, "--store", path])  # the command line's refusal
         assert proc.returncode == 3 and "live campaign" in proc.stderr
     # a lock left by a killed writer: the file exists but nobody holds its flock
-    holder = forkserver.popen([], code="import sys, sweep;"
-                              "from sweep.store.store import Store;"
-                              f"s = Store({str(path)!r}, sweep.parse_campaign({TOML!r}));"
-                              "print('locked', flush=True); sys.stdin.read()",
-                              stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
-    assert holder.stdout.readline().strip() == "locked"
+    holder = store_holder(path, TOML)
     os.kill(holder.pid, signal.SIGKILL)
     holder.wait()
     assert (tmp_path / "s.h5.lock").exists()

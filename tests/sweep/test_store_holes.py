@@ -16,7 +16,7 @@ from sweep import parse_campaign, run_campaign
 from sweep.cli import main
 from sweep.store.journal import journal_path, rejected_path
 from sweep.store.store import Store
-from sweep.testing import find_mpiexec
+from sweep.testing import catches_signal, find_mpiexec
 from tests import forkserver
 from tests.sweep.helpers import make_unclean, partial_shard, table
 
@@ -495,7 +495,7 @@ def test_a_stop_in_the_first_instants_is_status_6(tmp_path, delay):
                              env=_env())
         # SIGTERM's handler is sweep's (Python's own SIGINT handler exists from the
         # interpreter's first instants: a SIGINT before sweep runs is Python's affair)
-        while p.poll() is None and not _catches(p.pid, signal.SIGTERM):
+        while p.poll() is None and not catches_signal(p.pid, signal.SIGTERM):
             time.sleep(0.001)
         time.sleep(delay)
         p.send_signal(sig)
@@ -504,15 +504,6 @@ def test_a_stop_in_the_first_instants_is_status_6(tmp_path, delay):
         assert "Traceback" not in err and "cannot import" not in err
         if p.returncode == 0:
             assert "6 grid points" in out
-
-
-def _catches(pid, sig):
-    try:
-        status = open(f"/proc/{pid}/status").read()
-    except OSError:
-        return False
-    mask = int(next(x for x in status.splitlines() if x.startswith("SigCgt:")).split()[1], 16)
-    return bool(mask & (1 << (sig - 1)))
 
 
 # ---------------------------------------------------------------- 10. hostile inputs

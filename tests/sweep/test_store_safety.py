@@ -19,7 +19,7 @@ from sweep.store.journal import Journal, decode, encode, journal_path, rejected_
 from sweep.store.store import Store
 from sweep.testing import catches_signal
 from tests import forkserver
-from tests.sweep.helpers import make_unclean, table
+from tests.sweep.helpers import make_unclean, store_holder, table
 
 TOML = "[base]\nL_sheet = 6.0\n[sweep]\nL_x = [0.5, 1.5]\neps = [0.2, 0.4, 0.6, 0.8]\n"
 FAKE = "sweep.testing:fake_point"
@@ -208,22 +208,11 @@ def test_empty_store_beside_its_journal_is_rebuilt(tmp_path, campaign):
     assert len(list(tmp_path.glob("s.h5.damaged-*"))) == 1
 
 
-_HOLD = """
-import sys, sweep
-from sweep.store.store import Store
-s = Store(sys.argv[1], sweep.parse_campaign(sys.argv[2]))
-print("locked", flush=True)
-sys.stdin.read()
-"""
-
-
 def test_deleting_the_lock_file_does_not_admit_a_second_writer(tmp_path, campaign, refused_at_once):
     path = tmp_path / "s.h5"
     run_campaign(campaign, str(path), compute=FAKE)
-    holder = forkserver.popen([path, TOML], code=_HOLD, stdin=subprocess.PIPE,
-                              stdout=subprocess.PIPE, text=True)
+    holder = store_holder(path, TOML)
     try:
-        assert holder.stdout.readline().strip() == "locked"
         with pytest.raises(sweep.StoreLockedError, match=f"pid {holder.pid}"):
             Store(path, campaign)
         os.unlink(tmp_path / "s.h5.lock")
