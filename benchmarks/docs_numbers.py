@@ -22,7 +22,7 @@ records) and prints, labelled as in the docs:
   docs/performance.md quotes, so that one record holds them all with the machine named: the
   CPU (``/proc/cpuinfo``'s model name and vector width), the kernels' compile with an empty
   numba cache (``floewave run``'s ``kernels ready in`` line), the cost projection
-  (``benchmarks/plan_check.py --n 32 --seed 7`` against model version 6's numerics in the
+  (``benchmarks/plan_check.py --n 32 --seed 7`` against model version 7's numerics in the
   same run) and ``sweep paper-check --run --seeds 0 1`` (about 6 minutes more).
 
 ``--record FILE`` also writes the output to FILE under a header naming the model version
@@ -104,6 +104,11 @@ def machine() -> str:
     return f"{name}, {width}, {os.cpu_count()} cores"
 
 
+#: plan_check's in-run baseline: model version 7's numerics (the midpoint hold over 4 steps)
+V7 = ["--baseline", "drag_hold=midpoint", "--baseline", "drag_every=4", "--baseline",
+      "dt=0.001"]
+
+
 def timings(out: Path) -> None:
     """The compile, the cost projection and paper-check --run --seeds, timed (--timings)."""
     import os
@@ -117,11 +122,10 @@ def timings(out: Path) -> None:
     print(f"[timing] kernels' compile with an empty numba cache (floewave run):"
           f" {m.group(1) if m else '?'} s")
     proc = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "plan_check.py"),
-                           "--n", "32", "--seed", "7", "--baseline", "drag_every=1",
-                           "--baseline", "n_average=8"], capture_output=True, text=True,
+                           "--n", "32", "--seed", "7", *V7], capture_output=True, text=True,
                           cwd=ROOT)
-    print("[timing] python benchmarks/plan_check.py --n 32 --seed 7 --baseline drag_every=1"
-          " --baseline n_average=8 (CPU time; baseline: model version 6's numerics)")
+    print("[timing] python benchmarks/plan_check.py --n 32 --seed 7 " + " ".join(V7)
+          + " (CPU time; baseline: model version 7's numerics)")
     for line in (proc.stdout + proc.stderr).splitlines():
         if not re.match(r"^\s*(this|baseline)\s+[0-9]", line) and not line.startswith(
                 "     case"):

@@ -2,6 +2,7 @@
 
     python benchmarks/kernel_bits.py [--against REV] [--periods 0.5]
     python benchmarks/kernel_bits.py --against 8cbf2b1 --every-step   # drag_every = 1 is v6
+    python benchmarks/kernel_bits.py --against 9fc2add --midpoint     # v7's hold is v7's
 
 A kernel change that only restructures loops (vectorisation, fission, branch-free selects)
 must not change a single bit of any trajectory: otherwise it is a new model version (every
@@ -60,10 +61,13 @@ cases, periods, out = json.loads(sys.argv[1]), float(sys.argv[2]), sys.argv[3]
 arrays = {}
 import dataclasses
 fields = {f.name for f in dataclasses.fields(ModelConfig)}
-every_step = sys.argv[4] == "1"
+every_step = sys.argv[4] in ("1", "2")
 for n, case in enumerate(cases):
-    if every_step and "drag_every" in fields:
+    if sys.argv[4] == "1" and "drag_every" in fields:
         case = {**case, "drag_every": 1}
+    if sys.argv[4] == "2":     # model version 7's held drag: the midpoint hold over 4 steps
+        case = {**case, "drag_every": 4, **({"drag_hold": "midpoint"}
+                                            if "drag_hold" in fields else {})}
     cfg = ModelConfig(T=1.2, **case)
     k, _ = solve_dispersion(cfg)
     if every_step:      # arrangements that do not depend on the configuration's fields
@@ -91,13 +95,14 @@ np.savez(out, **arrays)
 """
 
 
-def run(checkout: Path, periods: float, out: Path, every_step: bool = False) -> None:
+def run(checkout: Path, periods: float, out: Path, every_step: bool | str = False) -> None:
     """The trajectories of the floewave in ``checkout``, into ``out`` (.npz)."""
     with tempfile.TemporaryDirectory() as cache:
         env = dict(os.environ, PYTHONPATH=str(checkout), NUMBA_CACHE_DIR=cache,
                    NUMBA_NUM_THREADS="1")
         subprocess.run([sys.executable, "-c", _RUN, json.dumps(CASES), str(periods),
-                        str(out), "1" if every_step else "0"], env=env, cwd=cache,
+                        str(out), every_step if isinstance(every_step, str) else
+                        ("1" if every_step else "0")], env=env, cwd=cache,
                        check=True)
 
 
@@ -106,6 +111,10 @@ def main() -> int:
     p.add_argument("--against", default="HEAD", help="the commit to compare with")
     p.add_argument("--periods", type=float, default=0.5,
                    help="wave periods per phase (four phases per case)")
+    p.add_argument("--midpoint", action="store_true",
+                   help="the midpoint hold over drag_every = 4 steps (model version 7's"
+                   " default; drag_hold = \"midpoint\" where the field exists) and"
+                   " arrangements that do not depend on the configuration's fields")
     p.add_argument("--every-step", action="store_true",
                    help="drag_every = 1 where the field exists and arrangements that do not"
                         " depend on the configuration's fields: model version 7's every-step"
@@ -116,8 +125,9 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         ref = export_revision(args.against, tmp / "ref", ("floewave",))
-        run(ref, args.periods, tmp / "ref.npz", args.every_step)
-        run(ROOT, args.periods, tmp / "new.npz", args.every_step)
+        mode = "2" if args.midpoint else args.every_step
+        run(ref, args.periods, tmp / "ref.npz", mode)
+        run(ROOT, args.periods, tmp / "new.npz", mode)
         a = dict(np.load(tmp / "ref.npz"))
         b = dict(np.load(tmp / "new.npz"))
         for arrays, where in ((a, ref), (b, ROOT)):       # each ran the floewave it should

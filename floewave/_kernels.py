@@ -63,6 +63,7 @@ from ._layout import (
     DAMPING_LIGGGHTS,
     DRAG_EXACT,
     DRAG_QUADRATURE,
+    HOLD_LINEAR,
     INTEG_HALF_STEP,
     INTEG_PREDICTOR,
     LANES,
@@ -97,7 +98,10 @@ W_FC = 5         # contact force of pair (j, j+1),
 W_VC = 6         # velocity and cos, sin(k x) at the centre of a held drag's steps
 W_CKC = 7        # (drag_every > 1),
 W_SKC = 8
-W_SC = 9         # then the drag scratch sc (N_SC rows)
+W_D0 = 9         # drag_hold "linear": the drag sums s2 of the last evaluation, their slope
+W_DS = 10        # per step from the evaluation before, and the step of the last
+W_DI = 11        # evaluation (a float)
+W_SC = 12        # then the drag scratch sc (N_SC rows)
 N_WORK = W_SC + N_SC
 
 
@@ -158,6 +162,7 @@ class KernelOptions(NamedTuple):
     integrator: int
     drag: int
     drag_every: int    # evaluate the drag sums every this many steps (held in between)
+    hold: int          # how a held drag is evaluated (``HOLD_*``, drag_every > 1)
     accumulate: bool   # add every step to the window statistics
 
 
@@ -170,6 +175,7 @@ def kernel_options(cfg: ModelConfig, accumulate: bool) -> KernelOptions:
         integrator=INTEG_PREDICTOR if cfg.integrator == "predictor" else INTEG_HALF_STEP,
         drag=DRAG_QUADRATURE if cfg.drag_integration == "quadrature" else DRAG_EXACT,
         drag_every=int(cfg.drag_every),
+        hold=HOLD_LINEAR if cfg.drag_hold == "linear" else HOLD_MIDPOINT,
         accumulate=bool(accumulate))
 
 
@@ -203,13 +209,14 @@ def make_advance(opts: KernelOptions):
     cos, sin(k x_j) are computed once per call and then rotated by k dx_j each step
     (Taylor series of the rotation to O((k dx)^4), k dx ~ 1e-5: exact to rounding).
     """
-    contact, damping, clip, integrator, drag, drag_every, accumulate = opts
+    contact, damping, clip, integrator, drag, drag_every, hold, accumulate = opts
     contact = int(contact)
     damping = int(damping)
     clip = int(clip)
     integrator = int(integrator)
     drag = int(drag)
     drag_every = int(drag_every)
+    linear = drag_every > 1 and int(hold) == HOLD_LINEAR
     w_s3 = float(drag_every)
     accumulate = bool(accumulate)
 
@@ -240,6 +247,9 @@ def make_advance(opts: KernelOptions):
         vc = work[W_VC, :nt]
         ckc = work[W_CKC, :nt]
         skc = work[W_SKC, :nt]
+        d0 = work[W_D0, :nt]
+        ds = work[W_DS, :nt]
+        di = work[W_DI, :nt]
         sc = work[W_SC:]
         # a held drag is evaluated at the centre of the steps it holds, (drag_every - 1) / 2
         # steps ahead: the wave phase at that time, the floe moved on by v* and its velocity
@@ -282,12 +292,28 @@ def make_advance(opts: KernelOptions):
             # drag_every and at an ``init``, and held in ``sc`` on the steps between; the
             # dissipation sum of an evaluation stands for the drag_every steps it holds)
             fresh = drag_every == 1 or step < 0 or istep % drag_every == 0
-            if drag_every == 1 or step < 0:
+            if drag_every == 1 or step < 0 or (linear and fresh):
                 if drag == DRAG_EXACT:
                     exact_pass(ck, sk, cwt, swt, a, vs, P, mom, accumulate, sc, idx)
                 else:
                     drag_pass(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc,
                               idx)
+                if linear:
+                    # "linear": the sums of the true state of this step; the slope from
+                    # the last evaluation (none across an ``init``: new amplitudes)
+                    fi = float(istep)
+                    for j in range(nt):
+                        s2 = sc[SC_S2, j]
+                        gap = fi - di[j]
+                        ds[j] = (s2 - d0[j]) / gap if (step >= 0 and gap > 0.0) else 0.0
+                        d0[j] = s2
+                        di[j] = fi
+            elif linear:
+                # between evaluations: extrapolated along the last slope
+                fi = float(istep)
+                for j in range(nt):
+                    sc[SC_S2, j] = d0[j] + ds[j] * (fi - di[j])
+                    sc[SC_S, j] = sk[j] * cwt - ck[j] * swt
             else:
                 if fresh:
                     wc = two_pi_nt * ((istep % P.n_t) + half)

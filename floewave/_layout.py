@@ -15,6 +15,8 @@ INTEG_PREDICTOR = 0
 INTEG_HALF_STEP = 1
 DRAG_QUADRATURE = 0
 DRAG_EXACT = 1
+HOLD_MIDPOINT = 0    # drag_hold: a held drag evaluated at the predicted centre of its steps
+HOLD_LINEAR = 1      # ... at the true state, extrapolated linearly from the last two
 
 # rows of the per-window statistics array ``stats`` (shape (N_STATS, R N_f))
 ST_S3 = 0        # sum over steps and cells of |u_rel|^3            [m^3 s^-3]

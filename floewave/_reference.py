@@ -61,7 +61,8 @@ def forces(x: np.ndarray, v: np.ndarray, a: np.ndarray, x0: np.ndarray, wt: floa
     return F
 
 
-def advance(x, u, acc, a, x0, istep, nsteps, P, opts, cxi, sxi, held=None):
+def advance(x, u, acc, a, x0, istep, nsteps, P, opts, cxi, sxi, held=None, slope=None,
+            i_last=None):
     """Numpy twin of the time loop :func:`floewave._kernels.make_advance` builds, for one
     chain (``x[1:] - x[:-1]`` pairs every neighbour; no statistics); returns istep.
 
@@ -69,11 +70,19 @@ def advance(x, u, acc, a, x0, istep, nsteps, P, opts, cxi, sxi, held=None):
     centre of the K steps it is then held for, (K - 1) / 2 steps ahead: the wave phase of
     that time, the floe moved on by its force velocity and that velocity moved on by acc;
     ``held`` is the drag [N] held when the loop starts (the kernel's, for a start inside a
-    hold)."""
+    hold). ``opts.hold`` linear (``drag_hold = "linear"``): evaluated at the true state of
+    the steps istep = 0 mod K and extrapolated between them along the slope from the
+    evaluation before; ``held``, ``slope`` (per step) and ``i_last`` (its step) are the
+    kernel's at the start."""
     dt = P.dt
     n_hold = int(opts.drag_every)
     h = 0.5 * (n_hold - 1) * dt
     Fd = held
+    # drag_hold "linear": the last evaluation [N], its slope per step [N], its step
+    linear = n_hold > 1 and opts.hold == K.HOLD_LINEAR
+    last, i_last = held, (istep if i_last is None else i_last)
+    if slope is None and held is not None:
+        slope = np.zeros_like(held)
     for _ in range(nsteps):
         istep += 1
         uh = u + 0.5 * dt * acc
@@ -82,6 +91,13 @@ def advance(x, u, acc, a, x0, istep, nsteps, P, opts, cxi, sxi, held=None):
         wt = 2.0 * math.pi / P.n_t * (istep % P.n_t)
         if n_hold == 1:
             F = forces(x, vs, a, x0, wt, P, opts, cxi, sxi)
+        elif linear:
+            if istep % n_hold == 0 or last is None:
+                new = drag(x, vs, a, wt, P, cxi, sxi)
+                slope = ((new - last) / (istep - i_last) if last is not None
+                         else np.zeros_like(new))
+                last, i_last = new, istep
+            F = forces(x, vs, a, x0, wt, P, opts, cxi, sxi, last + slope * (istep - i_last))
         else:
             if istep % n_hold == 0 or Fd is None:
                 wc = 2.0 * math.pi / P.n_t * ((istep % P.n_t) + 0.5 * (n_hold - 1))

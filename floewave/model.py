@@ -103,10 +103,11 @@ class FloeChain:
                     else np.zeros(a.shape[:-1], dtype=bool))
             saved = self.acc.copy()
             # the drag sums held between evaluations (``drag_every`` > 1), likewise
-            held = self._held_drag().copy()
+            held = [h.copy() for h in self._held_rows()]
             self._loop(self._spin, a, 0, np.zeros((K.N_STATS, 0)), True)
             self.acc[keep] = saved[keep]
-            self._held_drag()[keep] = held[keep]
+            for h, old in zip(self._held_rows(), held, strict=True):
+                h[keep] = old[keep]
             self._acc_a = a.copy()
             self._acc_ready = True
         if stats is None:
@@ -126,6 +127,13 @@ class FloeChain:
     def _held_drag(self) -> np.ndarray:
         """The drag sums the time loop holds between evaluations, (R, N_f) view."""
         return self.work[K.W_SC + K.SC_S2, :self.x0.size].reshape(self.x0.shape)
+
+    def _held_rows(self) -> list[np.ndarray]:
+        """Every row of scratch a held drag carries from step to step ((R, N_f) views):
+        the sums held, and for ``drag_hold = "linear"`` the last evaluation, its slope and
+        its step."""
+        rows = [K.W_SC + K.SC_S2, K.W_D0, K.W_DS, K.W_DI]
+        return [self.work[r, :self.x0.size].reshape(self.x0.shape) for r in rows]
 
     def check(self) -> None:
         """Raise :class:`NumericalError` on a non-finite state or floes out of order."""

@@ -13,11 +13,15 @@ from floewave.model import FloeChain
     dict(clip_attraction=True, integrator="half_step", eps=0.2),
     dict(dispersion="ep", L_x=1.5, d_f=0.0),
     dict(drag_every=1),
-    dict(drag_every=4, L_x=3.0, integrator="half_step"),
+    dict(drag_every=4, L_x=3.0, integrator="half_step", drag_hold="midpoint"),
+    dict(drag_every=4, L_x=3.0, integrator="half_step", drag_hold="linear"),
+    dict(drag_every=8, drag_hold="linear"),
+    dict(drag_every=8, drag_hold="midpoint"),
 ])
 def test_numba_kernel_equals_numpy_twin(opts):
     """(The default holds the drag over drag_every = 4 steps; the twin holds it alike, from
-    the drag the kernel holds when the twin takes over.)"""
+    the drag the kernel holds when the twin takes over: for ``drag_hold = "linear"`` the
+    last evaluation, its slope and its step.)"""
     # the paper's dt: 5000 steps of 1e-4 s stay short of chaos amplifying rounding (and
     # resolve the linear law's contacts)
     cfg = ModelConfig(**{"dt": 1e-4, **opts})
@@ -28,9 +32,15 @@ def test_numba_kernel_equals_numpy_twin(opts):
     x, u, acc = chain.x.copy(), chain.u.copy(), chain.acc.copy()
     istep = chain.istep
     held = chain.P.c_drag * chain._held_drag().copy()
+    _, d0, ds, di = (h.copy() for h in chain._held_rows())
+    if cfg.drag_every > 1 and cfg.drag_hold == "linear":   # the last evaluation, its slope
+        held, slope, i_last = chain.P.c_drag * d0, chain.P.c_drag * ds, int(di[0])
+        assert np.all(di == i_last) and i_last <= istep
+    else:
+        slope = i_last = None
     chain.run(a, 2000)
     ref.advance(x, u, acc, a, chain.x0, istep, 2000, chain.P, chain.opts, chain.cxi, chain.sxi,
-                held=held)
+                held=held, slope=slope, i_last=i_last)
     assert np.any(np.diff(x) - cfg.L_x < 0), "no contact exercised"
     np.testing.assert_allclose(chain.x, x, rtol=0, atol=1e-12)
     np.testing.assert_allclose(chain.u, u, rtol=0, atol=1e-10)
