@@ -75,7 +75,8 @@ def build_parser() -> argparse.ArgumentParser:
     e = sub.add_parser("export", help="write the per-point table as CSV or Parquet")
     e.add_argument("store", type=Path)
     e.add_argument("--output", "--out", "-o", type=Path, required=True, dest="output",
-                   help="file ending in .csv or .parquet (Parquet needs the 'parquet' extra)")
+                   help="file ending in .csv, .csv.gz or .parquet (Parquet needs the"
+                   " 'parquet' extra); sweep.load reads it back, bit for bit")
 
     v = sub.add_parser("validate", help="check a store against results_schema")
     v.add_argument("store", type=Path)

@@ -5,18 +5,20 @@ import importlib.util
 from pathlib import Path
 
 from sweep.analysis.load import load
+from sweep.analysis.tables import table_suffix
 from sweep.errors import ConfigError, StoreError
 
 __all__ = ["export_table", "parquet_engine"]
 
 
 def export_table(store: str | Path, output: Path) -> int:
-    """Write the table of ``store`` to ``output`` (``.csv`` or ``.parquet``); return the
+    """Write the table of ``store`` to ``output`` (``.csv``, ``.csv.gz`` or ``.parquet``); return the
     number of rows. :class:`ConfigError` for an output it cannot write (name, missing
     engine), :class:`StoreError` when the write fails (a full disk)."""
-    suffix = output.suffix.lower()
-    if suffix not in (".csv", ".parquet"):
-        raise ConfigError(f"--output {output}: expected a .csv or .parquet file name")
+    suffix = table_suffix(output)
+    if suffix is None:
+        raise ConfigError(f"--output {output}: expected a .csv, .csv.gz or .parquet file"
+                          " name")
     from floewave._paths import output_file_problem
 
     problem = output_file_problem(output, "--output")
@@ -27,7 +29,8 @@ def export_table(store: str | Path, output: Path) -> int:
                           " pip install 'floewave[parquet]' (or write .csv)")
     df = load(store)
     try:
-        if suffix == ".csv":
+        if suffix in (".csv", ".csv.gz"):
+            # floats as their shortest round-trip text: read back bit for bit
             df.to_csv(output, index=False)
         else:
             df.to_parquet(output, index=False)

@@ -16,6 +16,7 @@ import pandas as pd
 import xarray as xr
 
 import floewave
+from sweep.analysis.tables import STATUS_ORDER, typed_table, load_table, table_suffix
 from sweep.errors import PointNotFoundError, StoreError, StoreUnreadableError
 from sweep.store import reader
 from sweep.store.cells import text
@@ -29,12 +30,10 @@ from sweep.store.schema import (
     column,
 )
 
-__all__ = ["load", "load_xarray", "load_profile", "load_profiles", "store_attrs", "store_runs",
+__all__ = ["load", "load_table", "load_xarray", "load_profile", "load_profiles", "store_attrs",
+           "store_runs",
            "resolve_hash", "journal_points", "STATUS_ORDER", "PROFILE_LEADING_DIMS"]
 
-#: Every status a point can have, in the order of the ``status`` categorical.
-STATUS_ORDER = ("converged", "converged_noisy", "not_converged", "failed", "invalid",
-                "crashed", "timeout")
 #: Statuses without results: NaN in :func:`load_xarray` and :func:`load_profiles`.
 NO_RESULT = ("failed", "invalid", "crashed", "timeout")
 #: Names of a profile's leading axes when it has more than the floe axis (a profile of
@@ -134,7 +133,13 @@ def _retried(read: Any) -> Any:
 
 def load(path: str | Path) -> pd.DataFrame:
     """The per-point table as a DataFrame: one row per stored point (see :func:`_load`);
-    a read that fails while a live writer commits is tried again."""
+    a read that fails while a live writer commits is tried again.
+
+    ``path`` may also be a table ``sweep export`` wrote (``.csv``, ``.csv.gz``,
+    ``.parquet``) or a directory of them (the shards of one campaign, e.g.
+    ``results/herman2019``): :func:`load_table`."""
+    if Path(path).is_dir() or table_suffix(path) is not None:
+        return load_table(path)
     try:
         return _retried(lambda: _load(path))
     except KeyError as exc:
@@ -157,7 +162,7 @@ def _load(path: str | Path) -> pd.DataFrame:
         reader.check_hashes(path, data["hash"], data["config_json"], reader.model_version(f),
                             data["provenance"],
                             {k: data[k] for k in floewave.SWEPT_FIELDS if k in data})
-    df = _with_derived(_typed(pd.DataFrame(data)))
+    df = _with_derived(typed_table(pd.DataFrame(data)))
     df.attrs["units"] = {c.name: c.units for c in (*COLUMNS, *DERIVED)}
     df.attrs["long_name"] = {c.name: c.long_name for c in (*COLUMNS, *DERIVED)}
     df.attrs["campaign"] = campaign
@@ -171,21 +176,6 @@ def _with_derived(df: pd.DataFrame) -> pd.DataFrame:
         num, den = DERIVED_FROM[col.name]
         values = df[num].astype(float) / df[den].astype(float)
         df.insert(df.columns.get_loc(num) + 1, col.name, values)
-    return df
-
-
-def _typed(df: pd.DataFrame) -> pd.DataFrame:
-    """Times as UTC datetimes (NaT where unset), status and dispersion as categoricals
-    (statuses in :data:`STATUS_ORDER`; dispersions: ep, ml, ow, whatever the store holds)."""
-    for name in ("start_time", "end_time"):
-        df[name] = pd.to_datetime(df[name].replace("", None), utc=True, format="ISO8601")
-    extra = sorted(set(df["status"]) - set(STATUS_ORDER))
-    df["status"] = pd.Categorical(df["status"], categories=list(STATUS_ORDER) + extra)
-    # every dispersion relation floewave knows, so tables of two stores concatenate as
-    # categoricals (categories taken from each store's data would differ)
-    from floewave.config import DISPERSIONS
-    df["dispersion"] = pd.Categorical(
-        df["dispersion"], categories=sorted(set(DISPERSIONS) | set(df["dispersion"])))
     return df
 
 
