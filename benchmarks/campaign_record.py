@@ -60,6 +60,50 @@ def parse_log(path: Path) -> dict:
     return out
 
 
+def problems(store: Path, df, out: Path) -> dict:
+    """Every point that is not ``converged``/``converged_noisy``, with why, into ``out``
+    (CSV): a ``not_converged`` point reached ``max_iterations`` windows with an error bar
+    still above its target (max_i SE(a_i) / a0 against ``target_stderr``, SE(W_c) against
+    ``target_W_c_stderr``, from the store's profiles) or without a stationary stretch; a
+    ``failed``/``invalid``/``crashed``/``timeout`` point carries its message. Returns the
+    counts per reason."""
+    import json as _json
+
+    import pandas as pd
+
+    from sweep.analysis.load import load_profile
+    rows = []
+    for _, r in df[~df["status"].isin(["converged", "converged_noisy"])].iterrows():
+        cfg = _json.loads(r["config_json"])
+        why = str(r["message"])
+        se_a = float("nan")
+        if str(r["status"]) == "not_converged":
+            prof = load_profile(store, r["hash"])
+            se_a = float(prof["a_stderr"].max()) / r["a0"]
+            parts = []
+            if se_a > cfg["target_stderr"]:
+                parts.append(f"SE(a) {100 * se_a:.2f} % of a0 > {100 * cfg['target_stderr']:g} %")
+            if r["W_c_n"] >= 2 and r["W_c_stderr"] > cfg["target_W_c_stderr"]:
+                parts.append(f"SE(W_c) {r['W_c_stderr']:.2f} m > {cfg['target_W_c_stderr']:g} m")
+            why = "; ".join(parts) or "no stationary stretch (MSER / halves test)"
+            why = f"{int(r['iterations'])} windows: " + why
+        rows.append({"hash": r["hash"], **{c: r[c] for c in ("L_x", "T", "a0", "C_sd", "eps",
+                                                             "d_f", "dispersion")},
+                     "status": str(r["status"]), "se_a_max_rel": se_a,
+                     "W_c_stderr": r["W_c_stderr"], "reason": why})
+    table = pd.DataFrame(rows, columns=["hash", "L_x", "T", "a0", "C_sd", "eps", "d_f",
+                                        "dispersion", "status", "se_a_max_rel", "W_c_stderr",
+                                        "reason"])
+    table.to_csv(out, index=False)
+    kinds = table["reason"].str.replace(r"[0-9.]+", "#", regex=True)
+    return {str(k): int(v) for k, v in kinds.value_counts().items()}
+
+
+def _plain(o):
+    """numpy scalars (a store's attributes) as Python values for JSON."""
+    return o.item() if hasattr(o, "item") else str(o)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("store", type=Path)
@@ -92,12 +136,13 @@ def main() -> int:
                           if os.path.exists(str(args.store) + ".journal") else None),
         "table_bytes": os.path.getsize(table),
     }
+    entry["problems"] = problems(args.store, df, args.out / f"problems-{k}-of-{n}.csv")
     prov_path = args.out / "provenance.json"
     prov = json.loads(prov_path.read_text()) if prov_path.exists() else {}
     prov.setdefault("campaign", "configs/herman2019.toml")
     prov["campaign_hash"] = attrs.get("campaign_hash")
     prov.setdefault("shards", {})[f"{k}/{n}"] = entry
-    prov_path.write_text(json.dumps(prov, indent=1, sort_keys=True) + "\n")
+    prov_path.write_text(json.dumps(prov, indent=1, sort_keys=True, default=_plain) + "\n")
     print(f"{table}: {rows} points, {entry['table_bytes'] / 1e6:.2f} MB; status"
           f" {entry['status']}; runs {len(runs)}; CPU of all ranks {entry['cpu_s_all_ranks']}"
           f" s; store {entry['store_bytes'] / 1e6:.0f} MB + journal"

@@ -16,7 +16,13 @@ import pandas as pd
 import xarray as xr
 
 import floewave
-from sweep.analysis.tables import STATUS_ORDER, typed_table, load_table, table_suffix
+from sweep.analysis.tables import (
+    STATUS_ORDER,
+    column_attrs,
+    load_table,
+    table_suffix,
+    typed_table,
+)
 from sweep.errors import PointNotFoundError, StoreError, StoreUnreadableError
 from sweep.store import reader
 from sweep.store.cells import text
@@ -163,8 +169,7 @@ def _load(path: str | Path) -> pd.DataFrame:
                             data["provenance"],
                             {k: data[k] for k in floewave.SWEPT_FIELDS if k in data})
     df = _with_derived(typed_table(pd.DataFrame(data)))
-    df.attrs["units"] = {c.name: c.units for c in (*COLUMNS, *DERIVED)}
-    df.attrs["long_name"] = {c.name: c.long_name for c in (*COLUMNS, *DERIVED)}
+    df.attrs.update(column_attrs())         # shared, not deep-copied into every derived frame
     df.attrs["campaign"] = campaign
     return df
 

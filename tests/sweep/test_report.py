@@ -204,3 +204,28 @@ def test_problem_points_carry_their_whole_message_and_counts_come_in_order(page)
     assert re.search(r'<td title="[^"]*RuntimeError: deliberate failure[^"]*">', html)
     statuses = re.findall(r'<tr class="\w+"><td>(\w+)</td><td class="n"', html)
     assert statuses[:3] == ["converged", "not_converged", "failed"]
+
+
+@pytest.mark.slow   # the fast tier proves the page and its browser check on 12 points
+def test_the_report_of_a_whole_grid_opens_in_chromium(tmp_path):
+    """The paper's grid, 24,192 points (a cheap compute on a 6 m sheet): the report is one
+    page a browser opens, its every figure decoded, its size a few MB (the figures are
+    capped per kind, the problem points listed once each)."""
+    from pathlib import Path
+
+    exe = _chromium()
+    text = (Path(__file__).parents[2] / "configs" / "herman2019.toml").read_text()
+    assert "L_sheet = 42.0" in text
+    small = parse_campaign(text.replace("L_sheet = 42.0", "L_sheet = 6.0"), "herman2019.toml")
+    assert len(small.points()) == 24192
+    store = tmp_path / "grid.h5"
+    run_campaign(small, str(store), compute="sweep.testing:fake_point", progress_bar=False)
+    out = tmp_path / "grid.html"
+    assert main(["report", str(store), "--out", str(out)]) == 0
+    html = out.read_text()
+    assert "24192" in html.replace(",", "")
+    assert out.stat().st_size < 10e6
+    n_images = html.count("<img ")
+    assert n_images >= 5
+    dom = _browse(exe, tmp_path, out, "--dump-dom").stdout
+    assert re.search(r"<title>([^<]*)</title>", dom).group(1) == f"ok {n_images}"
