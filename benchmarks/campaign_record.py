@@ -136,7 +136,9 @@ def main() -> int:
                           if os.path.exists(str(args.store) + ".journal") else None),
         "table_bytes": os.path.getsize(table),
     }
-    entry["problems"] = problems(args.store, df, args.out / f"problems-{k}-of-{n}.csv")
+    (args.out / "problems").mkdir(exist_ok=True)     # not a table of points: beside them
+    entry["problems"] = problems(args.store, df,
+                                 args.out / "problems" / f"problems-{k}-of-{n}.csv")
     prov_path = args.out / "provenance.json"
     prov = json.loads(prov_path.read_text()) if prov_path.exists() else {}
     prov.setdefault("campaign", "configs/herman2019.toml")
