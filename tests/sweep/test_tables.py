@@ -10,17 +10,7 @@ import sweep
 from sweep.cli import main
 from sweep.errors import StoreCorruptedError, StoreError
 from tests.sweep.helpers import split_shards
-
-TOML = """\
-[base]
-L_sheet = 6.0
-[sweep]
-L_x = [0.5, 1.5]
-eps = [0.2, 0.4, 0.6]
-dispersion = ["ml", "ep"]
-[run]
-progress_interval = 100.0
-"""
+from tests.sweep.test_run import TOML  # noqa: F401 (the grid of the campaign fixture)
 
 
 def _same(a, b) -> None:
