@@ -208,10 +208,19 @@ def main() -> int:
     n = len(df)
     counts = df["status"].value_counts()
     say("# Atlas of the paper's grid\n")
-    say(f"Made by `python benchmarks/atlas.py` from `results/herman2019` ({', '.join(files)}):"
-        f" **{n} of the grid's {GRID_POINTS} points** ({100 * n / GRID_POINTS:.1f} %; each"
-        " shard a uniform random sample of the grid, so until all eight are in, every mean"
-        " below also carries a sampling error, included in its SE). Model version"
+    complete = n == GRID_POINTS
+    if complete:  # every point: a mean over the grid has no sampling error
+        args.bootstrap = 0
+        cover = (f" **all {GRID_POINTS} points of the grid**: a mean over the grid has no"
+                 " sampling error, its SE is the points' stochastic one,"
+                 " sqrt(sum SE_i²) / n, from their jackknife SEs.")
+    else:
+        cover = (f" **{n} of the grid's {GRID_POINTS} points** ({100 * n / GRID_POINTS:.1f} %;"
+                 " each shard a uniform random sample of the grid, so until all eight are"
+                 " in, every mean below also carries a sampling error: the SE quoted is the"
+                 " larger of the stochastic one and a bootstrap over points).")
+    say(f"Made by `python benchmarks/atlas.py` from `results/herman2019`"
+        f" ({len(files)} shard tables):" + cover + " Model version"
         f" {sorted(set(json.loads(p)['model_version'] for p in df['provenance']))[0]},"
         " ensembles of 8 replicas, **stochastic** (another seed or CPU moves the values"
         " within their error bars); machine and dates in"

@@ -8,15 +8,29 @@ Issue 5's target: >= 1,000 points/s both ways, and < 5% of a core with 0.2 s poi
 Then runs a campaign of 0.2 s points (``sleepy_point``) and reports the master's CPU
 seconds per wall second while workers "compute" (it must stay well under 5%).
 
+Scaling mode (issue [scale]): the paper's grid under oversubscribed ``mpiexec -n R`` for
+each R of ``--scale``, every point a ``sweep.testing:replay_point`` that sleeps as long as a
+real point of the shipped campaign (``benchmarks/data/point_costs.json``, from
+``--costs-from``), times each factor of ``--cost-scale`` (0.25: points 4x cheaper). A
+sleeping worker stands for a core, so 63 workers on 2 cores stand for 63 cores. Reported
+per run: stored points/s over the scheduling loop, the master's CPU share, the master's
+CPU per stored point, and from the store's start/end times per rank the hand-out latency
+(a worker's wait between finishing a point and starting the next) and the workers' idle
+share. ``benchmarks/master_model.py`` fits its queueing model to these rows.
+
 Usage::
 
     python benchmarks/bench_master.py [--points 2000] [--ranks 3]
+    python benchmarks/bench_master.py --scale 8 16 32 64 --cost-scale 1 0.25 0.0625
+    python benchmarks/bench_master.py --costs-from results/herman2019   # refresh the costs
 
 Prints one line per measurement; run from the repository root.
 """
 from __future__ import annotations
 
 import argparse
+import json
+import os
 import re
 import subprocess
 import sys
@@ -48,14 +62,123 @@ def parse(stdout: str) -> tuple[int, float, float]:
     return int(m.group(1)), float(m.group(2)), float(m.group(3) or "nan")
 
 
+COSTS = Path(__file__).resolve().parent / "data" / "point_costs.json"
+GRID = Path(__file__).resolve().parents[1] / "configs" / "herman2019.toml"
+GRID_POINTS = 24192
+
+
+def write_costs(source: str) -> None:
+    """benchmarks/data/point_costs.json from a real campaign's model wall times."""
+    import numpy as np
+
+    import sweep
+    df = sweep.load(source)
+    wt = df["model_wall_time"].to_numpy(float)
+    q = np.quantile(wt, np.linspace(0.0, 1.0, 201))
+    COSTS.write_text(json.dumps({
+        "source": f"{source}: {len(df)} points, model_wall_time [s]",
+        "model_version": sorted(set(json.loads(p)["model_version"] for p in df["provenance"])),
+        "mean": float(wt.mean()), "median": float(np.median(wt)),
+        "wall_time_quantiles": [round(float(v), 6) for v in q]}, indent=0) + "\n")
+    print(f"{COSTS}: {len(df)} points, mean {wt.mean():.3f} s, median {np.median(wt):.3f} s")
+
+
+def latency(store: Path) -> dict[str, float]:
+    """From the store's start and end times per rank: the gaps between one point's end
+    and the next's start on a worker (hand-out latency), the span from the first start to
+    the last end, and the workers' idle share while there was work to hand out (up to the
+    moment the first worker ran out: the drain at the end, where workers must idle, is
+    not the master's doing)."""
+    import numpy as np
+
+    import sweep
+    df = sweep.load(store)
+    t0 = df["start_time"].min()
+    per = []
+    for _, g in df.groupby("rank"):
+        g = g.sort_values("start_time")
+        per.append(((g["start_time"] - t0).dt.total_seconds().to_numpy(),
+                    (g["end_time"] - t0).dt.total_seconds().to_numpy()))
+    gap = np.concatenate([st[1:] - en[:-1] for st, en in per])
+    span = max(float(en[-1]) for _, en in per)
+    full = min(float(en[-1]) for _, en in per)  # the first worker to run out
+    busy = sum(float(np.clip(np.minimum(en, full) - st, 0, None).sum()) for st, en in per)
+    return {"latency_mean": float(gap.mean()) if gap.size else float("nan"),
+            "latency_p95": float(np.quantile(gap, 0.95)) if gap.size else float("nan"),
+            "idle": 1.0 - busy / (len(per) * full) if full > 0 else float("nan"),
+            "workers": len(per), "span_s": span,
+            "point_mean": float(df["wall_time"].mean()), "points": len(df)}
+
+
+def scale_mode(args, mpiexec: str) -> None:
+    mean = json.loads(COSTS.read_text())["mean"]
+    rows = []
+    print("| ranks | cost scale | mean point [s] | points | stored points/s | master CPU"
+          " | master CPU per point [ms] | hand-out latency mean / p95 [ms] | workers idle |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as tmp:
+        for scale in args.cost_scale:
+            for ranks in args.scale:
+                workers = ranks - 1
+                want = workers * args.seconds / (mean * scale)
+                shards = max(1, min(GRID_POINTS, int(GRID_POINTS / max(want, 1))))
+                store = Path(tmp) / f"scale-{ranks}-{scale}.h5"
+                env = {**os.environ, "FLOEWAVE_REPLAY_SCALE": repr(scale)}
+                cmd = [mpiexec, "-n", str(ranks), sys.executable, "-m", "sweep", "run",
+                       str(GRID), "--store", str(store), "--shard", f"0/{shards}",
+                       "--no-bar", "--compute", "sweep.testing:replay_point"]
+                proc = subprocess.run(cmd, capture_output=True, text=True, env=env)
+                if proc.returncode != 0:
+                    sys.exit(f"failed: {' '.join(cmd)}\n{proc.stderr[-2000:]}")
+                m = re.search(r"(\d+) stored now .* in ([\d.]+) s; master CPU ([\d.]+)%",
+                              proc.stdout)
+                assert m, proc.stdout
+                n, elapsed, cpu = int(m.group(1)), float(m.group(2)), float(m.group(3))
+                lat = latency(store)
+                # the loop's rate and the master's CPU per point over the store's span
+                # (first start to last end: the scheduling loop less its first hand-out
+                # and last commit); the summary's time also counts the start-up
+                span = lat["span_s"]
+                row = {"ranks": ranks, "scale": scale, "points": n, "elapsed_s": elapsed,
+                       "rate": n / span, "master_cpu_share": cpu / 100,
+                       "cpu_per_point_ms": 1e3 * cpu / 100 * span / n, **lat}
+                rows.append(row)
+                print(f"| {ranks} | {scale:g} | {lat['point_mean']:.3f} | {n} |"
+                      f" {row['rate']:.1f} | {cpu:.1f} % | {row['cpu_per_point_ms']:.2f} |"
+                      f" {1e3 * lat['latency_mean']:.1f} / {1e3 * lat['latency_p95']:.1f} |"
+                      f" {100 * lat['idle']:.1f} % |", flush=True)
+                store.unlink(missing_ok=True)
+                Path(str(store) + ".journal").unlink(missing_ok=True)
+    if args.record:
+        args.record.write_text(json.dumps({"rows": rows}, indent=1) + "\n")
+        print(f"recorded in {args.record}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scale", type=int, nargs="+", metavar="RANKS",
+                    help="scaling mode: oversubscribed mpiexec -n RANKS with replayed costs")
+    ap.add_argument("--cost-scale", type=float, nargs="+", default=[1.0],
+                    help="scaling mode: factors on the replayed point costs")
+    ap.add_argument("--seconds", type=float, default=20.0,
+                    help="scaling mode: about this long a run (sets its number of points)")
+    ap.add_argument("--record", type=Path, help="scaling mode: write the rows as JSON")
+    ap.add_argument("--costs-from", metavar="TABLE_OR_STORE",
+                    help="write benchmarks/data/point_costs.json from a real campaign")
     ap.add_argument("--points", type=int, default=2000)
     ap.add_argument("--ranks", type=int, default=3)
     ap.add_argument("--sleepy-points", type=int, default=40,
                     help="0: skip the CPU-share measurement")
     args = ap.parse_args()
+    if args.costs_from:
+        write_costs(args.costs_from)
+        return
     mpiexec = find_mpiexec()
+    if args.scale:
+        if not mpiexec:
+            sys.exit("the scaling mode needs mpiexec (pip install mpi4py mpich)")
+        scale_mode(args, mpiexec)
+        return
     with tempfile.TemporaryDirectory() as tmp:
         cfg = Path(tmp) / "bench.toml"
         cfg.write_text(campaign_text(args.points))

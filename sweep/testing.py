@@ -10,7 +10,11 @@ amplitudes for d_f = 0.01), :func:`trivial_point` (no work: the master benchmark
 """
 from __future__ import annotations
 
+import hashlib
+import json
+import os
 import time
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -20,7 +24,8 @@ from floewave import ModelConfig
 __all__ = ["fake_point", "raising_point", "nan_point", "trivial_point", "sleepy_point",
            "power_point", "faulty_point", "crashing_point", "stuck_point",
            "sleepy_trivial_point", "exiting_point", "c_exit_point", "misfit_point",
-           "stdout_closing_point", "stubborn_point", "POWER_M", "catches_signal",
+           "stdout_closing_point", "stubborn_point", "replay_point", "REPLAY_COSTS",
+           "POWER_M", "catches_signal",
            "find_mpiexec"]
 
 
@@ -297,3 +302,42 @@ def stubborn_point(cfg: ModelConfig) -> dict[str, Any]:
             except BaseException:  # noqa: BLE001, S110 - the point under test does this
                 pass
     return fake_point(cfg)
+
+
+#: The point costs :func:`replay_point` replays: a JSON file with ``wall_time_quantiles``
+#: (the model wall time [s] at quantiles 0, 1/Q, ..., 1 of a real campaign, made by
+#: ``benchmarks/bench_master.py --costs-from STORE_OR_TABLE``).
+REPLAY_COSTS = Path(__file__).resolve().parents[1] / "benchmarks" / "data" / "point_costs.json"
+_REPLAY_Q: list[float] | None = None
+
+
+def replay_point(cfg: ModelConfig) -> dict[str, Any]:
+    """:func:`fake_point` after sleeping as long as a real point: the cost distribution of
+    :data:`REPLAY_COSTS` (or the file ``FLOEWAVE_REPLAY_COSTS`` names), sampled by a
+    quantile drawn from the configuration's hash (so one point always costs the same),
+    times ``FLOEWAVE_REPLAY_SCALE`` (default 1; 0.25: points 4x cheaper). It sleeps
+    rather than computes, so that many oversubscribed ranks can stand for many cores:
+    the master's benchmark at scale (``benchmarks/bench_master.py --scale``)."""
+    global _REPLAY_Q
+    if _REPLAY_Q is None:
+        path = Path(os.environ.get("FLOEWAVE_REPLAY_COSTS", REPLAY_COSTS))
+        _REPLAY_Q = [float(v) for v in json.loads(path.read_text())["wall_time_quantiles"]]
+    digest = hashlib.sha256(json.dumps(cfg.to_dict(), sort_keys=True).encode()).digest()
+    u = int.from_bytes(digest[:8], "little") / 2.0**64 * (len(_REPLAY_Q) - 1)
+    i = min(int(u), len(_REPLAY_Q) - 2)
+    cost = _REPLAY_Q[i] + (u - i) * (_REPLAY_Q[i + 1] - _REPLAY_Q[i])
+    cost *= float(os.environ.get("FLOEWAVE_REPLAY_SCALE", "1"))
+    t0 = time.perf_counter()
+    time.sleep(cost)
+    out = fake_point(cfg)
+    # a real point's record: the per-replica profiles too (16 datasets of its shapes)
+    r, n = cfg.replicas, out["n_floes"]
+    out.update(W_c_replicas=np.full(r, out["W_c"]),
+               compact_end_replicas=np.full(r, out["compact_end"]),
+               x_mean_replicas=np.tile(out["x_mean"], (r, 1)),
+               gap_mean_replicas=np.tile(out["gap_mean"], (r, 1)),
+               S_sd_replicas=np.tile(out["S_sd"], (r, 1)), replicas=r)
+    assert out["x_mean_replicas"].shape == (r, n)
+    out["wall_time"] = time.perf_counter() - t0
+    out["kernel_mode"] = "replay"
+    return out

@@ -1,0 +1,206 @@
+"""The master at scale, modelled: the real master loop fed by simulated workers.
+
+    python benchmarks/master_model.py [--workers 7 15 31 63 1024 4096] [--cost-scale 1 0.25]
+                                      [--shards 1 32] [--seconds 15] [--check RECORD.json]
+
+The model is not an equation but the master itself: ``sweep run``'s own code (the
+scheduling loop of :class:`sweep.run.master.Master`, its group commits into a real HDF5
+store and journal, its depth rule) over a transport whose W workers are simulated in the
+master's process. A worker "computes" a task for the point's replayed cost (the real
+cost distribution, ``benchmarks/data/point_costs.json``, times ``--cost-scale``, as
+``sweep.testing:replay_point`` sleeps it) and its result arrives when that time has
+passed in real time; the master finds it by the same backoff polling as under MPI. What
+the workers would do (build the result, pickle it) is done in the master's process too,
+and its CPU is subtracted from the master's; the master's own share of a message, the
+unpickling, stays in. So the master's CPU, its batches and the workers' waits are
+measured on the real code at any W, while only the MPI transport is left out (checked
+against ``bench_master.py --scale`` at 8-64 ranks: ``--check``).
+
+``--shards S``: the campaign split into S shards (``sweep run --shard K/S``), each with its
+own master and store on its own node, W/S workers each; the shards are independent, so one
+shard's master is simulated with W/S workers and its figures are each master's.
+
+Reported per run: workers, shards, stored points/s per master and in all, the master's CPU
+share and CPU per point, the hand-out latency (a worker's wait from finishing a point to
+being handed the next) and the workers' idle share while there is work to hand out.
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import hashlib
+import heapq
+import json
+import os
+import pickle
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+COSTS = ROOT / "benchmarks" / "data" / "point_costs.json"
+GRID = ROOT / "configs" / "herman2019.toml"
+
+
+class SimTransport:
+    """W simulated workers: a task sent at time t to a worker free at f completes at
+    max(t, f) + cost; ``poll`` returns completed results in completion order."""
+
+    def __init__(self, workers: int, scale: float) -> None:
+        from sweep.protocol import Kind
+        from sweep.provenance import environment
+        from sweep.run.compute import compute_point, resolve_compute
+        self.Kind = Kind
+        self.compute_point = compute_point
+        # replay_point's record (the per-replica profiles too) without its sleep
+        os.environ["FLOEWAVE_REPLAY_SCALE"] = "0"
+        self.fn = resolve_compute("sweep.testing:replay_point")
+        self.workers = list(range(1, workers + 1))
+        env = environment(with_git=False)
+        self.worker_env = {w: env for w in self.workers}
+        self.compute = "sweep.testing:replay_point"
+        q = json.loads(COSTS.read_text())["wall_time_quantiles"]
+        self.q = np.asarray(q, float)
+        self.scale = scale
+        self.free_at = {w: 0.0 for w in self.workers}
+        self.events: list[tuple[float, int, int, bytes]] = []
+        self.seq = 0
+        self.worker_cpu = 0.0  # [s] CPU spent here on the workers' behalf: subtracted
+        self.idle = 0.0  # [s] summed over workers: waiting for a task while work remains
+        self.waits: list[float] = []
+        self.first_out = float("inf")
+        from sweep.run.transport import Backoff
+        self._backoff = Backoff()
+
+    def cost(self, config: dict[str, Any]) -> float:
+        digest = hashlib.sha256(json.dumps(config, sort_keys=True).encode()).digest()
+        u = int.from_bytes(digest[:8], "little") / 2.0**64 * (len(self.q) - 1)
+        i = min(int(u), len(self.q) - 2)
+        return float(self.q[i] + (u - i) * (self.q[i + 1] - self.q[i])) * self.scale
+
+    def start(self) -> None:
+        pass
+
+    def warm_up(self, configs):
+        return 0.0, ""
+
+    def send(self, worker: int, task) -> None:
+        now = time.monotonic()
+        c0 = time.process_time()
+        cost = self.cost(task.config)
+        out = self.compute_point(task, self.fn, worker)  # the worker's work
+        out = dataclasses.replace(out, wall_time=cost)  # as long as the point it replays
+        blob = pickle.dumps((self.Kind.RESULT, out), protocol=pickle.HIGHEST_PROTOCOL)
+        self.worker_cpu += time.process_time() - c0
+        free = self.free_at[worker]
+        if free < now and free > 0:  # it waited for this task
+            self.idle += now - free
+            self.waits.append(now - free)
+        start = max(now, free)
+        done = start + cost
+        self.free_at[worker] = done
+        self.seq += 1
+        heapq.heappush(self.events, (done, self.seq, worker, blob))
+
+    def poll(self, timeout: float):
+        deadline = time.monotonic() + timeout
+
+        def ready() -> bool:
+            return bool(self.events) and self.events[0][0] <= time.monotonic()
+        if not self._backoff.wait(ready, deadline):
+            return None
+        done, _, worker, blob = heapq.heappop(self.events)
+        kind, out = pickle.loads(blob)  # the master's side of a message
+        return worker, kind, out
+
+    def shutdown(self) -> None:
+        pass
+
+    def abort(self, code: int) -> None:
+        pass
+
+
+def simulate(workers: int, scale: float, seconds: float, tmp: Path) -> dict[str, float]:
+    """One master with ``workers`` simulated workers for about ``seconds`` of real time."""
+    import sweep.run.launch as launch
+    from sweep.config import parse_campaign
+    mean = json.loads(COSTS.read_text())["mean"] * scale
+    want = int(workers * seconds / mean) + 2 * workers
+    text = GRID.read_text()
+    seeds = max(1, -(-want // 24192))
+    if seeds > 1:  # more points than the grid: the grid at several seeds
+        text = text.replace("[sweep]\n", f"[sweep]\nseed = {list(range(seeds))}\n", 1)
+    campaign = parse_campaign(text, str(GRID))
+    shards = max(1, campaign.size // want)
+    store = tmp / f"model-{workers}-{scale}.h5"
+    sim = SimTransport(workers, scale)
+    real_open = launch._open_transport
+    launch._open_transport = lambda comm, compute, mpi: sim
+    campaign = campaign.shard(0, shards)
+    import contextlib
+    import io
+    try:
+        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+            summary = launch.run_campaign(campaign, str(store),
+                                          compute="sweep.testing:replay_point",
+                                          progress_bar=False)
+    finally:
+        launch._open_transport = real_open
+    n = summary.computed
+    loop = summary.loop_elapsed
+    cpu = summary.master_cpu - sim.worker_cpu
+    # the workers' idle share while work remained: up to the first worker to run out
+    full = min(sim.free_at.values()) - (time.monotonic() - loop)
+    for p in (store, Path(str(store) + ".journal")):
+        p.unlink(missing_ok=True)
+    waits = np.asarray(sim.waits) if sim.waits else np.zeros(1)
+    return {"workers": workers, "scale": scale, "points": n, "loop_s": loop,
+            "rate": n / loop, "master_cpu_share": cpu / loop, "cpu_per_point_ms": 1e3 * cpu / n,
+            "latency_mean": float(waits.mean()), "latency_p95": float(np.quantile(waits, 0.95)),
+            "idle": sim.idle / (workers * max(full, 1e-9)), "point_mean": mean}
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--workers", type=int, nargs="+", default=[7, 15, 31, 63, 1024, 4096])
+    ap.add_argument("--cost-scale", type=float, nargs="+", default=[1.0, 0.25])
+    ap.add_argument("--shards", type=int, nargs="+", default=[1])
+    ap.add_argument("--seconds", type=float, default=15.0)
+    ap.add_argument("--check", type=Path, help="bench_master.py --scale --record JSON:"
+                    " print the model beside each measured row")
+    args = ap.parse_args()
+    measured = {}
+    if args.check:
+        for r in json.loads(args.check.read_text())["rows"]:
+            measured[(r["ranks"] - 1, r["scale"])] = r
+    print("| workers | shards | cost scale | points/s per master | points/s in all | master CPU"
+          " | master CPU per point [ms] | hand-out latency mean / p95 [ms] | workers idle"
+          " | from |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as tmp:
+        for scale in args.cost_scale:
+            for shards in args.shards:
+                for w in args.workers:
+                    per = max(1, w // shards)
+                    r = simulate(per, scale, args.seconds, Path(tmp))
+                    print(f"| {w} | {shards} | {scale:g} | {r['rate']:.1f} |"
+                          f" {r['rate'] * shards:.0f} | {100 * r['master_cpu_share']:.1f} % |"
+                          f" {r['cpu_per_point_ms']:.2f} | {1e3 * r['latency_mean']:.1f} /"
+                          f" {1e3 * r['latency_p95']:.1f} | {100 * r['idle']:.1f} % | model",
+                          flush=True)
+                    m = measured.get((w, scale)) if shards == 1 else None
+                    if m:
+                        print(f"| {w} | 1 | {scale:g} | {m['rate']:.1f} | {m['rate']:.0f} |"
+                              f" {100 * m['master_cpu_share']:.1f} % |"
+                              f" {m['cpu_per_point_ms']:.2f} | {1e3 * m['latency_mean']:.1f} /"
+                              f" {1e3 * m['latency_p95']:.1f} | {100 * m['idle']:.1f} % |"
+                              " measured (MPI)", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
