@@ -324,6 +324,38 @@ def test_array_script_and_merge(slurm, campaign, reference, tmp_path):
 
 
 @pytest.mark.slow  # a real Slurm (fast: test_scripts_run_outside_slurm)
+def test_mpi_script_sharded_array_and_merge(slurm, campaign, reference, tmp_path):
+    """SHARDS=2 with a job array of 2: one MPI job per shard, each its own master and
+    store (STORE-sKof2.h5), merged into the reference's points (docs/cluster.md "Past
+    one master")."""
+    store = tmp_path / "c.h5"
+    job = slurm.sbatch("--array=0-1", f"--ntasks={RANKS}", f"--output={tmp_path}/job-%A_%a.log",
+                       str(MPI_SCRIPT), str(campaign), str(store),
+                       env=job_env(slurm, SHARDS="2"))
+    try:
+        slurm.wait(job, timeout=240)
+    finally:
+        slurm.cancel_quietly(job)
+    recs = slurm.jobs(job)
+    logs = "\n".join(p.read_text() for p in sorted(tmp_path.glob("job-*.log")))
+    assert len(recs) == 2, recs
+    assert all((r["JobState"], r["ExitCode"]) == ("COMPLETED", "0:0") for r in recs), logs
+    parts = [tmp_path / f"c-s{k}of2.h5" for k in range(2)]
+    sizes = [len(sweep.load(p)) for p in parts]
+    assert sum(sizes) == N_POINTS and all(s > 0 for s in sizes), sizes
+    for p in parts:  # each shard computed by its own workers under its own master
+        assert set(sweep.load(p)["rank"]) <= {1, 2}
+    merged = tmp_path / "merged.h5"
+    proc = subprocess.run([sys.executable, "-m", "sweep", "merge", str(merged),
+                           *map(str, parts)], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    report("MPI script sharded (SHARDS=2, 2 array tasks) + sweep merge",
+           ", ".join(f"task {r['ArrayTaskId']}: {says(r)}" for r in recs), merged,
+           f"shard sizes {sizes}")
+    same_as(reference[0], merged)
+
+
+@pytest.mark.slow  # a real Slurm (fast: test_scripts_run_outside_slurm)
 def test_array_task_time_limit_signal_during_startup(slurm, campaign, reference, tmp_path):
     """The time-limit signal to an array task still starting (one shard: the whole grid):
     held back until ``sweep run`` listens, then a clean stop, that task requeued, resumed."""
