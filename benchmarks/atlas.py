@@ -120,16 +120,18 @@ def paired(ok, y, se, p, sign, *, order=None, where=None):
     zs, rel, at = [], [], []
     keys = piv.index.to_frame(index=False)
     for v1, v2 in zip(vals[:-1], vals[1:], strict=True):
-        if v1 not in piv["_y"].columns or v2 not in piv["_y"].columns:
+        if any(v not in piv[c].columns for c in ("_y", "_s", "_w") for v in (v1, v2)):
             continue  # a value with no point at all (pivot_table drops it): no pair
         y1, y2 = piv["_y"][v1].to_numpy(float), piv["_y"][v2].to_numpy(float)
         s1, s2 = piv["_s"][v1].to_numpy(float), piv["_s"][v2].to_numpy(float)
         w = piv["_w"][v1].to_numpy(float) > 0
         d = sign * (y2 - y1)
-        ok2 = np.isfinite(d) & w
-        s = np.sqrt(np.nan_to_num(s1) ** 2 + np.nan_to_num(s2) ** 2)
+        s = np.sqrt(s1**2 + s2**2)
+        # a pair counts only with both values and both error bars (a point without an SE
+        # cannot decide a pair)
+        ok2 = np.isfinite(d) & w & np.isfinite(s) & (s > 0)
         with np.errstate(divide="ignore", invalid="ignore"):
-            z = np.where(s > 0, d / s, np.sign(d) * np.inf)
+            z = d / s
         zs.append(z[ok2])
         at.append(keys[ok2].assign(**{p: f"{v1}->{v2}"}))
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -138,6 +140,7 @@ def paired(ok, y, se, p, sign, *, order=None, where=None):
     r = np.concatenate(rel) if rel else np.array([])
     n = int(z.size)
     return {"n": n, "agree": int((z >= 2).sum()), "contra": int((z <= -2).sum()),
+            "neg": int((z < 0).sum()),
             "sign": float((z > 0).mean()) if n else math.nan,
             "median_rel": float(np.nanmedian(r[np.isfinite(r)])) if n else math.nan,
             "z": z, "at": pd.concat(at, ignore_index=True) if at else None}
@@ -158,21 +161,44 @@ def where_contra(t, top=3):
     return ", ".join(c[1] for c in cells[:top])
 
 
+#: The chance of z <= -2 for one pair when there is no effect: a difference of two
+#: 8-replica jackknife means is about Student's t with 14 degrees of freedom (3.3 %; the
+#: normal's would be 2.3 %).
+CHANCE = 0.0327
+#: With an effect >= 0 in every pair, at most this share of the pairs with z < 0 reach
+#: z <= -2 (t_14: P(t <= -2) / P(t < 0) = 0.065; more means real reversals).
+REVERSAL = 0.065
+
+
 def verdict(t):
-    """One word for a trend over the grid: what the pairs that decide say."""
+    """One phrase for a trend over the grid, from its pairs.
+
+    - **holds over the grid**: at least half the pairs agree (z >= 2), and those that go
+      the other way are what chance gives when the effect is >= 0 everywhere: at most
+      :data:`CHANCE` of all pairs at z <= -2, and at most :data:`REVERSAL` of the pairs
+      with z < 0;
+    - **holds, with real reversals**: at least half agree and at least 80 % of the pairs
+      that decide, but more contradict than chance allows;
+    - **split**: the pairs that decide agree more often than not, but fewer than 80 % (or
+      fewer than half of all pairs agree, with reversals beyond chance);
+    - **not resolved**: fewer than half the pairs agree, no reversal beyond chance;
+    - **mostly reversed**: the pairs that decide mostly contradict.
+    """
     if t["n"] == 0:
         return "no pairs"
     dec = t["agree"] + t["contra"]
     if dec == 0:
-        return "undecided everywhere"
+        return "not resolved"
     share = t["agree"] / dec
-    if t["contra"] <= 0.023 * t["n"]:  # no more reversals than chance at z <= -2
-        return "holds over the grid"
-    if share >= 0.8:
-        return "holds mostly, with reversals"
-    if share >= 0.5:
-        return "split: holds more often than not"
-    return "mostly reversed"
+    neg = t.get("neg", t["contra"])
+    chance = t["contra"] <= CHANCE * t["n"] and t["contra"] <= REVERSAL * max(neg, 1)
+    if t["agree"] >= 0.5 * t["n"]:
+        if chance:
+            return "holds over the grid"
+        return "holds, with real reversals" if share >= 0.8 else "split"
+    if chance:
+        return "not resolved"
+    return "split" if share >= 0.5 else "mostly reversed"
 
 
 def fmt(x, se):
@@ -385,9 +411,17 @@ def main() -> int:
         " pair of points of the grid that differ in that parameter alone (adjacent values;"
         " ep against ml for the dispersion relation): z is the pair's difference in the"
         " paper's direction over its SE (the points' jackknife SEs in quadrature). A pair"
-        " *agrees* at z ≥ 2 and *contradicts* at z ≤ −2; with no effect at all, chance alone"
-        " puts 2.3 % of pairs on each side, so a statement **holds over the grid** when no"
-        " more than 2.3 % of its pairs contradict it. Two statements are per point (edge"
+        " *agrees* at z ≥ 2 and *contradicts* at z ≤ −2. With no effect, chance alone puts"
+        " about 3.3 % of pairs at z ≤ −2 (a difference of two 8-replica jackknife means is"
+        " about Student's t with 14 degrees of freedom), and with an effect ≥ 0 in every"
+        " pair at most 6.5 % of the pairs with z < 0 reach z ≤ −2. A statement **holds over"
+        " the grid** when at least half its pairs agree and its contradictions stay within"
+        " both; *holds, with real reversals* when more contradict than that but 80 % of the"
+        " deciding pairs agree; *split* below 80 %. Pairs without an SE on either point are"
+        " left out. The rule takes the points' SEs at their word (against long reference"
+        " runs their RMS z is 0.92-1.15: docs/convergence.md); an SE 15 % too small would"
+        " raise the 6.5 % to about 10 %, far below the shares that make the reversals"
+        " below real. Two statements are per point (edge"
         " against inner slope; the inner slope against eq. 24's) and count points.\n")
     ice = float(np.nanmedian(ok["ice_extent"]))
     has_zone = np.isfinite(ok["W_c"])
@@ -408,6 +442,7 @@ def main() -> int:
     trow("attenuation steep near the edge, flatter downwave", "§4.2",
          "alpha_edge − alpha_inner per point with a zone",
          {"n": z.size, "agree": int((z >= 2).sum()), "contra": int((z <= -2).sum()),
+          "neg": int((z < 0).sum()),
           "sign": float((z > 0).mean()), "median_rel": float(np.nanmedian(
               ((e - i) / i)[np.isfinite(e) & np.isfinite(i) & has_zone]))})
     ri, si, _ = resp["inner_c"]
@@ -416,16 +451,21 @@ def main() -> int:
     trow("the compact zone attenuates like confined ice (eq. 25)", "§4.2, §5",
          "alpha_inner/alpha_c inside [0.8, 1.25], per point",
          {"n": zz.size, "agree": int((zz >= 2).sum()), "contra": int((zz <= -2).sum()),
+          "neg": int((zz < 0).sum()),
           "sign": float((zz > 0).mean()),
           "median_rel": float(np.nanmedian(ri[np.isfinite(ri)]) - 1)})
     trow("ep attenuates less than ml, all else equal, always", "§4.2, §5",
          "a_end/a0, ep minus ml", paired(ok, ya, sa, "dispersion", 1, order=("ml", "ep")))
     trow("smaller floes attenuate more (Fig. 5)", "§4.2", "a_end/a0 along L_x",
          paired(ok, ya, sa, "L_x", 1))
+    trow("small floes undergo more vigorous collisions", "§4.2",
+         "collisions per pair per wave period along L_x",
+         paired(ok, ok["collision_rate"], ok["collision_rate_stderr"], "L_x", -1))
     per_m = ok["collision_rate"] / ok["L_x"]
-    trow("small floes collide more per distance travelled", "§4.2",
-         "collisions per pair per period / L_x along L_x (the 1/L_x is most of it)",
-         paired(ok, per_m, ok["collision_rate_stderr"] / ok["L_x"], "L_x", -1))
+    trow("... and more collisions per distance travelled by the wave", "§4.2",
+         "collisions per metre of ice per period (per pair / L_x) along L_x: the 1/L_x"
+         " is most of it", paired(ok, per_m, ok["collision_rate_stderr"] / ok["L_x"],
+                                  "L_x", -1))
     trow("smaller d_f, stronger attenuation near the edge (Fig. 6a)", "§4.2",
          "alpha_edge along d_f", paired(ok, ok["alpha_edge"], ok["alpha_edge_stderr"],
                                         "d_f", -1))
@@ -440,23 +480,25 @@ def main() -> int:
          "a_end/a0 along a0", paired(ok, ya, sa, "a0", -1))
     trow("shorter waves attenuate more (alpha(omega), eqs. 24, 27-28)", "§3, §5",
          "alpha_all along T", paired(ok, ok["alpha_all"], ok["alpha_all_stderr"], "T", -1))
-    say("| the paper says | where | over the grid | n | agree | contradict | right sign"
-        " | median change | verdict |")
-    say("|---|---|---|---|---|---|---|---|---|")
+    say("| the paper says | where | over the grid | n | agree | contradict | contradict"
+        " among z < 0 | right sign | median change | verdict |")
+    say("|---|---|---|---|---|---|---|---|---|---|")
     verdicts = []
     for claim, where_, measure, t in trows:
         v = verdict(t)
         verdicts.append((claim, v, t))
         say(f"| {claim} | {where_} | {measure} | {t['n']} | {t['agree']}"
             f" ({100 * t['agree'] / max(t['n'], 1):.1f} %) | {t['contra']}"
-            f" ({100 * t['contra'] / max(t['n'], 1):.1f} %) | {100 * t['sign']:.1f} %"
+            f" ({100 * t['contra'] / max(t['n'], 1):.1f} %)"
+            f" | {100 * t['contra'] / max(t.get('neg', 0), 1):.1f} % | {100 * t['sign']:.1f} %"
             f" | {100 * t['median_rel']:+.1f} % | {v} |")
     say("")
     say("Where the contradictions concentrate (the parameter values whose pairs contradict"
-        " most often, as a share of that value's pairs), for each statement contradicted by"
-        " more than chance:\n")
+        " most often, as a share of that value's pairs), for each statement that does not"
+        " hold over the grid:\n")
     for claim, v, t in verdicts:
-        if t["n"] and t["contra"] > 0.023 * t["n"] and t.get("at") is not None:
+        if t["n"] and verdict(t) != "holds over the grid" and t.get("at") is not None \
+                and t["contra"]:
             say(f"- {claim}: {where_contra(t)}.")
     say("")
     say("Median change: the pair's relative difference in the paper's direction (for the"
@@ -490,7 +532,9 @@ def main() -> int:
     slow = ok[ok["model_wall_time"] >= q99]
     say(f"Model wall time per point (one core, 8 replicas): median {np.median(wt):.2f} s,"
         f" mean {wt.mean():.2f} s, 99th percentile {q99:.2f} s, maximum {wt.max():.2f} s;"
-        f" {wt.sum() / 3600:.2f} core-hours in all over these {len(ok)} points.\n")
+        f" {wt.sum() / 3600:.2f} hours summed over these {len(ok)} points (wall time of"
+        " each point on its rank, with 3 ranks sharing 2 cores: more than the CPU time;"
+        " the CPU of all ranks is in `results/herman2019/provenance.json`).\n")
     cap = (slow["iterations"] >= maxit).mean() if maxit else math.nan
     say(f"The slowest 1 % ({len(slow)} points, ≥ {q99:.2f} s) are slow because their"
         " attenuation iteration does not settle: median"
@@ -545,18 +589,20 @@ def main() -> int:
             f"{fmt(ma[2], ma[3])} | {fmt(mw[2], mw[3])} |")
     say("")
     # --- headlines, at the top
-    d_share = ok.groupby("d_f", observed=True)["compact"].mean()
+    spread = {q: ok.groupby(q, observed=True)["compact"].mean() for q in PARAMS}
+    top = max(spread, key=lambda q: spread[q].max() - spread[q].min())
+    d_share = spread[top]
     heads = ["## Headlines\n",
              f"- A compact zone forms at {100 * ok['compact'].mean():.1f} % of the points"
              f" ({lay.get('edge', 0)} edge, {lay.get('patchy', 0)} patchy,"
-             f" {lay.get('inverted', 0)} inverted); the floe gap decides it first:"
-             f" {100 * d_share.iloc[0]:.1f} % at d_f = {d_share.index[0]} m against"
-             f" {100 * d_share.iloc[-1]:.1f} % at {d_share.index[-1]} m.",
+             f" {lay.get('inverted', 0)} inverted); of the 7 parameters {top} moves its"
+             f" share most: {100 * d_share.max():.1f} % at {top} = {d_share.idxmax()} against"
+             f" {100 * d_share.min():.1f} % at {d_share.idxmin()}.",
              "- The paper's trend statements, over every pair of the grid:"]
     for v in dict.fromkeys(vv for _, vv, _ in verdicts):
         heads.append(f"  - **{v}**: " + "; ".join(
             f"{c}" + (f" ({100 * t['contra'] / t['n']:.0f} % contradict)"
-                      if t["contra"] > 0.023 * t["n"] else "")
+                      if vv != "holds over the grid" else "")
             for c, vv, t in verdicts if vv == v) + ".")
     heads += [
              f"- alpha_all is set by C_sd and T (R² {decomp['alpha_all'][1]['C_sd']:.2f} and"
@@ -568,9 +614,11 @@ def main() -> int:
              f" {100 * decomp['alpha_all'][2]:.0f} % of log alpha_all's.",
              ]
     if law:
-        heads.append(f"- W_c scales as (a0 k)^{law['beta'][1]:.2f} (k L_x)^{law['beta'][4]:.2f}"
-                     f" d_f^{law['beta'][5]:.2f} to within a factor {math.exp(law['rms']):.2f},"
-                     f" {law['ratio']:.0f} times its error bars: no law within them.")
+        b = law["beta"]
+        heads.append(f"- W_c ∝ (a0 k)^{b[1]:.2f} (tau_d/T)^{b[2]:.2f} eps^{b[3]:.2f}"
+                     f" (k L_x)^{b[4]:.2f} d_f^{b[5]:.2f} to within a factor"
+                     f" {math.exp(law['rms']):.2f}, {law['ratio']:.0f} times its error bars:"
+                     " a rough scaling, no law within them.")
     heads.append("- By dispersion relation (mean a_end/a0): " + "; ".join(
         f"{k} {v}" for k, v in disp_means.items()) + ".")
     heads.append("")
