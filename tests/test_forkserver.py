@@ -61,15 +61,27 @@ def test_environment_arguments_streams_and_status(tmp_path):
 
 def test_signals_reach_the_command_and_end_it_as_they_would(tmp_path):
     """Its pid is the command's: SIGKILL ends it with -9, SIGTERM without a handler -15,
-    an uncaught KeyboardInterrupt (SIGINT) -2, as for a fresh interpreter."""
+    an uncaught KeyboardInterrupt (SIGINT) -2, as for a fresh interpreter. Where SIGINT
+    is ignored from the start (a job started in the background by a non-interactive
+    shell: ``nohup ... &``), a fresh interpreter keeps ignoring it, and so does the
+    command: it is still running after SIGINT."""
+    sigint_ignored = signal.getsignal(signal.SIGINT) is signal.SIG_IGN
     for sig in (signal.SIGKILL, signal.SIGTERM, signal.SIGINT):
         p = forkserver.popen([], code="import time; print('up', flush=True); time.sleep(60)",
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         assert isinstance(p, forkserver.Forked) and p.stdout.readline() == "up\n"
         p.send_signal(sig)
+        if sig == signal.SIGINT and sigint_ignored:
+            with pytest.raises(subprocess.TimeoutExpired):
+                p.communicate(timeout=1.0)
+            p.kill()
+            p.communicate(timeout=60)
+            assert p.returncode == -signal.SIGKILL
+            continue
         _, err = p.communicate(timeout=60)
         assert p.returncode == -sig, (sig, err)
-    assert "KeyboardInterrupt" in err
+    if not sigint_ignored:
+        assert "KeyboardInterrupt" in err
     with pytest.raises(subprocess.TimeoutExpired):
         forkserver.run([], code="import time; time.sleep(60)", timeout=0.2)
 
