@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import hashlib
 import heapq
 import json
 import os
@@ -63,8 +62,6 @@ class SimTransport:
         env = environment(with_git=False)
         self.worker_env = {w: env for w in self.workers}
         self.compute = "sweep.testing:replay_point"
-        q = json.loads(COSTS.read_text())["wall_time_quantiles"]
-        self.q = np.asarray(q, float)
         self.scale = scale
         self.free_at = {w: 0.0 for w in self.workers}
         self.events: list[tuple[float, int, int, bytes]] = []
@@ -75,10 +72,8 @@ class SimTransport:
         self._backoff = Backoff()
 
     def cost(self, config: dict[str, Any]) -> float:
-        digest = hashlib.sha256(json.dumps(config, sort_keys=True).encode()).digest()
-        u = int.from_bytes(digest[:8], "little") / 2.0**64 * (len(self.q) - 1)
-        i = min(int(u), len(self.q) - 2)
-        return float(self.q[i] + (u - i) * (self.q[i + 1] - self.q[i])) * self.scale
+        from sweep.testing import replay_cost
+        return replay_cost(config) * self.scale
 
     def start(self) -> None:
         pass

@@ -24,7 +24,7 @@ from floewave import ModelConfig
 __all__ = ["fake_point", "raising_point", "nan_point", "trivial_point", "sleepy_point",
            "power_point", "faulty_point", "crashing_point", "stuck_point",
            "sleepy_trivial_point", "exiting_point", "c_exit_point", "misfit_point",
-           "stdout_closing_point", "stubborn_point", "replay_point", "REPLAY_COSTS",
+           "stdout_closing_point", "stubborn_point", "replay_point", "replay_cost", "REPLAY_COSTS",
            "POWER_M", "catches_signal",
            "find_mpiexec"]
 
@@ -311,6 +311,20 @@ REPLAY_COSTS = Path(__file__).resolve().parents[1] / "benchmarks" / "data" / "po
 _REPLAY_Q: list[float] | None = None
 
 
+def replay_cost(config: dict[str, Any]) -> float:
+    """The replayed cost [s] of the point whose configuration (as a dict) is ``config``:
+    the cost distribution of :data:`REPLAY_COSTS` (or of the file
+    ``FLOEWAVE_REPLAY_COSTS`` names) at a quantile drawn from the configuration's hash."""
+    global _REPLAY_Q
+    if _REPLAY_Q is None:
+        path = Path(os.environ.get("FLOEWAVE_REPLAY_COSTS", REPLAY_COSTS))
+        _REPLAY_Q = [float(v) for v in json.loads(path.read_text())["wall_time_quantiles"]]
+    digest = hashlib.sha256(json.dumps(config, sort_keys=True).encode()).digest()
+    u = int.from_bytes(digest[:8], "little") / 2.0**64 * (len(_REPLAY_Q) - 1)
+    i = min(int(u), len(_REPLAY_Q) - 2)
+    return _REPLAY_Q[i] + (u - i) * (_REPLAY_Q[i + 1] - _REPLAY_Q[i])
+
+
 def replay_point(cfg: ModelConfig) -> dict[str, Any]:
     """:func:`fake_point` after sleeping as long as a real point: the cost distribution of
     :data:`REPLAY_COSTS` (or the file ``FLOEWAVE_REPLAY_COSTS`` names), sampled by a
@@ -318,15 +332,7 @@ def replay_point(cfg: ModelConfig) -> dict[str, Any]:
     times ``FLOEWAVE_REPLAY_SCALE`` (default 1; 0.25: points 4x cheaper). It sleeps
     rather than computes, so that many oversubscribed ranks can stand for many cores:
     the master's benchmark at scale (``benchmarks/bench_master.py --scale``)."""
-    global _REPLAY_Q
-    if _REPLAY_Q is None:
-        path = Path(os.environ.get("FLOEWAVE_REPLAY_COSTS", REPLAY_COSTS))
-        _REPLAY_Q = [float(v) for v in json.loads(path.read_text())["wall_time_quantiles"]]
-    digest = hashlib.sha256(json.dumps(cfg.to_dict(), sort_keys=True).encode()).digest()
-    u = int.from_bytes(digest[:8], "little") / 2.0**64 * (len(_REPLAY_Q) - 1)
-    i = min(int(u), len(_REPLAY_Q) - 2)
-    cost = _REPLAY_Q[i] + (u - i) * (_REPLAY_Q[i + 1] - _REPLAY_Q[i])
-    cost *= float(os.environ.get("FLOEWAVE_REPLAY_SCALE", "1"))
+    cost = replay_cost(cfg.to_dict()) * float(os.environ.get("FLOEWAVE_REPLAY_SCALE", "1"))
     t0 = time.perf_counter()
     time.sleep(cost)
     out = fake_point(cfg)

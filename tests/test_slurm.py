@@ -175,6 +175,30 @@ def runs_of(store: Path) -> dict[str, int]:
     return dict(zip(df["hash"], df["run"].astype(int), strict=True))
 
 
+def completed_array(slurm: SlurmCluster, job: str, tasks: int, logs) -> list[dict[str, str]]:
+    """The records of array ``job``'s tasks, asserted to be ``tasks`` that all completed
+    with status 0 (else the tasks' ``logs`` are shown)."""
+    recs = slurm.jobs(job)
+    text = "\n".join(p.read_text() for p in sorted(logs))
+    assert len(recs) == tasks, recs
+    assert all((r["JobState"], r["ExitCode"]) == ("COMPLETED", "0:0") for r in recs), text
+    return recs
+
+
+def merge_shards(parts: list[Path], tmp_path: Path, reference, recs, scenario: str) -> None:
+    """Every shard store holds points, together the campaign's; ``sweep merge`` of them
+    equals the uninterrupted reference."""
+    sizes = [len(sweep.load(p)) for p in parts]
+    assert sum(sizes) == N_POINTS and all(s > 0 for s in sizes), sizes
+    merged = tmp_path / "merged.h5"
+    proc = subprocess.run([sys.executable, "-m", "sweep", "merge", str(merged),
+                           *map(str, parts)], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    report(scenario, ", ".join(f"task {r['ArrayTaskId']}: {says(r)}" for r in recs), merged,
+           f"shard sizes {sizes}")
+    same_as(reference[0], merged)
+
+
 # --------------------------------------------------------------------------- scenarios
 @pytest.fixture(scope="session")
 def reference(slurm, campaign, tmp_path_factory) -> tuple[Path, str]:
@@ -305,22 +329,10 @@ def test_array_script_and_merge(slurm, campaign, reference, tmp_path):
         slurm.wait(job, timeout=180)
     finally:
         slurm.cancel_quietly(job)
-    recs = slurm.jobs(job)
-    logs = "\n".join(p.read_text() for p in sorted(tmp_path.glob("shard-*.log")))
-    assert len(recs) == 4, recs
-    assert all((r["JobState"], r["ExitCode"]) == ("COMPLETED", "0:0") for r in recs), logs
+    recs = completed_array(slurm, job, 4, tmp_path.glob("shard-*.log"))
     parts = sorted(shards.glob("c-*.h5"))
     assert [p.name for p in parts] == [f"c-{k}.h5" for k in range(4)]
-    sizes = [len(sweep.load(p)) for p in parts]
-    assert sum(sizes) == N_POINTS and all(s > 0 for s in sizes), sizes
-    merged = tmp_path / "merged.h5"
-    proc = subprocess.run([sys.executable, "-m", "sweep", "merge", str(merged),
-                           *map(str, parts)], capture_output=True, text=True)
-    assert proc.returncode == 0, proc.stderr
-    report("array script (4 tasks) + sweep merge",
-           ", ".join(f"task {r['ArrayTaskId']}: {says(r)}" for r in recs), merged,
-           f"shard sizes {sizes}")
-    same_as(reference[0], merged)
+    merge_shards(parts, tmp_path, reference, recs, "array script (4 tasks) + sweep merge")
 
 
 @pytest.mark.slow  # a real Slurm (fast: test_scripts_run_outside_slurm)
@@ -336,23 +348,12 @@ def test_mpi_script_sharded_array_and_merge(slurm, campaign, reference, tmp_path
         slurm.wait(job, timeout=240)
     finally:
         slurm.cancel_quietly(job)
-    recs = slurm.jobs(job)
-    logs = "\n".join(p.read_text() for p in sorted(tmp_path.glob("job-*.log")))
-    assert len(recs) == 2, recs
-    assert all((r["JobState"], r["ExitCode"]) == ("COMPLETED", "0:0") for r in recs), logs
+    recs = completed_array(slurm, job, 2, tmp_path.glob("job-*.log"))
     parts = [tmp_path / f"c-s{k}of2.h5" for k in range(2)]
-    sizes = [len(sweep.load(p)) for p in parts]
-    assert sum(sizes) == N_POINTS and all(s > 0 for s in sizes), sizes
     for p in parts:  # each shard computed by its own workers under its own master
         assert set(sweep.load(p)["rank"]) <= {1, 2}
-    merged = tmp_path / "merged.h5"
-    proc = subprocess.run([sys.executable, "-m", "sweep", "merge", str(merged),
-                           *map(str, parts)], capture_output=True, text=True)
-    assert proc.returncode == 0, proc.stderr
-    report("MPI script sharded (SHARDS=2, 2 array tasks) + sweep merge",
-           ", ".join(f"task {r['ArrayTaskId']}: {says(r)}" for r in recs), merged,
-           f"shard sizes {sizes}")
-    same_as(reference[0], merged)
+    merge_shards(parts, tmp_path, reference, recs,
+                 "MPI script sharded (SHARDS=2, 2 array tasks) + sweep merge")
 
 
 @pytest.mark.slow  # a real Slurm (fast: test_scripts_run_outside_slurm)
