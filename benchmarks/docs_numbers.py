@@ -23,7 +23,10 @@ records) and prints, labelled as in the docs:
   CPU (``/proc/cpuinfo``'s model name and vector width), the kernels' compile with an empty
   numba cache (``floewave run``'s ``kernels ready in`` line), the cost projection
   (``benchmarks/plan_check.py --n 32 --seed 7`` against model version 7's numerics in the
-  same run) and ``sweep paper-check --run --seeds 0 1`` (about 6 minutes more).
+  same run) and ``sweep paper-check --run --seeds 0 1`` (about 6 minutes more);
+- with ``--timings --settle``, the settled table (``sweep paper-check --run --settle`` on
+  those seed stores, about 30 minutes more); ``--settle-only --out DIR`` prints that
+  section alone, for a record whose other sections stand.
 
 ``--record FILE`` also writes the output to FILE under a header naming the model version
 and the SHA-256 of the campaign files (:func:`stamp`). ``docs/numbers.txt`` is that record
@@ -143,6 +146,19 @@ def timings(out: Path) -> None:
     print(proc.stdout)
 
 
+def settled(out: Path) -> None:
+    """``sweep paper-check --run --settle`` on the seed stores of :func:`timings` (seeds 0
+    and 1 there; the settling adds the rest: about 30 minutes on 2 cores), timed."""
+    seeds = out / "paper-seeds"
+    t = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-m", "sweep", "paper-check", "--stores",
+                           str(seeds), "--run", "--settle"], capture_output=True, text=True)
+    t = time.perf_counter() - t
+    print(f"\n[ensembles, stochastic] sweep paper-check --stores DIR --run --settle"
+          f" ({t:.0f} s, on [machine] above)")
+    print(proc.stdout if proc.returncode == 0 else proc.stderr[-2000:])
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=None)
@@ -150,7 +166,16 @@ def main() -> int:
     ap.add_argument("--record", type=Path, default=None, metavar="FILE")
     ap.add_argument("--timings", action="store_true",
                     help="also time the compile, the cost projection and paper-check --seeds")
+    ap.add_argument("--settle", action="store_true", help="with --timings: also the settled"
+                    " table (paper-check --settle on the seed stores; ~30 min more)")
+    ap.add_argument("--settle-only", action="store_true", help="print only the settled"
+                    " table's section, on --out's seed stores (to append to a record)")
     args = ap.parse_args()
+    if args.settle_only:
+        if args.out is None:
+            ap.error("--settle-only needs --out (the directory of paper-seeds/)")
+        settled(args.out)
+        return 0
     if args.record is not None:
         record = open(args.record, "w", encoding="utf-8")  # noqa: SIM115 - closed at exit
         record.write(stamp() + f" ({time.strftime('%Y-%m-%d', time.gmtime())})\n")
@@ -235,6 +260,8 @@ def main() -> int:
     print(proc.stdout + proc.stderr)
     if args.timings:
         timings(out)
+        if args.settle:
+            settled(out)
     return 0
 
 

@@ -110,6 +110,11 @@ def build_parser() -> argparse.ArgumentParser:
                     help="check independent ensembles: the campaigns with [base] seed = S"
                     " in DIR/seed<S>/ (run with --run); a verdict stands only where every"
                     " seed gives it")
+    pc.add_argument("--settle", action="store_true", help="settle every row: pool seeds"
+                    " 0, 1, ... in DIR/seed<S>/, added in looks of 4, 8, ... seeds (with"
+                    " --run: run as needed) read group-sequentially (docs/paper-check.md)")
+    pc.add_argument("--max-seeds", type=int, default=64, metavar="N",
+                    help="--settle: the last look's seeds (4 x a power of 2; default 64)")
 
     rp = sub.add_parser("report", help="one self-contained HTML page of a campaign: what ran,"
                         " status, failures, figures, collision-zone statistics")
@@ -279,6 +284,16 @@ def cmd_paper_check(args: argparse.Namespace) -> int:
     def log(msg: str) -> None:
         print(f"sweep: {msg}", file=sys.stderr)
 
+    if args.settle:
+        if args.seeds:
+            raise ConfigError("--settle and --seeds: give one (--settle chooses its seeds)")
+        from sweep.paper.settle import settle
+        from sweep.paper.settled import format_settled, settled_json
+
+        settled = settle(args.stores, max_seeds=args.max_seeds, run=args.run,
+                         configs=args.configs, compute=args.compute, log=log)
+        print(settled_json(settled) if args.json else format_settled(settled))
+        return EXIT_OK
     if args.seeds:
         from sweep.paper.seeds import across_seeds, check_seeds, format_seed_table
 

@@ -48,14 +48,17 @@ input, 3 a store missing or unreadable — the table is still printed).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass, replace
 from functools import cache
+from typing import Any
 
 import numpy as np
 
 __all__ = ["Estimate", "Z_CRIT", "HOLDS", "FAILS", "INCONCLUSIVE", "z_critical", "ordering",
-           "pairs", "in_range", "power_exponent"]
+           "pairs", "in_range", "power_exponent", "critical", "hooked", "observing", "current_hook"]
 
 HOLDS, FAILS, INCONCLUSIVE = "holds", "fails", "inconclusive"
 
@@ -99,17 +102,62 @@ class Estimate:
         return f"{self.label}: {self.value:.{digits}f} ± {self.se:.{digits}f}{mark}"
 
 
-@cache
+#: The critical |z| in force (:data:`Z_CRIT`; a look's boundary inside :func:`critical`).
+_Z: ContextVar[float] = ContextVar("z_crit", default=Z_CRIT)
+#: Who sees every estimate a rule or a check is given (:func:`observing`).
+_HOOK: ContextVar[Any] = ContextVar("estimate_hook", default=None)
+
+
+@contextmanager
+def critical(z: float) -> Iterator[None]:
+    """Every rule inside reads its z's against ``z`` instead of :data:`Z_CRIT` (a look's
+    boundary of :mod:`sweep.paper.sequential`)."""
+    token = _Z.set(float(z))
+    try:
+        yield
+    finally:
+        _Z.reset(token)
+
+
+@contextmanager
+def observing(hook: Any) -> Iterator[None]:
+    """Inside, every rule and every check hands its estimates to ``hook.estimates(tuple)``
+    and uses what it returns; every check made is handed to ``hook.created(check)``
+    (:mod:`sweep.paper.settle` records the estimates of each seed this way, and pools them)."""
+    token = _HOOK.set(hook)
+    try:
+        yield
+    finally:
+        _HOOK.reset(token)
+
+
+def current_hook() -> Any:
+    """The hook of the innermost :func:`observing` (None outside one)."""
+    return _HOOK.get()
+
+
+def hooked(estimates: Sequence[Estimate]) -> tuple[Estimate, ...]:
+    """``estimates`` as the hook of :func:`observing` returns them (unchanged without one)."""
+    hook = _HOOK.get()
+    return tuple(estimates) if hook is None else tuple(hook.estimates(tuple(estimates)))
+
+
 def z_critical(dof: float) -> float:
-    """The critical |z|: :data:`Z_CRIT` for a known SE, the Student-t value with the same
-    one-sided tail probability for an SE estimated with ``dof`` degrees of freedom."""
+    """The critical |z|: :data:`Z_CRIT` (or the boundary in force, :func:`critical`) for a
+    known SE, the Student-t value with the same one-sided tail probability for an SE
+    estimated with ``dof`` degrees of freedom."""
+    return _z_critical(dof, _Z.get())
+
+
+@cache
+def _z_critical(dof: float, z: float) -> float:
     if not math.isfinite(dof):
-        return Z_CRIT
+        return z
     if dof < 1:
         return math.inf
     from scipy import stats
 
-    return float(stats.t.ppf(stats.norm.cdf(Z_CRIT), dof))
+    return float(stats.t.ppf(stats.norm.cdf(z), dof))
 
 
 @dataclass(frozen=True)
@@ -155,7 +203,7 @@ def _no_se(estimates: Sequence[Estimate]) -> str:
 def ordering(estimates: Sequence[Estimate], *, increasing: bool) -> tuple[str, str]:
     """Verdict and evidence for "the value increases (``increasing``) / decreases along
     ``estimates``" (the chain rule of the module docstring)."""
-    pts, gone = _valued(estimates)
+    pts, gone = _valued(hooked(estimates))
     if len(pts) < 2:
         return INCONCLUSIVE, f"fewer than 2 points with a value{gone}"
     sign = 1.0 if increasing else -1.0
@@ -179,6 +227,8 @@ def ordering(estimates: Sequence[Estimate], *, increasing: bool) -> tuple[str, s
 def pairs(pair_list: Sequence[tuple[Estimate, Estimate]]) -> tuple[str, str]:
     """Verdict and evidence for "the second of each pair is above the first" (independent
     pairs, Stouffer's combined z)."""
+    flat = hooked([e for p in pair_list for e in p])
+    pair_list = list(zip(flat[0::2], flat[1::2], strict=True))
     valid = [(a, b) for a, b in pair_list
              if math.isfinite(a.value) and math.isfinite(b.value)]
     gone = [f"{a.label}/{b.label}" for a, b in pair_list
@@ -204,7 +254,7 @@ def pairs(pair_list: Sequence[tuple[Estimate, Estimate]]) -> tuple[str, str]:
 def in_range(estimates: Sequence[Estimate], lo: float, hi: float) -> tuple[str, str]:
     """Verdict and evidence for "every value lies in [lo, hi]" (``math.inf`` for an open
     end)."""
-    pts, gone = _valued(estimates)
+    pts, gone = _valued(hooked(estimates))
     if not pts:
         return INCONCLUSIVE, f"no point with a value{gone}"
     held, failed, parts = [], [], []

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from sweep.paper.estimates import INCONCLUSIVE, Estimate
+from sweep.paper.estimates import INCONCLUSIVE, Estimate, current_hook, hooked
 
 __all__ = ["FLOORS", "X_NEAR", "Check", "Profile", "point", "col", "label_of",
            "a_end", "a_near", "w_c", "inner_over_c", "force_decades", "make_check",
@@ -235,8 +235,16 @@ def force_decades(row: pd.Series | None, label: str, profile: Profile | None, ca
 
 def make_check(claim: str, source: str, campaign: str, points: str, quantity: str,
                rule: str, estimates: Sequence[Estimate], verdict: tuple[str, str]) -> Check:
-    """A :class:`Check` from a rule's (verdict, evidence)."""
-    return Check(claim, source, campaign, points, quantity, rule, tuple(estimates), *verdict)
+    """A :class:`Check` from a rule's (verdict, evidence) (its estimates and the check
+    handed to the hook of :func:`sweep.paper.estimates.observing`, if any)."""
+    check = Check(claim, source, campaign, points, quantity, rule, hooked(estimates), *verdict)
+    return created(check)
+
+
+def created(check: Check) -> Check:
+    """``check``, shown to the hook of :func:`sweep.paper.estimates.observing` (if any)."""
+    hook = current_hook()
+    return check if hook is None else hook.created(check)
 
 
 def sorted_values(df: pd.DataFrame, key: str, **fixed: Any) -> list[Any]:
@@ -274,8 +282,8 @@ class Tables:
     def unavailable(self, name: str, claim: str, source: str, points: str, quantity: str,
                     rule: str) -> None:
         """An inconclusive row for a claim whose campaign has no table."""
-        self.checks.append(Check(claim, source, name, points, quantity, rule, (), INCONCLUSIVE,
-                                 f"not checked: {self.missing[name]}"))
+        self.checks.append(created(Check(claim, source, name, points, quantity, rule, (),
+                                         INCONCLUSIVE, f"not checked: {self.missing[name]}")))
 
     def prof(self, name: str, row: pd.Series | None) -> Mapping[str, Any] | None:
         """The profiles of ``row`` in campaign ``name`` (None if not available)."""

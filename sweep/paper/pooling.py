@@ -1,0 +1,226 @@
+"""Pooling the paper checks of independent seeds (``sweep paper-check --settle``,
+:mod:`sweep.paper.settle`).
+
+Every rule and every check of :mod:`sweep.paper.claims` hands its estimates to a hook
+(:func:`sweep.paper.estimates.observing`). A :class:`Recorder` keeps them, check by check,
+for one seed's stores; a :class:`Pooler` hands every rule of one more run the estimates
+pooled over the seeds' records (:func:`pool`), so the claims' code runs unchanged on
+the pooled data. :func:`calibration` compares the seeds' spread with their stated SEs.
+"""
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Sequence
+
+import numpy as np
+
+from sweep.paper.claims import PAPER_CAMPAIGNS
+from sweep.paper.estimates import Estimate
+from sweep.paper.points import Check
+
+__all__ = ["EMPIRICAL_MIN", "SHARED_REPLICA0", "pool", "Recorder", "Pooler", "campaigns_of",
+           "shared_share", "calibration"]
+
+#: Seeds from which the seeds' spread bounds a pooled SE from below (S - 1 dof).
+EMPIRICAL_MIN = 4
+#: Paper campaigns whose replica 0 is the same chain for every seed (``placement =
+#: "uniform"``: replica 0 is the paper's arrangement, whatever the seed;
+#: :func:`floewave.ensemble.initial_positions`), with their replicas R. Their seeds share
+#: 1 of R replicas, so the mean of S seeds has the variance of independent seeds times
+#: 1 + (S - 1) / R; :func:`pool` widens their SE by its square root (for a difference
+#: with a campaign that shares nothing, that is conservative).
+SHARED_REPLICA0 = {"uniform": 8}
+_STATED = ("replicas", "profile", "fit", "periods", "combined")
+
+
+def _base(label: str) -> str:
+    return label.split(" (", 1)[0].split(":", 1)[0].strip()
+
+
+def pool(estimates: Sequence[Estimate], shared: float = 0.0) -> Estimate:
+    """One estimate from the same quantity's estimates on independent seeds (the module
+    docstring, step 2). Seeds without a value are left out; none with one: NaN.
+    ``shared``: the share of each seed's replicas common to all seeds (1 / R for
+    :data:`SHARED_REPLICA0`), which widens a stated SE by sqrt(1 + (S - 1) shared)."""
+    ok = [e for e in estimates if math.isfinite(e.value)]
+    if not ok:
+        return estimates[0]
+    n = len(ok)
+    values = np.array([e.value for e in ok])
+    mean = float(values.mean())
+    label = ok[0].label
+    if all(e.source == "exact" for e in ok):
+        return Estimate(label, mean, 0.0 if np.ptp(values) == 0 else math.nan, "exact")
+    ses = np.array([e.se for e in ok])
+    if all(e.source in _STATED for e in ok) and np.all(np.isfinite(ses)):
+        se = float(math.sqrt(np.sum(ses ** 2)) / n * math.sqrt(1.0 + (n - 1) * shared))
+        dofs = np.array([e.dof for e in ok])
+        if np.all(np.isinf(dofs)):
+            dof = math.inf
+        else:                                               # Welch-Satterthwaite
+            dof = float(np.sum(ses ** 2) ** 2 / np.sum(ses ** 4 / dofs))
+        source = ok[0].source if len({e.source for e in ok}) == 1 else "combined"
+        if n >= EMPIRICAL_MIN:                 # the seeds' spread, where it is the larger
+            spread = float(values.std(ddof=1) / math.sqrt(n))
+            if spread > se:
+                return Estimate(label, mean, spread, "seeds", float(n - 1))
+        return Estimate(label, mean, se, source, dof)
+    if n >= EMPIRICAL_MIN:
+        return Estimate(label, mean, float(values.std(ddof=1) / math.sqrt(n)), "seeds",
+                        float(n - 1))
+    if np.all(np.isfinite(ses)):
+        return Estimate(label, mean, float(math.sqrt(np.sum(ses ** 2)) / n), "floor")
+    return Estimate(label, mean)
+
+
+def _key(check: Check) -> tuple[str, str, str, str]:
+    return (check.claim, check.campaign, check.points, check.quantity)
+
+
+class Recorder:
+    """A hook (:func:`sweep.paper.estimates.observing`) that keeps, per check made, the
+    estimates every rule and the check itself were given (``groups[i]``: check i's;
+    ``keys[i]``: which check: claim, campaign, points, quantity and the how-manieth of
+    that key). The checks a seed makes depend on its stores (a missing campaign gives
+    one row per claim, a present one a row per stored period), so seeds are matched by
+    key, never by position."""
+
+    def __init__(self) -> None:
+        self.groups: list[list[tuple[Estimate, ...]]] = []
+        self.campaigns: list[str] = []
+        self.keys: list[tuple] = []
+        self._index: dict[tuple, int] | None = None
+        self._open: list[tuple[Estimate, ...]] = []
+
+    def estimates(self, ests: tuple[Estimate, ...]) -> tuple[Estimate, ...]:
+        self._open.append(ests)
+        return ests
+
+    def created(self, check: Check) -> Check:
+        self.groups.append(self._open)
+        self.campaigns.append(check.campaign)
+        key = _key(check)
+        n = sum(k[:-1] == key for k in self.keys)
+        self.keys.append((*key, n))
+        self._open = []
+        return check
+
+    def group(self, key: tuple) -> list[tuple[Estimate, ...]] | None:
+        """The recorded group of the check with ``key`` (None: that check not made)."""
+        if self._index is None or len(self._index) != len(self.keys):
+            self._index = {k: i for i, k in enumerate(self.keys)}
+        i = self._index.get(key)
+        return None if i is None else self.groups[i]
+
+
+def _aligned(a: Sequence[tuple[Estimate, ...]], b: Sequence[tuple[Estimate, ...]]) -> bool:
+    return len(a) == len(b) and all(
+        len(x) == len(y) and all(_base(e.label) == _base(f.label) for e, f in zip(x, y,
+                                                                                   strict=True))
+        for x, y in zip(a, b, strict=True))
+
+
+class Pooler:
+    """A hook that hands every rule and check of a run the estimates pooled over the
+    seeds' :class:`Recorder` s (the carrier's first). A seed whose group differs in shape or
+    labels from the carrier's (its store missing, say) is left out of that check;
+    ``used[i]``: the seeds pooled for check i."""
+
+    def __init__(self, recorders: Sequence[Recorder]) -> None:
+        self.recorders = recorders
+        self.used: list[int] = []
+        self._group = 0
+        self._call = 0
+        self._members: list[list[tuple[Estimate, ...]]] | None = None
+
+    def _current(self) -> list[list[tuple[Estimate, ...]]]:
+        if self._members is None:
+            carrier = self.recorders[0]
+            g = self._group
+            self._members = []
+            if g < len(carrier.keys):
+                mine = carrier.groups[g]
+                for rec in self.recorders:
+                    theirs = rec.group(carrier.keys[g])
+                    if theirs is not None and _aligned(theirs, mine):
+                        self._members.append(theirs)
+        return self._members
+
+    def estimates(self, ests: tuple[Estimate, ...]) -> tuple[Estimate, ...]:
+        members = self._current()
+        j = self._call
+        self._call += 1
+        if not members or j >= len(members[0]) or len(members[0][j]) != len(ests):
+            return ests
+        carrier = self.recorders[0]
+        shared = shared_share(carrier.campaigns[self._group])
+        calls = [m[j] for m in members]
+        return tuple(pool([c[i] for c in calls], shared) for i in range(len(ests)))
+
+    def created(self, check: Check) -> Check:
+        self.used.append(len(self._current()))
+        self._group += 1
+        self._call = 0
+        self._members = None
+        return check
+
+
+_NAMES = re.compile(r"[a-z0-9_]+")
+
+
+def shared_share(campaign: str) -> float:
+    """The share of replicas common to all seeds in a row on ``campaign``."""
+    names = [w for w in _NAMES.findall(campaign) if w in SHARED_REPLICA0]
+    return max((1.0 / SHARED_REPLICA0[w] for w in names), default=0.0)
+
+
+def campaigns_of(check: Check) -> list[str]:
+    """The paper campaigns a row rests on (from its campaign column: ``uniform vs fig2``)."""
+    return [w for w in _NAMES.findall(check.campaign) if w in PAPER_CAMPAIGNS]
+
+
+def calibration(seeds: Sequence[int], recorded: dict[int, Recorder]) -> dict[str, float]:
+    """How the seeds' spread compares with their stated SEs: over every pooled estimate
+    with a stated SE on at least 3 seeds, chi^2 = sum_s (x_s - mean)^2 / se_s^2 with
+    S - 1 degrees of freedom (equal SEs); returns the total chi^2 / dof, the dof and the
+    number of estimates (1 is honest; its own SE is about sqrt(2 / dof))."""
+    chi2 = dof = 0.0
+    count = 0
+    each: list[tuple[float, int, str, str]] = []
+    recs = [recorded[s] for s in seeds]
+    if len(recs) < 3:
+        return {}
+    carrier = recs[0]
+    for g, key in enumerate(carrier.keys):
+        if shared_share(carrier.campaigns[g]):     # seeds that share a replica: not independent
+            continue
+        members = [m for m in (r.group(key) for r in recs)
+                   if m is not None and _aligned(m, carrier.groups[g])]
+        if len(members) < 3:
+            continue
+        seen: set[tuple[str, float]] = set()
+        for j, call in enumerate(carrier.groups[g]):
+            for i in range(len(call)):
+                es = [m[j][i] for m in members]
+                if not all(e.source in _STATED and math.isfinite(e.value) and e.se > 0
+                           and math.isfinite(e.se) for e in es):
+                    continue
+                once = (es[0].label, es[0].value)          # a rule and its check: once
+                if once in seen:
+                    continue
+                seen.add(once)
+                v = np.array([e.value for e in es])
+                se = np.array([e.se for e in es])
+                c2 = float(np.sum((v - v.mean()) ** 2 / se ** 2))
+                chi2 += c2
+                dof += len(es) - 1
+                count += 1
+                each.append((c2 / (len(es) - 1), g, es[0].label, es[0].source))
+    if not dof:
+        return {}
+    each.sort(reverse=True)
+    return {"chi2_per_dof": round(chi2 / dof, 4), "dof": dof, "estimates": count,
+            "seeds": len(recs),
+            "worst": [{"row": g + 1, "estimate": lab, "source": src, "chi2_per_dof":
+                       round(c, 2)} for c, g, lab, src in each[:8]]}

@@ -1,0 +1,224 @@
+"""``sweep paper-check --settle``: every claim's verdict settled by pooling independent
+seeds, looked at group-sequentially.
+
+A claim that is inconclusive, or that holds with one seed and not another, is usually one
+whose error bar is too wide for its margin. Settling buys precision where it is needed:
+
+1. **Seeds.** Each paper campaign is run once per seed S (``[base] seed = S``, stores in
+   ``<stores>/seed<S>/``, as ``--seeds`` does). A seed is an independent ensemble of the
+   same points, the same cost again, so pooling S seeds divides the SE by sqrt(S) at S
+   times the cost (``benchmarks/settle_cost.py`` compares more replicas and longer
+   averaging). The stores resume: a point already stored is never recomputed.
+2. **Pooling.** The checks are run on each seed's stores, and every estimate a rule reads
+   is recorded (:func:`sweep.paper.estimates.observing`). The pooled table is the checks run
+   once more, each rule reading the estimates pooled over the seeds (:func:`pool`): the
+   mean of the seeds' values, with the SE of that mean: sqrt(sum se_s^2) / S from the
+   seeds' own error bars (replicas, profiles, fits), or, for a quantity whose error bar is
+   a floor (no stored SE), the seeds' spread sd / sqrt(S) with S - 1 degrees of freedom.
+   The spread also bounds a stated SE from below: where sd / sqrt(S) is larger, it is
+   used (S - 1 dof). So an error bar that is too small (some are: :func:`calibration`)
+   cannot decide a row. Text in the evidence that is not a rule's (notes, detail) is the
+   first seed's.
+3. **Looks.** The seeds are added in looks (:data:`FIRST_LOOK` = 4, 8, 16, ... up to
+   ``max_seeds``, 4 seeds at the first look so that the spread exists); at look k
+   every rule reads its z's against the boundary c_k of :mod:`sweep.paper.sequential`
+   (Pocock-type alpha spending, one-sided alpha = 2.28 % per z: the one-look rule's rate).
+   A row is decided at the first look where it holds or fails, and keeps that verdict;
+   only the campaigns of undecided rows get the next look's seeds. A row still undecided
+   at the last look (or one no seed can change: an analytic value) is inconclusive.
+
+The error bars being pooled must be honest for the rate to hold: :func:`calibration`
+compares the seeds' spread with their stated SEs over every pooled estimate.
+"""
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from sweep.errors import ConfigError
+from sweep.paper.check import check_stores, default_configs
+from sweep.paper.claims import PAPER_CAMPAIGNS
+from sweep.paper.estimates import FAILS, HOLDS, INCONCLUSIVE, critical, observing
+from sweep.paper.points import Check
+from sweep.paper.pooling import EMPIRICAL_MIN, Pooler, Recorder, calibration, campaigns_of
+from sweep.paper.seeds import seeded_configs
+from sweep.paper.sequential import boundaries
+
+__all__ = ["FIRST_LOOK", "Settled", "SettleReport", "looks_for", "pooled_checks", "settle",
+           "stored_cost"]
+
+#: Seeds pooled at the first look: enough for the spread to check the stated SEs.
+FIRST_LOOK = EMPIRICAL_MIN
+
+
+def looks_for(max_seeds: int) -> tuple[int, ...]:
+    """The looks' seed counts: :data:`FIRST_LOOK`, then doubling up to ``max_seeds``."""
+    looks = [FIRST_LOOK]
+    while looks[-1] < max_seeds:
+        looks.append(looks[-1] * 2)
+    if looks[-1] != max_seeds:
+        raise ConfigError(f"--max-seeds {max_seeds}: {FIRST_LOOK} times a power of 2 (the"
+                          f" looks double the seeds: {FIRST_LOOK}, {2 * FIRST_LOOK}, ...)")
+    return tuple(looks)
+
+
+def pooled_checks(stores: Path, seeds: Sequence[int], z: float,
+                  recorded: dict[int, Recorder]) -> tuple[list[Check], list[int]]:
+    """The checks on ``<stores>/seed<S>/`` pooled over ``seeds`` (each seed's
+    :class:`Recorder` in ``recorded``, made here if missing) and read against ``z``; with
+    the number of seeds pooled per row."""
+    for s in seeds:
+        if s not in recorded:
+            rec = Recorder()
+            with observing(rec):
+                check_stores(stores / f"seed{s}")
+            recorded[s] = rec
+    pooler = Pooler([recorded[s] for s in seeds])
+    with observing(pooler), critical(z):
+        report = check_stores(stores / f"seed{seeds[0]}")
+    return report.checks, pooler.used
+
+
+@dataclass
+class Settled:
+    """One row of the settled table: its pooled check at the look that decided it (or the
+    last), the look (1-based), the seeds pooled and the boundary read against."""
+
+    check: Check
+    look: int
+    seeds: int
+    boundary: float
+    extendable: bool = True
+
+
+@dataclass
+class SettleReport:
+    rows: list[Settled]
+    looks: tuple[int, ...]
+    boundaries: tuple[float, ...]
+    seeds: tuple[int, ...]
+    runs: list[dict[str, Any]] = field(default_factory=list)
+    calibration: dict[str, float] = field(default_factory=dict)
+    stored: dict[str, float] = field(default_factory=dict)
+
+    def counts(self) -> dict[str, int]:
+        return {v: sum(r.check.verdict == v for r in self.rows)
+                for v in (HOLDS, FAILS, INCONCLUSIVE)}
+
+    def cost(self) -> dict[str, float]:
+        """Points run and their CPU [s] in this invocation (seed stores that were complete
+        cost nothing), and what the table rests on: the points in the pooled seeds' stores
+        and their summed ``wall_time`` (one core each)."""
+        return {"points_added": sum(r["points"] for r in self.runs),
+                "cpu_s": sum(r["cpu_s"] for r in self.runs),
+                "wall_s": sum(r["wall_s"] for r in self.runs), **self.stored}
+
+
+def _extendable(check: Check) -> bool:
+    """Whether more seeds can move the row: not an analytic value, and on a campaign."""
+    return bool(campaigns_of(check)) and not (
+        check.estimates and all(e.source == "exact" for e in check.estimates))
+
+
+def _run_seed(stores: Path, configs: Path, seed: int, names: Sequence[str],
+              compute: str | None, log: Callable[[str], None] | None) -> dict[str, Any]:
+    from sweep.analysis.load import load
+    from sweep.config import load_campaign
+    from sweep.run.compute import DEFAULT_COMPUTE
+    from sweep.run.launch import run_campaign
+
+    where = stores / f"seed{seed}"
+    cfgs = seeded_configs(configs, seed, where / "configs")
+    before = 0
+    for name in names:
+        path = where / f"{name}.h5"
+        if path.exists():
+            before += len(load(path))
+    cpu, wall = time.process_time(), time.monotonic()
+    after = 0
+    for name in names:
+        path = where / f"{name}.h5"
+        if log:
+            log(f"seed {seed}: running {name} into {path}")
+        run_campaign(load_campaign(cfgs / f"{name}.toml"), str(path),
+                     compute=compute or DEFAULT_COMPUTE, progress_bar=False,
+                     command=f"sweep paper-check --settle (seed {seed}, {name})")
+        after += len(load(path))
+    return {"seed": seed, "campaigns": list(names), "points": after - before,
+            "cpu_s": round(time.process_time() - cpu, 2),
+            "wall_s": round(time.monotonic() - wall, 2)}
+
+
+def settle(stores: str | Path, *, max_seeds: int = 64, first_seed: int = 0,
+           run: bool = False, configs: str | Path | None = None, compute: str | None = None,
+           log: Callable[[str], None] | None = None) -> SettleReport:
+    """Settle every row (the module docstring). ``run``: run (or resume) the seeds'
+    campaigns as the looks need them; without it only stores already there are read, and
+    a look whose stores are missing leaves its rows undecided."""
+    stores = Path(stores)
+    configs = Path(configs) if configs is not None else default_configs()
+    looks = looks_for(max_seeds)
+    cs = boundaries([s / looks[-1] for s in looks])
+    seeds = tuple(range(first_seed, first_seed + looks[-1]))
+    decided: dict[int, Settled] = {}
+    recorded: dict[int, Recorder] = {}
+    runs: list[dict[str, Any]] = []
+    rows: list[Check] = []
+    used: list[int] = []
+    last: dict[int, Settled] = {}
+    for k, (n, c) in enumerate(zip(looks, cs, strict=True)):
+        if k == 0:
+            names = list(PAPER_CAMPAIGNS)
+        else:
+            open_rows = [i for i in range(len(rows)) if i not in decided
+                         and _extendable(rows[i])]
+            if not open_rows:
+                break
+            names = [nm for nm in PAPER_CAMPAIGNS
+                     if any(nm in campaigns_of(rows[i]) for i in open_rows)]
+        if run:
+            for s in seeds[:n]:
+                r = _run_seed(stores, configs, s, names, compute, log)
+                if r["points"]:
+                    runs.append(r)
+                    recorded.pop(s, None)
+        elif not stores.is_dir():
+            raise ConfigError(f"--stores {stores}: no such directory (run with --run)")
+        if log:
+            log(f"look {k + 1}: {n} seeds pooled, boundary |z| >= {c:.3f}")
+        rows, used = pooled_checks(stores, seeds[:n], c, recorded)
+        for i, row in enumerate(rows):
+            if i in decided:
+                continue
+            last[i] = Settled(row, k + 1, used[i], c, _extendable(row))
+            if row.verdict in (HOLDS, FAILS):
+                decided[i] = last[i]
+    out = [decided.get(i, last[i]) for i in range(len(rows))]
+    report = SettleReport(out, looks, cs, seeds, runs)
+    report.calibration = calibration([s for s in seeds if s in recorded], recorded)
+    report.stored = stored_cost(stores, [s for s in seeds if s in recorded])
+    return report
+
+
+def stored_cost(stores: Path, seeds: Sequence[int]) -> dict[str, float]:
+    """The points in the seeds' stores and their summed point ``wall_time`` [s]; those of
+    seeds 0 and 1 (what ``--seeds 0 1`` runs) apart."""
+    from sweep.analysis.load import load
+    from sweep.errors import StoreError
+
+    n = {True: 0, False: 0}
+    cpu = {True: 0.0, False: 0.0}
+    for s in seeds:
+        for path in sorted((stores / f"seed{s}").glob("*.h5")):
+            try:
+                df = load(path)
+            except StoreError:
+                continue
+            first = s < 2
+            n[first] += len(df)
+            cpu[first] += float(df["wall_time"].sum()) if "wall_time" in df else 0.0
+    return {"stored_points": n[True] + n[False], "stored_core_s": round(cpu[True] + cpu[False]),
+            "stored_points_seeds_2_up": n[False], "stored_core_s_seeds_2_up": round(cpu[False])}

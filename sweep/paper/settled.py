@@ -1,0 +1,77 @@
+"""The settled table of ``sweep paper-check --settle`` (:mod:`sweep.paper.settle`): Markdown
+and JSON, with the reasons of undecided rows and the threshold curves
+(:mod:`sweep.paper.thresholds`)."""
+from __future__ import annotations
+
+import json
+import math
+from typing import Any
+
+from sweep.paper.estimates import FAILS, HOLDS, INCONCLUSIVE
+from sweep.paper.sequential import ALPHA, POCOCK, crossing_rate
+from sweep.paper.settle import SettleReport
+from sweep.paper.thresholds import curves, format_curves, undecided_reason
+
+__all__ = ["settled_dict", "settled_json", "format_settled"]
+
+
+def settled_dict(report: SettleReport) -> dict[str, Any]:
+    """Everything the settled table says, machine-readable."""
+    looks = report.looks
+    return {"looks": list(looks), "boundaries": list(report.boundaries),
+            "alpha_one_sided": ALPHA, "spending": POCOCK,
+            "rate_if_c2_every_look": crossing_rate([s / looks[-1] for s in looks],
+                                                   [2.0] * len(looks)),
+            "counts": report.counts(), "cost": report.cost(), "runs": report.runs,
+            "calibration": report.calibration, "curves": curves(report),
+            "rows": [{"look": r.look, "seeds": r.seeds, "boundary": r.boundary,
+                      "extendable": r.extendable,
+                      "undecided": undecided_reason(r, budget=looks[-1]),
+                      **r.check.to_dict()} for r in report.rows]}
+
+
+def settled_json(report: SettleReport) -> str:
+    return json.dumps(settled_dict(report), indent=2)
+
+
+def _cell(text: str) -> str:
+    return text.replace("|", "\\|").replace("\n", " ")
+
+
+def format_settled(report: SettleReport) -> str:
+    """The settled table (Markdown) with its rule, rate, calibration and cost lines, then
+    the threshold curves (:mod:`sweep.paper.thresholds`)."""
+    lines = ["| # | claim (paper) | campaign: points | seeds (look) | value ± SE (pooled) |"
+             " rule: evidence | verdict |", "|---|---|---|---|---|---|---|"]
+    for i, r in enumerate(report.rows, 1):
+        c = r.check
+        values = "; ".join(e.text() for e in c.estimates) or "—"
+        why = undecided_reason(r, budget=report.looks[-1])
+        why = f"; undecided: {why}" if why else ""
+        lines.append("| " + " | ".join(_cell(s) for s in (
+            str(i), f"{c.claim} ({c.source})", f"{c.campaign}: {c.points}",
+            f"{r.seeds} ({r.look})", values, f"{c.rule}: {c.evidence}{why}",
+            c.verdict)) + " |")
+    counts = report.counts()
+    cost = report.cost()
+    cal = report.calibration
+    fr = [s / report.looks[-1] for s in report.looks]
+    lines += ["", f"{counts[HOLDS]} hold, {counts[FAILS]} fail, {counts[INCONCLUSIVE]}"
+              f" inconclusive. Looks at {', '.join(map(str, report.looks))} seeds pooled,"
+              f" boundaries |z| >= {', '.join(f'{c:.3f}' for c in report.boundaries)}"
+              f" (Pocock-type alpha spending, one-sided alpha {ALPHA:.4f} per z; reading"
+              f" every look at 2 would be {crossing_rate(fr, [2.0] * len(fr)):.4f})."]
+    if cal:
+        lines.append(f"Seeds' spread against their stated SEs: chi^2/dof"
+                     f" {cal['chi2_per_dof']:.3f} over {cal['estimates']} estimates"
+                     f" ({cal['dof']:.0f} dof, {cal['seeds']} seeds; honest: 1 ±"
+                     f" {math.sqrt(2 / cal['dof']):.3f}).")
+    lines.append(f"Settling's cost: this run added {cost['points_added']} points in"
+                 f" {cost['cpu_s']:.0f} CPU s ({cost['wall_s']:.0f} s wall, in-process); the"
+                 f" table rests on {cost.get('stored_points', 0)} stored points"
+                 f" ({cost.get('stored_core_s', 0)} core-s), of which seeds 2 and up:"
+                 f" {cost.get('stored_points_seeds_2_up', 0)} points"
+                 f" ({cost.get('stored_core_s_seeds_2_up', 0)} core-s).")
+    lines += ["", "Verdicts against the thresholds the paper's words leave open:", "",
+              format_curves(curves(report))]
+    return "\n".join(lines)

@@ -1,0 +1,248 @@
+"""``sweep paper-check --settle``: the group-sequential rule (its false-verdict rate
+measured on simulated looks where the truth is known), the pooling of seeds, and the
+command."""
+from __future__ import annotations
+
+import json
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sweep.cli import main
+from sweep.paper import claims, pooling, sequential, settle
+from sweep.paper.estimates import FAILS, HOLDS, INCONCLUSIVE, Estimate, critical, in_range
+from sweep.paper.estimates import observing, pairs
+from sweep.paper.points import Check
+from tests.sweep.test_papercheck import _fig2 as fig2_table
+
+FRACTIONS = (1 / 8, 1 / 4, 1 / 2, 1.0)
+
+
+# ---------------------------------------------------------------------- the boundaries
+@pytest.mark.parametrize("kind", [sequential.POCOCK, sequential.OBRIEN_FLEMING])
+def test_boundaries_spend_exactly_alpha(kind):
+    c = sequential.boundaries(FRACTIONS, kind=kind)
+    assert sequential.crossing_rate(FRACTIONS, c) == pytest.approx(sequential.ALPHA, rel=1e-6)
+    # the first look spends alpha(1/8) alone: its boundary is the normal quantile of that
+    from scipy.stats import norm
+    assert c[0] == pytest.approx(norm.isf(sequential.spent(FRACTIONS[0], kind=kind)))
+    if kind == sequential.POCOCK:
+        assert all(2.0 < x < 2.7 for x in c) and list(c) == sorted(c, reverse=True)
+    else:                                   # strict early, about z_(alpha) at the end
+        assert c[0] > 5 and c[-1] == pytest.approx(2.0, abs=0.02)
+
+
+def test_looking_again_at_two_inflates_the_rate():
+    naive = sequential.crossing_rate(FRACTIONS, [2.0] * 4)
+    assert 0.06 < naive < 0.07                      # about 2.9 times the one-look rate
+    assert sequential.crossing_rate([1.0], [2.0]) == pytest.approx(sequential.ALPHA)
+
+
+def test_boundaries_checked_by_simulated_brownian_looks():
+    rng = np.random.default_rng(20261203)
+    n = 200_000
+    steps = rng.standard_normal((n, 4)) * np.sqrt(np.diff((0.0, *FRACTIONS)))
+    z = np.cumsum(steps, axis=1) / np.sqrt(FRACTIONS)
+    for kind in (sequential.POCOCK, sequential.OBRIEN_FLEMING):
+        c = np.array(sequential.boundaries(FRACTIONS, kind=kind))
+        alive = np.ones(n, bool)
+        up = np.zeros(n, bool)
+        for k in range(4):
+            hit, low = alive & (z[:, k] >= c[k]), alive & (z[:, k] <= -c[k])
+            up |= hit
+            alive &= ~(hit | low)
+        se = math.sqrt(sequential.ALPHA * (1 - sequential.ALPHA) / n)
+        assert abs(up.mean() - sequential.ALPHA) < 4 * se, (kind, up.mean())
+
+
+def test_bad_looks_are_refused():
+    for fr in ((0.5, 0.25, 1.0), (0.5,), (0.0, 1.0)):
+        with pytest.raises(ValueError):
+            sequential.boundaries(fr)
+    with pytest.raises(ValueError):
+        sequential.spent(0.5, kind="linear")
+
+
+# ---------------------------------------------------------------------- pooling
+def test_pool_stated_errors_floors_exact_and_missing():
+    p = pooling.pool([Estimate("x", 1.0, 0.3, "replicas"), Estimate("x", 2.0, 0.4,
+                                                                   "replicas")])
+    assert (p.value, p.se, p.source) == (1.5, pytest.approx(0.25), "replicas")
+    assert math.isinf(p.dof)
+    # one seed shares 1 of 8 replicas with the others: variance x (1 + (S - 1) / 8)
+    q = pooling.pool([Estimate("x", 1.0, 0.3, "replicas")] * 4, shared=1 / 8)
+    assert q.se == pytest.approx(0.3 / 2 * math.sqrt(1 + 3 / 8))
+    fl = [Estimate("f", v, 0.02, "floor") for v in (0.10, 0.12)]
+    assert pooling.pool(fl).se == pytest.approx(0.02 / math.sqrt(2))   # too few: the floor
+    fl4 = [Estimate("f", v, 0.02, "floor") for v in (0.10, 0.12, 0.11, 0.13)]
+    p4 = pooling.pool(fl4)                          # four: the seeds' own spread
+    assert (p4.source, p4.dof) == ("seeds", 3.0)
+    assert p4.se == pytest.approx(np.std([0.10, 0.12, 0.11, 0.13], ddof=1) / 2)
+    ex = pooling.pool([Estimate("m", 4.0, 0.0, "exact")] * 3)
+    assert (ex.value, ex.se, ex.source) == (4.0, 0.0, "exact")
+    mixed = pooling.pool([Estimate("w", math.nan), Estimate("w n=8", 20.0, 1.0, "replicas")])
+    assert (mixed.value, mixed.se) == (20.0, 1.0)
+    fits = pooling.pool([Estimate("m", 3.0, 0.1, "fit", 2.0), Estimate("m", 3.2, 0.1, "fit",
+                                                                       2.0)])
+    assert fits.dof == pytest.approx(4.0)          # Welch-Satterthwaite of equal SEs
+
+
+def _fig2(shift):
+    t = fig2_table([30.0, 25.0, 20.0, 15.0])
+    t["W_c"] = t["W_c"] + shift
+    return t
+
+
+def test_pooled_checks_read_the_seeds_mean_and_its_error():
+    recs = []
+    for shift in (0.0, 1.0):
+        rec = pooling.Recorder()
+        with observing(rec):
+            claims.paper_checks({"fig2": _fig2(shift)}, trace=False)
+        recs.append(rec)
+    assert len(recs[0].groups) == len(recs[1].groups) > 30
+    pooler = pooling.Pooler(recs)
+    with observing(pooler), critical(2.5):
+        pooled = claims.paper_checks({"fig2": _fig2(0.0)}, trace=False)
+    w = next(c for c in pooled if c.claim.startswith("higher eps -> narrower") and "(ml)"
+             in c.claim)
+    assert [e.value for e in w.estimates] == [30.5, 25.5, 20.5, 15.5]
+    assert all(e.se == pytest.approx(0.5 / math.sqrt(2)) for e in w.estimates)
+    assert "z_c 2.5" in w.evidence and w.verdict == HOLDS
+    assert pooler.used[0] == 2 and len(pooler.used) == len(pooled)
+    # a seed whose table lacks the campaign is left out of those rows, not misaligned
+    rec = pooling.Recorder()
+    with observing(rec):
+        claims.paper_checks({}, trace=False)
+    pooler = pooling.Pooler([recs[0], rec])
+    with observing(pooler):
+        again = claims.paper_checks({"fig2": _fig2(0.0)}, trace=False)
+    on_fig2 = [u for u, c in zip(pooler.used, recs[0].campaigns, strict=True) if "fig2" in c]
+    assert on_fig2 and set(on_fig2) == {1}
+    assert [c.verdict for c in again] == [c.verdict for c in claims.paper_checks(
+        {"fig2": _fig2(0.0)}, trace=False)]
+
+
+def test_shared_replica_campaigns_are_the_uniform_placement_ones():
+    configs = Path(__file__).resolve().parents[2] / "configs"
+    uniform = {}
+    for name in claims.PAPER_CAMPAIGNS:
+        base = tomllib.loads((configs / f"{name}.toml").read_text())["base"]
+        if base["placement"] == "uniform":
+            uniform[name] = base["replicas"]
+    assert uniform == pooling.SHARED_REPLICA0
+
+
+# ---------------------------------------------------------------------- the rule's error rate
+LOOKS = settle.looks_for(64)                       # 4, 8, 16, 32, 64 seeds
+
+
+def _settle_draws(mu, sigma, *, draws, rng, zs=None, rule="range", hi=1.0, stated=None):
+    """The sequential verdicts of ``draws`` simulated claims: each seed's estimate
+    N(mu, sigma) with its stated SE ``stated`` (default sigma), pooled at the looks of
+    ``settle.looks_for(64)`` and read against ``zs`` (default: the Pocock boundaries);
+    "range": value in [-inf, hi]; "pair": b > a with a ~ N(0, sigma)."""
+    zs = zs or sequential.boundaries([n / LOOKS[-1] for n in LOOKS])
+    stated = sigma if stated is None else stated
+    out = []
+    for _ in range(draws):
+        x = rng.normal(mu, sigma, LOOKS[-1])
+        y = rng.normal(0.0, sigma, LOOKS[-1])
+        verdict = INCONCLUSIVE
+        for n, z in zip(LOOKS, zs, strict=True):
+            est = pooling.pool([Estimate("x", v, stated, "replicas") for v in x[:n]])
+            with critical(z):
+                if rule == "range":
+                    verdict = in_range([est], -math.inf, hi)[0]
+                else:
+                    ref = pooling.pool([Estimate("y", v, stated, "replicas") for v in y[:n]])
+                    verdict = pairs([(ref, est)])[0]
+            if verdict != INCONCLUSIVE:
+                break
+        out.append(verdict)
+    return np.array(out)
+
+
+@pytest.mark.parametrize("rule", ["range", "pair"])
+def test_sequential_false_verdict_rate_on_synthetic_claims(rule):
+    """The truth on the claim's bound (range: mu = hi; pair: no difference): "holds" and
+    "fails" are both false verdicts. The looks keep each at most alpha (the seeds'
+    spread, used where it exceeds the stated SE, makes the rule a little conservative);
+    reading every look at 2 does not."""
+    rng = np.random.default_rng(7 if rule == "range" else 8)
+    draws = 3000
+    mu = 1.0 if rule == "range" else 0.0
+    se = math.sqrt(sequential.ALPHA * (1 - sequential.ALPHA) / draws)
+    v = _settle_draws(mu, 0.1, draws=draws, rng=rng, rule=rule)
+    for wrong in (HOLDS, FAILS):
+        rate = np.mean(v == wrong)
+        assert sequential.ALPHA / 3 < rate < sequential.ALPHA + 4 * se, (wrong, rate)
+    naive = _settle_draws(mu, 0.1, draws=draws, rng=rng, rule=rule, zs=[2.0] * len(LOOKS))
+    assert np.mean(naive == HOLDS) > sequential.ALPHA + 6 * se
+
+
+def test_too_small_error_bars_are_caught_by_the_seeds_spread(monkeypatch):
+    draws = 3000
+    se = math.sqrt(sequential.ALPHA * (1 - sequential.ALPHA) / draws)
+    # stated SEs 1.6 times too small: the spread keeps the false "holds" at alpha ...
+    v = _settle_draws(1.0, 0.16, draws=draws, rng=np.random.default_rng(11), stated=0.1)
+    assert np.mean(v == HOLDS) < sequential.ALPHA + 4 * se
+    # ... which the stated SEs alone would not (16.6 % with this draw, 7 times alpha)
+    monkeypatch.setattr(pooling, "EMPIRICAL_MIN", 10 ** 9)
+    v = _settle_draws(1.0, 0.16, draws=draws, rng=np.random.default_rng(11), stated=0.1)
+    assert np.mean(v == HOLDS) > 4 * sequential.ALPHA
+
+
+def test_sequential_rule_decides_a_real_effect():
+    rng = np.random.default_rng(9)
+    # an effect of one seed's SE: 8 SE at 64 seeds, decided (the right way) by then
+    v = _settle_draws(1.0 - 0.1, 0.1, draws=500, rng=rng)
+    assert np.mean(v == HOLDS) > 0.97 and np.mean(v == FAILS) < 0.01
+
+
+# ---------------------------------------------------------------------- the command
+@pytest.mark.slow  # 88 campaign runs of fake_point (56 s); fast: the bad-input tests
+def test_cli_settle_runs_the_looks_and_reports(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr("sweep.paper.traces.PERIODS", 4)
+    monkeypatch.setattr("sweep.paper.traces.SPIN_UP", 1)
+    d = tmp_path / "paper"
+    assert main(["paper-check", "--stores", str(d), "--run", "--settle", "--max-seeds", "8",
+                 "--compute", "sweep.testing:fake_point", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["looks"] == [4, 8] and len(out["boundaries"]) == 2
+    assert sum(out["counts"].values()) == len(out["rows"])
+    for seed in (0, 1, 2, 3):
+        for name in claims.PAPER_CAMPAIGNS:
+            assert (d / f"seed{seed}" / f"{name}.h5").exists()
+    # the second look ran only the campaigns of rows still open after the first
+    second = [r for r in out["runs"] if r["seed"] >= 4]
+    open_after_1 = {n for r in out["rows"] if r["look"] == 2 and r["extendable"]
+                    for n in pooling.campaigns_of(_check(r))}
+    assert {n for r in second for n in r["campaigns"]} <= open_after_1 | set()
+    assert out["cost"]["points_added"] == sum(r["points"] for r in out["runs"]) > 0
+    # resumed: nothing is recomputed, the same table
+    assert main(["paper-check", "--stores", str(d), "--run", "--settle", "--max-seeds", "8",
+                 "--compute", "sweep.testing:fake_point", "--json"]) == 0
+    again = json.loads(capsys.readouterr().out)
+    assert again["cost"]["points_added"] == 0
+    assert [r["verdict"] for r in again["rows"]] == [r["verdict"] for r in out["rows"]]
+    assert main(["paper-check", "--stores", str(d), "--settle", "--max-seeds", "8"]) == 0
+    table = capsys.readouterr().out
+    assert "| seeds (look) |" in table and "this run added 0 points" in table
+
+
+def _check(row):
+    return Check(row["claim"], row["source"], row["campaign"], row["points"],
+                        row["quantity"], row["rule"], (), row["verdict"], row["evidence"])
+
+
+@pytest.mark.parametrize("argv", [["--settle", "--max-seeds", "12"],
+                                  ["--settle", "--seeds", "0", "1"]])
+def test_cli_settle_bad_input_exits_2(tmp_path, capsys, argv):
+    assert main(["paper-check", "--stores", str(tmp_path), *argv]) == 2
+    err = capsys.readouterr().err
+    assert "--max-seeds" in err or "--settle and --seeds" in err
+    assert list(tmp_path.iterdir()) == []
