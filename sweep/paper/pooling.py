@@ -5,13 +5,16 @@ Every rule and every check of :mod:`sweep.paper.claims` hands its estimates to a
 (:func:`sweep.paper.estimates.observing`). A :class:`Recorder` keeps them, check by check,
 for one seed's stores; a :class:`Pooler` hands every rule of one more run the estimates
 pooled over the seeds' records (:func:`pool`), so the claims' code runs unchanged on
-the pooled data. :func:`calibration` compares the seeds' spread with their stated SEs.
+the pooled data. :func:`calibration` compares the seeds' spread with their stated SEs;
+:func:`widening` gives the factor by which each estimate's stated SE is too small.
 """
 from __future__ import annotations
 
 import math
 import re
 from collections.abc import Sequence
+from dataclasses import replace
+from typing import Any
 
 import numpy as np
 
@@ -20,7 +23,7 @@ from sweep.paper.estimates import Estimate
 from sweep.paper.points import Check
 
 __all__ = ["EMPIRICAL_MIN", "SHARED_REPLICA0", "pool", "Recorder", "Pooler", "campaigns_of",
-           "shared_share", "calibration"]
+           "shared_share", "calibration", "WIDEN_MIN", "widening"]
 
 #: Seeds from which the seeds' spread bounds a pooled SE from below (S - 1 dof).
 EMPIRICAL_MIN = 4
@@ -127,8 +130,10 @@ class Pooler:
     labels from the carrier's (its store missing, say) is left out of that check;
     ``used[i]``: the seeds pooled for check i."""
 
-    def __init__(self, recorders: Sequence[Recorder]) -> None:
+    def __init__(self, recorders: Sequence[Recorder],
+                 widen: dict[tuple, float] | None = None) -> None:
         self.recorders = recorders
+        self.widen = widen or {}
         self.used: list[int] = []
         self._group = 0
         self._call = 0
@@ -156,7 +161,14 @@ class Pooler:
         carrier = self.recorders[0]
         shared = shared_share(carrier.campaigns[self._group])
         calls = [m[j] for m in members]
-        return tuple(pool([c[i] for c in calls], shared) for i in range(len(ests)))
+        out = []
+        for i in range(len(ests)):
+            p = pool([c[i] for c in calls], shared)
+            f = self.widen.get((carrier.keys[self._group], j, i), 1.0)
+            if f > 1.0 and p.source in _STATED and math.isfinite(p.se):
+                p = replace(p, se=p.se * f)
+            out.append(p)
+        return tuple(out)
 
     def created(self, check: Check) -> Check:
         self.used.append(len(self._current()))
@@ -180,47 +192,66 @@ def campaigns_of(check: Check) -> list[str]:
     return [w for w in _NAMES.findall(check.campaign) if w in PAPER_CAMPAIGNS]
 
 
-def calibration(seeds: Sequence[int], recorded: dict[int, Recorder]) -> dict[str, float]:
-    """How the seeds' spread compares with their stated SEs: over every pooled estimate
-    with a stated SE on at least 3 seeds, chi^2 = sum_s (x_s - mean)^2 / se_s^2 with
-    S - 1 degrees of freedom (equal SEs); returns the total chi^2 / dof, the dof and the
-    number of estimates (1 is honest; its own SE is about sqrt(2 / dof))."""
-    chi2 = dof = 0.0
-    count = 0
-    each: list[tuple[float, int, str, str]] = []
+def _entries(seeds: Sequence[int], recorded: dict[int, Recorder]):
+    """(g, key, j, i, chi2, n, estimates) of every pooled estimate with a stated SE on at
+    least 3 independent seeds (groups of :data:`SHARED_REPLICA0` campaigns left out)."""
     recs = [recorded[s] for s in seeds]
     if len(recs) < 3:
-        return {}
+        return
     carrier = recs[0]
     for g, key in enumerate(carrier.keys):
-        if shared_share(carrier.campaigns[g]):     # seeds that share a replica: not independent
+        if shared_share(carrier.campaigns[g]):   # seeds that share a replica: dependent
             continue
         members = [m for m in (r.group(key) for r in recs)
                    if m is not None and _aligned(m, carrier.groups[g])]
         if len(members) < 3:
             continue
-        seen: set[tuple[str, float]] = set()
         for j, call in enumerate(carrier.groups[g]):
             for i in range(len(call)):
                 es = [m[j][i] for m in members]
                 if not all(e.source in _STATED and math.isfinite(e.value) and e.se > 0
                            and math.isfinite(e.se) for e in es):
                     continue
-                once = (es[0].label, es[0].value)          # a rule and its check: once
-                if once in seen:
-                    continue
-                seen.add(once)
                 v = np.array([e.value for e in es])
                 se = np.array([e.se for e in es])
-                c2 = float(np.sum((v - v.mean()) ** 2 / se ** 2))
-                chi2 += c2
-                dof += len(es) - 1
-                count += 1
-                each.append((c2 / (len(es) - 1), g, es[0].label, es[0].source))
+                yield g, key, j, i, float(np.sum((v - v.mean()) ** 2 / se ** 2)), len(es), es
+
+
+def calibration(seeds: Sequence[int], recorded: dict[int, Recorder]) -> dict[str, Any]:
+    """How the seeds' spread compares with their stated SEs: over every pooled estimate
+    with a stated SE on at least 3 seeds, chi^2 = sum_s (x_s - mean)^2 / se_s^2 with
+    S - 1 degrees of freedom (equal SEs); returns the total chi^2 / dof, the dof, the
+    number of estimates (1 is honest; its own SE is about sqrt(2 / dof)) and the worst."""
+    chi2 = dof = 0.0
+    each: list[tuple[float, int, str, str]] = []
+    seen: set[tuple[int, str, float]] = set()
+    for g, _key, _j, _i, c2, n, es in _entries(seeds, recorded):
+        once = (g, es[0].label, es[0].value)        # a rule and its check: once
+        if once in seen:
+            continue
+        seen.add(once)
+        chi2 += c2
+        dof += n - 1
+        each.append((c2 / (n - 1), g, es[0].label, es[0].source))
     if not dof:
         return {}
     each.sort(reverse=True)
-    return {"chi2_per_dof": round(chi2 / dof, 4), "dof": dof, "estimates": count,
-            "seeds": len(recs),
+    return {"chi2_per_dof": round(chi2 / dof, 4), "dof": dof, "estimates": len(each),
+            "seeds": len(seeds),
             "worst": [{"row": g + 1, "estimate": lab, "source": src, "chi2_per_dof":
                        round(c, 2)} for c, g, lab, src in each[:8]]}
+
+
+#: Seeds from which a point's spread is trusted to widen its stated SE (:func:`widening`).
+WIDEN_MIN = 8
+
+
+def widening(seeds: Sequence[int], recorded: dict[int, Recorder]) -> dict[tuple, float]:
+    """(check key, call, index) -> sqrt(chi^2 / dof) of the seeds' spread against their
+    stated SEs, where it exceeds 1 on at least :data:`WIDEN_MIN` seeds: the factor by
+    which an estimate's stated SE is too small (the audit of :mod:`sweep.paper.settle`)."""
+    out = {}
+    for _g, key, j, i, c2, n, _es in _entries(seeds, recorded):
+        if n >= WIDEN_MIN and c2 > n - 1:
+            out[key, j, i] = math.sqrt(c2 / (n - 1))
+    return out

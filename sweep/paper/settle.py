@@ -43,7 +43,14 @@ from sweep.paper.check import check_stores, default_configs
 from sweep.paper.claims import PAPER_CAMPAIGNS
 from sweep.paper.estimates import FAILS, HOLDS, INCONCLUSIVE, critical, observing
 from sweep.paper.points import Check
-from sweep.paper.pooling import EMPIRICAL_MIN, Pooler, Recorder, calibration, campaigns_of
+from sweep.paper.pooling import (
+    EMPIRICAL_MIN,
+    Pooler,
+    Recorder,
+    calibration,
+    campaigns_of,
+    widening,
+)
 from sweep.paper.seeds import seeded_configs
 from sweep.paper.sequential import boundaries
 
@@ -66,7 +73,8 @@ def looks_for(max_seeds: int) -> tuple[int, ...]:
 
 
 def pooled_checks(stores: Path, seeds: Sequence[int], z: float,
-                  recorded: dict[int, Recorder]) -> tuple[list[Check], list[int]]:
+                  recorded: dict[int, Recorder], widen: dict[tuple, float] | None = None
+                  ) -> tuple[list[Check], list[int]]:
     """The checks on ``<stores>/seed<S>/`` pooled over ``seeds`` (each seed's
     :class:`Recorder` in ``recorded``, made here if missing) and read against ``z``; with
     the number of seeds pooled per row."""
@@ -76,7 +84,7 @@ def pooled_checks(stores: Path, seeds: Sequence[int], z: float,
             with observing(rec):
                 check_stores(stores / f"seed{s}")
             recorded[s] = rec
-    pooler = Pooler([recorded[s] for s in seeds])
+    pooler = Pooler([recorded[s] for s in seeds], widen)
     with observing(pooler), critical(z):
         report = check_stores(stores / f"seed{seeds[0]}")
     return report.checks, pooler.used
@@ -92,6 +100,8 @@ class Settled:
     seeds: int
     boundary: float
     extendable: bool = True
+    audited: str = ""
+    audited_look: int = 0
 
 
 @dataclass
@@ -104,8 +114,8 @@ class SettleReport:
     calibration: dict[str, float] = field(default_factory=dict)
     stored: dict[str, float] = field(default_factory=dict)
 
-    def counts(self) -> dict[str, int]:
-        return {v: sum(r.check.verdict == v for r in self.rows)
+    def counts(self, audited: bool = False) -> dict[str, int]:
+        return {v: sum((r.audited if audited else r.check.verdict) == v for r in self.rows)
                 for v in (HOLDS, FAILS, INCONCLUSIVE)}
 
     def cost(self) -> dict[str, float]:
@@ -198,9 +208,33 @@ def settle(stores: str | Path, *, max_seeds: int = 64, first_seed: int = 0,
                 decided[i] = last[i]
     out = [decided.get(i, last[i]) for i in range(len(rows))]
     report = SettleReport(out, looks, cs, seeds, runs)
-    report.calibration = calibration([s for s in seeds if s in recorded], recorded)
+    have = [s for s in seeds if s in recorded]
+    report.calibration = calibration(have, recorded)
+    _audit(stores, out, looks, cs, seeds, recorded, widening(have, recorded))
     report.stored = stored_cost(stores, [s for s in seeds if s in recorded])
     return report
+
+
+def _audit(stores: Path, rows: list[Settled], looks: Sequence[int], cs: Sequence[float],
+           seeds: Sequence[int], recorded: dict[int, Recorder],
+           widen: dict[tuple, float]) -> None:
+    """The looks once more on the stored seeds, every stated SE widened by the factor all
+    the stored seeds' spread shows it to be too small
+    (:func:`sweep.paper.pooling.widening`; the means at each look are its seeds' only):
+    ``Settled.audited`` is the verdict at the first look where the row holds or fails so
+    read, ``audited_look`` that look (a row whose look lacks its seeds stops there)."""
+    done: set[int] = set()
+    for k, (n, c) in enumerate(zip(looks, cs, strict=True), 1):
+        checks, used = pooled_checks(stores, seeds[:n], c, recorded, widen)
+        for i, r in enumerate(rows):
+            if i in done:
+                continue
+            if used[i] < n and k > 1:          # this look's seeds were never run for it
+                done.add(i)
+                continue
+            r.audited, r.audited_look = checks[i].verdict, k
+            if checks[i].verdict in (HOLDS, FAILS):
+                done.add(i)
 
 
 def stored_cost(stores: Path, seeds: Sequence[int]) -> dict[str, float]:

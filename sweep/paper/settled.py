@@ -8,6 +8,7 @@ import math
 from typing import Any
 
 from sweep.paper.estimates import FAILS, HOLDS, INCONCLUSIVE
+from sweep.paper.pooling import WIDEN_MIN
 from sweep.paper.sequential import ALPHA, POCOCK, crossing_rate
 from sweep.paper.settle import SettleReport
 from sweep.paper.thresholds import curves, format_curves, undecided_reason
@@ -22,10 +23,12 @@ def settled_dict(report: SettleReport) -> dict[str, Any]:
             "alpha_one_sided": ALPHA, "spending": POCOCK,
             "rate_if_c2_every_look": crossing_rate([s / looks[-1] for s in looks],
                                                    [2.0] * len(looks)),
-            "counts": report.counts(), "cost": report.cost(), "runs": report.runs,
+            "counts": report.counts(),
+            "counts_audited": report.counts(audited=True), "cost": report.cost(), "runs": report.runs,
             "calibration": report.calibration, "curves": curves(report),
             "rows": [{"look": r.look, "seeds": r.seeds, "boundary": r.boundary,
-                      "extendable": r.extendable,
+                      "extendable": r.extendable, "audited": r.audited,
+                      "audited_look": r.audited_look,
                       "undecided": undecided_reason(r, budget=looks[-1]),
                       **r.check.to_dict()} for r in report.rows]}
 
@@ -42,7 +45,7 @@ def format_settled(report: SettleReport) -> str:
     """The settled table (Markdown) with its rule, rate, calibration and cost lines, then
     the threshold curves (:mod:`sweep.paper.thresholds`)."""
     lines = ["| # | claim (paper) | campaign: points | seeds (look) | value ± SE (pooled) |"
-             " rule: evidence | verdict |", "|---|---|---|---|---|---|---|"]
+             " rule: evidence | verdict | audited (look) |", "|---|---|---|---|---|---|---|---|"]
     for i, r in enumerate(report.rows, 1):
         c = r.check
         values = "; ".join(e.text() for e in c.estimates) or "—"
@@ -51,7 +54,7 @@ def format_settled(report: SettleReport) -> str:
         lines.append("| " + " | ".join(_cell(s) for s in (
             str(i), f"{c.claim} ({c.source})", f"{c.campaign}: {c.points}",
             f"{r.seeds} ({r.look})", values, f"{c.rule}: {c.evidence}{why}",
-            c.verdict)) + " |")
+            c.verdict, f"{r.audited} ({r.audited_look})" if r.audited else "—")) + " |")
     counts = report.counts()
     cost = report.cost()
     cal = report.calibration
@@ -61,6 +64,14 @@ def format_settled(report: SettleReport) -> str:
               f" boundaries |z| >= {', '.join(f'{c:.3f}' for c in report.boundaries)}"
               f" (Pocock-type alpha spending, one-sided alpha {ALPHA:.4f} per z; reading"
               f" every look at 2 would be {crossing_rate(fr, [2.0] * len(fr)):.4f})."]
+    moved = [f"#{i} ({r.check.verdict} -> {r.audited})" for i, r in enumerate(report.rows, 1)
+             if r.audited and r.audited != r.check.verdict]
+    ca = report.counts(audited=True)
+    lines.append(f"Audited: {ca[HOLDS]} hold, {ca[FAILS]} fail, {ca[INCONCLUSIVE]}"
+                 " inconclusive (the looks read again with each stated SE widened by the"
+                 " factor all the stored seeds' spread shows it too small, on >="
+                 f" {WIDEN_MIN} seeds; each look's mean its own seeds'); verdicts that move: "
+                 + (", ".join(moved) if moved else "none") + ".")
     if cal:
         lines.append(f"Seeds' spread against their stated SEs: chi^2/dof"
                      f" {cal['chi2_per_dof']:.3f} over {cal['estimates']} estimates"

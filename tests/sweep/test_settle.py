@@ -246,3 +246,26 @@ def test_cli_settle_bad_input_exits_2(tmp_path, capsys, argv):
     err = capsys.readouterr().err
     assert "--max-seeds" in err or "--settle and --seeds" in err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_widening_finds_too_small_error_bars_and_the_pooler_applies_it():
+    rng = np.random.default_rng(3)
+    recs = []
+    for _ in range(16):                      # stated SE 0.5, true scatter 1.5 (3x)
+        rec = pooling.Recorder()
+        shift = float(rng.normal(0.0, 1.5))
+        with observing(rec):
+            claims.paper_checks({"fig2": _fig2(shift)}, trace=False)
+        recs.append(rec)
+    widen = pooling.widening(range(16), dict(enumerate(recs)))
+    w_rows = [k for k in widen if k[0][0].startswith("higher eps -> narrower") and
+              "(ml)" in k[0][0]]
+    assert w_rows and all(1.8 < widen[k] < 4.5 for k in w_rows)   # ~3 (chi2, 15 dof)
+    assert pooling.widening(range(4), dict(enumerate(recs))) == {}  # too few seeds
+    pooler = pooling.Pooler(recs, widen)
+    with observing(pooler):
+        pooled = claims.paper_checks({"fig2": _fig2(0.0)}, trace=False)
+    w = next(c for c in pooled if c.claim.startswith("higher eps -> narrower") and "(ml)"
+             in c.claim)
+    plain = 0.5 / 4                          # sqrt(16 x 0.5^2) / 16, unwidened
+    assert all(1.8 * plain < e.se < 4.5 * plain for e in w.estimates)
