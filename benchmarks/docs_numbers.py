@@ -174,6 +174,7 @@ def main() -> int:
     if args.settle_only:
         if args.out is None:
             ap.error("--settle-only needs --out (the directory of paper-seeds/)")
+        print(f"[machine] {machine()}")
         settled(args.out)
         return 0
     if args.record is not None:
