@@ -113,7 +113,7 @@ def build_parser() -> argparse.ArgumentParser:
     pc.add_argument("--settle", action="store_true", help="settle every row: pool seeds"
                     " 0, 1, ... in DIR/seed<S>/, added in looks of 4, 8, ... seeds (with"
                     " --run: run as needed) read group-sequentially (docs/paper-check.md)")
-    pc.add_argument("--max-seeds", type=int, default=64, metavar="N",
+    pc.add_argument("--max-seeds", type=int, default=None, metavar="N",
                     help="--settle: the last look's seeds (4 x a power of 2; default 64)")
 
     rp = sub.add_parser("report", help="one self-contained HTML page of a campaign: what ran,"
@@ -290,10 +290,15 @@ def cmd_paper_check(args: argparse.Namespace) -> int:
         from sweep.paper.settle import settle
         from sweep.paper.settled import format_settled, settled_json
 
-        settled = settle(args.stores, max_seeds=args.max_seeds, run=args.run,
-                         configs=args.configs, compute=args.compute, log=log)
+        most = 64 if args.max_seeds is None else args.max_seeds
+        settled = settle(args.stores, max_seeds=most, run=args.run, configs=args.configs,
+                         compute=args.compute, log=log)
         print(settled_json(settled) if args.json else format_settled(settled))
-        return EXIT_OK
+        for name, problem in settled.problems.items():
+            _err(f"{name}: {problem}")
+        return EXIT_STORE if settled.problems else EXIT_OK
+    if args.max_seeds is not None:
+        raise ConfigError(f"--max-seeds {args.max_seeds}: only with --settle")
     if args.seeds:
         from sweep.paper.seeds import across_seeds, check_seeds, format_seed_table
 

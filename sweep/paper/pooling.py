@@ -13,7 +13,6 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Sequence
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -23,7 +22,7 @@ from sweep.paper.estimates import Estimate
 from sweep.paper.points import Check
 
 __all__ = ["EMPIRICAL_MIN", "SHARED_REPLICA0", "pool", "Recorder", "Pooler", "campaigns_of",
-           "shared_share", "calibration", "WIDEN_MIN", "widening"]
+           "shared_share", "calibration", "WIDEN_MIN", "widening", "HONEST_R8"]
 
 #: Seeds from which the seeds' spread bounds a pooled SE from below (S - 1 dof).
 EMPIRICAL_MIN = 4
@@ -37,15 +36,25 @@ SHARED_REPLICA0 = {"uniform": 8}
 _STATED = ("replicas", "profile", "fit", "periods", "combined")
 
 
+_COUNT = re.compile(r"\s+n=\d+")
+
+
 def _base(label: str) -> str:
-    return label.split(" (", 1)[0].split(":", 1)[0].strip()
+    """A label without what may differ between seeds: the count of replicas with a value
+    (``n=8``), a parenthesised note or a colon's detail."""
+    return _COUNT.sub("", label).split(" (", 1)[0].split(":", 1)[0].strip()
 
 
-def pool(estimates: Sequence[Estimate], shared: float = 0.0) -> Estimate:
+def pool(estimates: Sequence[Estimate], shared: float = 0.0, widen: float = 1.0) -> Estimate:
     """One estimate from the same quantity's estimates on independent seeds (the module
-    docstring, step 2). Seeds without a value are left out; none with one: NaN.
-    ``shared``: the share of each seed's replicas common to all seeds (1 / R for
-    :data:`SHARED_REPLICA0`), which widens a stated SE by sqrt(1 + (S - 1) shared)."""
+    docstring of :mod:`sweep.paper.settle`, step 2). Seeds without a value are left out;
+    none with one: NaN.
+
+    ``shared``: the share rho of each seed's replicas common to all seeds (1 / R for
+    :data:`SHARED_REPLICA0`): the seeds' means then correlate by rho, so a stated SE is
+    widened by sqrt(1 + (S - 1) rho) and the seeds' spread (which shrinks by 1 - rho) by
+    sqrt((1 + (S - 1) rho) / (1 - rho)). ``widen``: a factor on the stated SE (the audit's,
+    :func:`widening`), applied before it is compared with the spread."""
     ok = [e for e in estimates if math.isfinite(e.value)]
     if not ok:
         return estimates[0]
@@ -56,29 +65,37 @@ def pool(estimates: Sequence[Estimate], shared: float = 0.0) -> Estimate:
     if all(e.source == "exact" for e in ok):
         return Estimate(label, mean, 0.0 if np.ptp(values) == 0 else math.nan, "exact")
     ses = np.array([e.se for e in ok])
+    spread = math.nan
+    if n >= EMPIRICAL_MIN:
+        spread = float(values.std(ddof=1) / math.sqrt(n)
+                       * math.sqrt((1.0 + (n - 1) * shared) / (1.0 - shared)))
     if all(e.source in _STATED for e in ok) and np.all(np.isfinite(ses)):
-        se = float(math.sqrt(np.sum(ses ** 2)) / n * math.sqrt(1.0 + (n - 1) * shared))
+        se = float(math.sqrt(np.sum(ses ** 2)) / n * math.sqrt(1.0 + (n - 1) * shared)
+                   * widen)
         dofs = np.array([e.dof for e in ok])
         if np.all(np.isinf(dofs)):
             dof = math.inf
         else:                                               # Welch-Satterthwaite
             dof = float(np.sum(ses ** 2) ** 2 / np.sum(ses ** 4 / dofs))
         source = ok[0].source if len({e.source for e in ok}) == 1 else "combined"
-        if n >= EMPIRICAL_MIN:                 # the seeds' spread, where it is the larger
-            spread = float(values.std(ddof=1) / math.sqrt(n))
-            if spread > se:
-                return Estimate(label, mean, spread, "seeds", float(n - 1))
+        if spread > se:                        # the seeds' spread, where it is the larger
+            return Estimate(label, mean, spread, "seeds", float(n - 1))
         return Estimate(label, mean, se, source, dof)
-    if n >= EMPIRICAL_MIN:
-        return Estimate(label, mean, float(values.std(ddof=1) / math.sqrt(n)), "seeds",
-                        float(n - 1))
+    if math.isfinite(spread):
+        return Estimate(label, mean, spread, "seeds", float(n - 1))
     if np.all(np.isfinite(ses)):
         return Estimate(label, mean, float(math.sqrt(np.sum(ses ** 2)) / n), "floor")
     return Estimate(label, mean)
 
 
+_WITH_VALUE = re.compile(r"\b\d+ with a value")
+
+
 def _key(check: Check) -> tuple[str, str, str, str]:
-    return (check.claim, check.campaign, check.points, check.quantity)
+    """Which check: its claim, campaign, points (a count of points with a value, which may
+    differ between seeds, left out) and quantity."""
+    return (check.claim, check.campaign, _WITH_VALUE.sub("N with a value", check.points),
+            check.quantity)
 
 
 class Recorder:
@@ -92,6 +109,8 @@ class Recorder:
     def __init__(self) -> None:
         self.groups: list[list[tuple[Estimate, ...]]] = []
         self.campaigns: list[str] = []
+        #: campaign -> a problem with a store that exists (unreadable), by check_stores
+        self.problems: dict[str, str] = {}
         self.keys: list[tuple] = []
         self._index: dict[tuple, int] | None = None
         self._open: list[tuple[Estimate, ...]] = []
@@ -163,11 +182,8 @@ class Pooler:
         calls = [m[j] for m in members]
         out = []
         for i in range(len(ests)):
-            p = pool([c[i] for c in calls], shared)
             f = self.widen.get((carrier.keys[self._group], j, i), 1.0)
-            if f > 1.0 and p.source in _STATED and math.isfinite(p.se):
-                p = replace(p, se=p.se * f)
-            out.append(p)
+            out.append(pool([c[i] for c in calls], shared, max(f, 1.0)))
         return tuple(out)
 
     def created(self, check: Check) -> Check:
@@ -221,12 +237,14 @@ def calibration(seeds: Sequence[int], recorded: dict[int, Recorder]) -> dict[str
     """How the seeds' spread compares with their stated SEs: over every pooled estimate
     with a stated SE on at least 3 seeds, chi^2 = sum_s (x_s - mean)^2 / se_s^2 with
     S - 1 degrees of freedom (equal SEs); returns the total chi^2 / dof, the dof, the
-    number of estimates (1 is honest; its own SE is about sqrt(2 / dof)) and the worst."""
+    number of estimates and the worst. Honest SEs known exactly give 1 (+- sqrt(2 / dof));
+    honest SEs that are themselves estimated from R = 8 replicas give about
+    E[7 / chi^2_7] = 1.4 (:data:`HONEST_R8`)."""
     chi2 = dof = 0.0
     each: list[tuple[float, int, str, str]] = []
-    seen: set[tuple[int, str, float]] = set()
+    seen: set[tuple[float, ...]] = set()
     for g, _key, _j, _i, c2, n, es in _entries(seeds, recorded):
-        once = (g, es[0].label, es[0].value)        # a rule and its check: once
+        once = tuple(e.value for e in es)   # one estimate read by several rules: once
         if once in seen:
             continue
         seen.add(once)
@@ -242,6 +260,8 @@ def calibration(seeds: Sequence[int], recorded: dict[int, Recorder]) -> dict[str
                        round(c, 2)} for c, g, lab, src in each[:8]]}
 
 
+#: chi^2 / dof of honest SEs estimated from 8 replicas (E[nu / chi^2_nu], nu = 7).
+HONEST_R8 = 7.0 / 5.0
 #: Seeds from which a point's spread is trusted to widen its stated SE (:func:`widening`).
 WIDEN_MIN = 8
 
@@ -249,7 +269,9 @@ WIDEN_MIN = 8
 def widening(seeds: Sequence[int], recorded: dict[int, Recorder]) -> dict[tuple, float]:
     """(check key, call, index) -> sqrt(chi^2 / dof) of the seeds' spread against their
     stated SEs, where it exceeds 1 on at least :data:`WIDEN_MIN` seeds: the factor by
-    which an estimate's stated SE is too small (the audit of :mod:`sweep.paper.settle`)."""
+    which an estimate's stated SE is too small (the audit of :mod:`sweep.paper.settle`).
+    Taken against 1, not :data:`HONEST_R8`: conservative by up to sqrt(1.4) for replica
+    SEs."""
     out = {}
     for _g, key, j, i, c2, n, _es in _entries(seeds, recorded):
         if n >= WIDEN_MIN and c2 > n - 1:

@@ -10,7 +10,7 @@ a verdict appears, at c = 2 each time, that rate grows with the number of looks 
 (Lan & DeMets 1983, the error-spending approach; Jennison & Turnbull 2000, ch. 7):
 
 - the looks are at information fractions t_1 < ... < t_K = 1 (here the share of the
-  planned seeds pooled: 2, 4, 8, 16 seeds give 1/8, 1/4, 1/2, 1);
+  planned seeds pooled: 4, 8, 16, 32, 64 seeds give 1/16, 1/8, 1/4, 1/2, 1);
 - a spending function alpha(t) says how much of alpha may be used by t:
   :data:`POCOCK` ``alpha ln(1 + (e - 1) t)`` (Lan-DeMets' Pocock type: nearly constant
   boundaries, most of alpha early) or :data:`OBRIEN_FLEMING`
@@ -26,7 +26,7 @@ So over all K looks the chance that a z with no effect ever crosses +c_k is alph
 same for -c_k: the false-verdict rate of one z is the one-look rule's. Where the SE is
 estimated with nu degrees of freedom, c_k is carried to Student-t at the same tail
 probability (as :func:`sweep.paper.estimates.z_critical` does for one look). The tests
-(``tests/test_sequential.py``) measure the rate on simulated looks.
+(``tests/sweep/test_settle.py``) measure the rate on simulated looks.
 """
 from __future__ import annotations
 

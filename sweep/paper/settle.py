@@ -81,8 +81,12 @@ def pooled_checks(stores: Path, seeds: Sequence[int], z: float,
     for s in seeds:
         if s not in recorded:
             rec = Recorder()
-            with observing(rec):
-                check_stores(stores / f"seed{s}")
+            where = stores / f"seed{s}"
+            if where.is_dir() or s == seeds[0]:      # the carrier's absence is an error
+                with observing(rec):
+                    report = check_stores(where)
+                rec.problems = {name: p for name, p in report.problems.items()
+                                if not p.startswith("no store")}
             recorded[s] = rec
     pooler = Pooler([recorded[s] for s in seeds], widen)
     with observing(pooler), critical(z):
@@ -113,6 +117,8 @@ class SettleReport:
     runs: list[dict[str, Any]] = field(default_factory=list)
     calibration: dict[str, float] = field(default_factory=dict)
     stored: dict[str, float] = field(default_factory=dict)
+    #: "seed S: campaign" -> a store that exists but cannot be read (exit status 3)
+    problems: dict[str, str] = field(default_factory=dict)
 
     def counts(self, audited: bool = False) -> dict[str, int]:
         return {v: sum((r.audited if audited else r.check.verdict) == v for r in self.rows)
@@ -166,11 +172,17 @@ def settle(stores: str | Path, *, max_seeds: int = 64, first_seed: int = 0,
            run: bool = False, configs: str | Path | None = None, compute: str | None = None,
            log: Callable[[str], None] | None = None) -> SettleReport:
     """Settle every row (the module docstring). ``run``: run (or resume) the seeds'
-    campaigns as the looks need them; without it only stores already there are read, and
-    a look whose stores are missing leaves its rows undecided."""
+    campaigns as the looks need them; without it only stores already there are read. A
+    row is read at a look only if every seed of that look has its stores; else it stops at
+    its last look (undecided there, if it was)."""
     stores = Path(stores)
     configs = Path(configs) if configs is not None else default_configs()
     looks = looks_for(max_seeds)
+    if run:
+        for name in PAPER_CAMPAIGNS:
+            if not (configs / f"{name}.toml").is_file():
+                raise ConfigError(f"{configs / (name + '.toml')}: no such campaign file"
+                                  " (--configs)")
     cs = boundaries([s / looks[-1] for s in looks])
     seeds = tuple(range(first_seed, first_seed + looks[-1]))
     decided: dict[int, Settled] = {}
@@ -179,12 +191,13 @@ def settle(stores: str | Path, *, max_seeds: int = 64, first_seed: int = 0,
     rows: list[Check] = []
     used: list[int] = []
     last: dict[int, Settled] = {}
+    stopped: set[int] = set()        # rows no later look can read: analytic, or seeds missing
+    performed = 0
     for k, (n, c) in enumerate(zip(looks, cs, strict=True)):
         if k == 0:
             names = list(PAPER_CAMPAIGNS)
         else:
-            open_rows = [i for i in range(len(rows)) if i not in decided
-                         and _extendable(rows[i])]
+            open_rows = [i for i in range(len(rows)) if i not in decided and i not in stopped]
             if not open_rows:
                 break
             names = [nm for nm in PAPER_CAMPAIGNS
@@ -200,17 +213,25 @@ def settle(stores: str | Path, *, max_seeds: int = 64, first_seed: int = 0,
         if log:
             log(f"look {k + 1}: {n} seeds pooled, boundary |z| >= {c:.3f}")
         rows, used = pooled_checks(stores, seeds[:n], c, recorded)
+        performed = k + 1
         for i, row in enumerate(rows):
-            if i in decided:
+            if i in decided or i in stopped:
+                continue
+            if k > 0 and used[i] < n:     # this look's seeds are not all there: no reading
+                stopped.add(i)
                 continue
             last[i] = Settled(row, k + 1, used[i], c, _extendable(row))
             if row.verdict in (HOLDS, FAILS):
                 decided[i] = last[i]
+            elif not _extendable(row):
+                stopped.add(i)
     out = [decided.get(i, last[i]) for i in range(len(rows))]
     report = SettleReport(out, looks, cs, seeds, runs)
     have = [s for s in seeds if s in recorded]
     report.calibration = calibration(have, recorded)
-    _audit(stores, out, looks, cs, seeds, recorded, widening(have, recorded))
+    _audit(stores, out, looks[:performed], cs, seeds, recorded, widening(have, recorded))
+    report.problems = {f"seed {s}: {name}": p for s in have
+                       for name, p in recorded[s].problems.items()}
     report.stored = stored_cost(stores, [s for s in seeds if s in recorded])
     return report
 
@@ -229,11 +250,11 @@ def _audit(stores: Path, rows: list[Settled], looks: Sequence[int], cs: Sequence
         for i, r in enumerate(rows):
             if i in done:
                 continue
-            if used[i] < n and k > 1:          # this look's seeds were never run for it
+            if k > 1 and used[i] < n:          # this look's seeds were never run for it
                 done.add(i)
                 continue
             r.audited, r.audited_look = checks[i].verdict, k
-            if checks[i].verdict in (HOLDS, FAILS):
+            if checks[i].verdict in (HOLDS, FAILS) or not r.extendable:
                 done.add(i)
 
 

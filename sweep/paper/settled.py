@@ -8,7 +8,7 @@ import math
 from typing import Any
 
 from sweep.paper.estimates import FAILS, HOLDS, INCONCLUSIVE
-from sweep.paper.pooling import WIDEN_MIN
+from sweep.paper.pooling import HONEST_R8, WIDEN_MIN
 from sweep.paper.sequential import ALPHA, POCOCK, crossing_rate
 from sweep.paper.settle import SettleReport
 from sweep.paper.thresholds import curves, format_curves, undecided_reason
@@ -75,8 +75,9 @@ def format_settled(report: SettleReport) -> str:
     if cal:
         lines.append(f"Seeds' spread against their stated SEs: chi^2/dof"
                      f" {cal['chi2_per_dof']:.3f} over {cal['estimates']} estimates"
-                     f" ({cal['dof']:.0f} dof, {cal['seeds']} seeds; honest: 1 ±"
-                     f" {math.sqrt(2 / cal['dof']):.3f}).")
+                     f" ({cal['dof']:.0f} dof, {cal['seeds']} seeds; SEs known exactly give"
+                     f" 1 ± {math.sqrt(2 / cal['dof']):.3f}, honest SEs estimated from 8"
+                     f" replicas about {HONEST_R8:.1f}).")
     lines.append(f"Settling's cost: this run added {cost['points_added']} points in"
                  f" {cost['cpu_s']:.0f} CPU s ({cost['wall_s']:.0f} s wall, in-process); the"
                  f" table rests on {cost.get('stored_points', 0)} stored points"

@@ -41,16 +41,18 @@ def test_looking_again_at_two_inflates_the_rate():
     assert sequential.crossing_rate([1.0], [2.0]) == pytest.approx(sequential.ALPHA)
 
 
-def test_boundaries_checked_by_simulated_brownian_looks():
+@pytest.mark.parametrize("fractions", [FRACTIONS, (1 / 16, 1 / 8, 1 / 4, 1 / 2, 1.0)])
+def test_boundaries_checked_by_simulated_brownian_looks(fractions):
+    """An independent check of the integration: Brownian paths simulated directly."""
     rng = np.random.default_rng(20261203)
     n = 200_000
-    steps = rng.standard_normal((n, 4)) * np.sqrt(np.diff((0.0, *FRACTIONS)))
-    z = np.cumsum(steps, axis=1) / np.sqrt(FRACTIONS)
+    steps = rng.standard_normal((n, len(fractions))) * np.sqrt(np.diff((0.0, *fractions)))
+    z = np.cumsum(steps, axis=1) / np.sqrt(fractions)
     for kind in (sequential.POCOCK, sequential.OBRIEN_FLEMING):
-        c = np.array(sequential.boundaries(FRACTIONS, kind=kind))
+        c = np.array(sequential.boundaries(fractions, kind=kind))
         alive = np.ones(n, bool)
         up = np.zeros(n, bool)
-        for k in range(4):
+        for k in range(len(fractions)):
             hit, low = alive & (z[:, k] >= c[k]), alive & (z[:, k] <= -c[k])
             up |= hit
             alive &= ~(hit | low)
@@ -88,6 +90,22 @@ def test_pool_stated_errors_floors_exact_and_missing():
     fits = pooling.pool([Estimate("m", 3.0, 0.1, "fit", 2.0), Estimate("m", 3.2, 0.1, "fit",
                                                                        2.0)])
     assert fits.dof == pytest.approx(4.0)          # Welch-Satterthwaite of equal SEs
+    # the audit's factor widens the stated SE before the spread is compared with it
+    four = [Estimate("x", v, 0.01, "replicas") for v in (1.0, 1.1, 0.9, 1.0)]
+    spread = np.std([1.0, 1.1, 0.9, 1.0], ddof=1) / 2
+    assert pooling.pool(four).se == pytest.approx(spread)              # spread > 0.005
+    assert pooling.pool(four, widen=20.0).se == pytest.approx(0.1)     # 20 x 0.005 > spread
+    # seeds sharing a replica: their spread shrinks by 1 - rho, their mean's variance grows
+    assert pooling.pool(four, shared=1 / 8).se == pytest.approx(
+        spread * math.sqrt((1 + 3 / 8) / (1 - 1 / 8)))
+
+
+def test_seeds_align_whatever_their_counts_of_replicas_with_a_value():
+    assert pooling._base("eps=0.2 n=8") == pooling._base("eps=0.2 n=0 (marginal zone)")
+    assert pooling._base("eps=0.2 n=8") != pooling._base("eps=0.4 n=8")
+    a = Check("c", "s", "periods_fine", "T 1.1-1.5 s: 10 with a value", "q", "r", (), "x", "")
+    b = Check("c", "s", "periods_fine", "T 1.1-1.5 s: 9 with a value", "q", "r", (), "x", "")
+    assert pooling._key(a) == pooling._key(b)
 
 
 def _fig2(shift):
@@ -232,6 +250,14 @@ def test_cli_settle_runs_the_looks_and_reports(tmp_path, capsys, monkeypatch):
     assert main(["paper-check", "--stores", str(d), "--settle", "--max-seeds", "8"]) == 0
     table = capsys.readouterr().out
     assert "| seeds (look) |" in table and "this run added 0 points" in table
+    # a budget beyond the stored seeds, without --run: no row is read past the seeds it
+    # has (seed 8 and up missing, or present but empty), and the audit runs on what is there
+    (d / "seed9").mkdir()
+    assert main(["paper-check", "--stores", str(d), "--settle", "--max-seeds", "16",
+                 "--json"]) == 0
+    wide = json.loads(capsys.readouterr().out)
+    assert all(r["look"] <= 2 and r["seeds"] <= 8 for r in wide["rows"])
+    assert all(r["audited_look"] <= 2 for r in wide["rows"])
 
 
 def _check(row):
@@ -239,14 +265,16 @@ def _check(row):
                         row["quantity"], row["rule"], (), row["verdict"], row["evidence"])
 
 
-@pytest.mark.parametrize("argv", [["--settle", "--max-seeds", "12"],
-                                  ["--settle", "--seeds", "0", "1"]])
-def test_cli_settle_bad_input_exits_2(tmp_path, capsys, argv):
-    assert main(["paper-check", "--stores", str(tmp_path), *argv]) == 2
-    err = capsys.readouterr().err
-    assert "--max-seeds" in err or "--settle and --seeds" in err
-    assert list(tmp_path.iterdir()) == []
-
+@pytest.mark.parametrize("argv, message", [
+    (["--settle", "--max-seeds", "12"], "--max-seeds 12: 4 times a power of 2"),
+    (["--settle", "--seeds", "0", "1"], "--settle and --seeds: give one"),
+    (["--max-seeds", "8"], "--max-seeds 8: only with --settle"),
+    (["--settle", "--run", "--configs", "nowhere"], "no such campaign file")])
+def test_cli_settle_bad_input_exits_2_and_writes_nothing(tmp_path, capsys, argv, message):
+    d = tmp_path / "paper"
+    assert main(["paper-check", "--stores", str(d), *argv]) == 2
+    assert message in capsys.readouterr().err
+    assert not d.exists()
 
 def test_widening_finds_too_small_error_bars_and_the_pooler_applies_it():
     rng = np.random.default_rng(3)
@@ -269,3 +297,11 @@ def test_widening_finds_too_small_error_bars_and_the_pooler_applies_it():
              in c.claim)
     plain = 0.5 / 4                          # sqrt(16 x 0.5^2) / 16, unwidened
     assert all(1.8 * plain < e.se < 4.5 * plain for e in w.estimates)
+    # a factor the spread does not reach: the SE is exactly the widened stated one
+    big = {k: 40.0 for k in widen}
+    pooler = pooling.Pooler(recs, big)
+    with observing(pooler):
+        pooled = claims.paper_checks({"fig2": _fig2(0.0)}, trace=False)
+    w = next(c for c in pooled if c.claim.startswith("higher eps -> narrower") and "(ml)"
+             in c.claim)
+    assert all(e.se == pytest.approx(40.0 * plain) for e in w.estimates)
