@@ -26,7 +26,8 @@ from sweep.paper.estimates import FAILS, HOLDS, INCONCLUSIVE, Z_CRIT
 from sweep.run.compute import DEFAULT_COMPUTE
 from sweep.run.launch import run_campaign
 
-__all__ = ["PaperReport", "default_configs", "check_stores", "format_table"]
+__all__ = ["PaperReport", "default_configs", "campaign_files", "run_campaigns", "check_stores",
+           "format_table", "markdown_cell"]
 
 
 # ---------------------------------------------------------------------- stores and output
@@ -57,6 +58,29 @@ def default_configs() -> Path:
     return Path(__file__).resolve().parents[2] / "configs"
 
 
+def campaign_files(configs: Path, names: Sequence[str] = PAPER_CAMPAIGNS) -> dict[str, Path]:
+    """``<configs>/<name>.toml`` for each of ``names``; a missing one is a
+    :class:`ConfigError` (checked for all before anything runs)."""
+    files = {name: Path(configs) / f"{name}.toml" for name in names}
+    for path in files.values():
+        if not path.is_file():
+            raise ConfigError(f"{path}: no such campaign file (--configs)")
+    return files
+
+
+def run_campaigns(stores: Path, files: Mapping[str, Path], *, compute: str | None = None,
+                  log: Callable[[str], None] | None = None, command: str) -> None:
+    """Run (or resume) each campaign file into ``<stores>/<name>.h5``, in-process, in the
+    order given (every file parsed first: an invalid one stops the run before it starts)."""
+    campaigns = {name: load_campaign(path) for name, path in files.items()}
+    for name, campaign in campaigns.items():
+        path = Path(stores) / f"{name}.h5"
+        if log:
+            log(f"running {name} into {path}")
+        run_campaign(campaign, str(path), compute=compute or DEFAULT_COMPUTE,
+                     progress_bar=False, command=f"{command} ({name})")
+
+
 def check_stores(stores: str | Path = "paper", *, run: bool = False,
                  configs: str | Path | None = None, compute: str | None = None,
                  log: Callable[[str], None] | None = None) -> PaperReport:
@@ -83,17 +107,8 @@ def check_stores(stores: str | Path = "paper", *, run: bool = False,
                           " with --run, or see docs/paper-check.md)")
     paths = {name: stores / f"{name}.h5" for name in PAPER_CAMPAIGNS}
     if run:
-        campaigns = {}
-        for name in PAPER_CAMPAIGNS:
-            cfg = configs / f"{name}.toml"
-            if not cfg.is_file():
-                raise ConfigError(f"{cfg}: no such campaign file (--configs)")
-            campaigns[name] = load_campaign(cfg)
-        for name, campaign in campaigns.items():
-            if log:
-                log(f"running {name} into {paths[name]}")
-            run_campaign(campaign, str(paths[name]), compute=compute or DEFAULT_COMPUTE,
-                         progress_bar=False, command=f"sweep paper-check --run ({name})")
+        run_campaigns(stores, campaign_files(configs), compute=compute, log=log,
+                      command="sweep paper-check --run")
     tables: dict[str, pd.DataFrame | None] = {}
     problems: dict[str, str] = {}
     for name, path in paths.items():
@@ -121,7 +136,8 @@ def check_stores(stores: str | Path = "paper", *, run: bool = False,
     return PaperReport(checks, {k: str(v) for k, v in paths.items()}, problems)
 
 
-def _cell(text: str) -> str:
+def markdown_cell(text: str) -> str:
+    """``text`` as one cell of a Markdown table (pipes escaped, one line)."""
     return text.replace("|", "\\|").replace("\n", " ")
 
 
@@ -132,7 +148,7 @@ def format_table(checks: Sequence[Check]) -> str:
              " | verdict |", "|---|---|---|---|---|---|---|"]
     for i, c in enumerate(checks, 1):
         values = "; ".join(e.text() for e in c.estimates) or "—"
-        lines.append("| " + " | ".join(_cell(s) for s in (
+        lines.append("| " + " | ".join(markdown_cell(s) for s in (
             str(i), f"{c.claim} ({c.source})", f"{c.campaign}: {c.points}", c.quantity, values,
             f"{c.rule}: {c.evidence}" if c.rule else c.evidence, c.verdict)) + " |")
     counts = {v: sum(c.verdict == v for c in checks) for v in (HOLDS, FAILS, INCONCLUSIVE)}

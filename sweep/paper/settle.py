@@ -39,7 +39,7 @@ from pathlib import Path
 from typing import Any
 
 from sweep.errors import ConfigError
-from sweep.paper.check import check_stores, default_configs
+from sweep.paper.check import campaign_files, check_stores, default_configs, run_campaigns
 from sweep.paper.claims import PAPER_CAMPAIGNS
 from sweep.paper.estimates import FAILS, HOLDS, INCONCLUSIVE, critical, observing
 from sweep.paper.points import Check
@@ -141,29 +141,22 @@ def _extendable(check: Check) -> bool:
 
 def _run_seed(stores: Path, configs: Path, seed: int, names: Sequence[str],
               compute: str | None, log: Callable[[str], None] | None) -> dict[str, Any]:
+    """Run (or resume) ``names`` with ``[base] seed = seed`` into ``<stores>/seed<S>/``:
+    the points added and their CPU and wall time."""
     from sweep.analysis.load import load
-    from sweep.config import load_campaign
-    from sweep.run.compute import DEFAULT_COMPUTE
-    from sweep.run.launch import run_campaign
 
     where = stores / f"seed{seed}"
     cfgs = seeded_configs(configs, seed, where / "configs")
-    before = 0
-    for name in names:
-        path = where / f"{name}.h5"
-        if path.exists():
-            before += len(load(path))
+
+    def points() -> int:
+        return sum(len(load(p)) for p in (where / f"{n}.h5" for n in names) if p.exists())
+
+    before = points()
     cpu, wall = time.process_time(), time.monotonic()
-    after = 0
-    for name in names:
-        path = where / f"{name}.h5"
-        if log:
-            log(f"seed {seed}: running {name} into {path}")
-        run_campaign(load_campaign(cfgs / f"{name}.toml"), str(path),
-                     compute=compute or DEFAULT_COMPUTE, progress_bar=False,
-                     command=f"sweep paper-check --settle (seed {seed}, {name})")
-        after += len(load(path))
-    return {"seed": seed, "campaigns": list(names), "points": after - before,
+    run_campaigns(where, campaign_files(cfgs, names), compute=compute,
+                  log=(lambda m: log(f"seed {seed}: {m}")) if log else None,
+                  command=f"sweep paper-check --settle (seed {seed})")
+    return {"seed": seed, "campaigns": list(names), "points": points() - before,
             "cpu_s": round(time.process_time() - cpu, 2),
             "wall_s": round(time.monotonic() - wall, 2)}
 
@@ -179,10 +172,7 @@ def settle(stores: str | Path, *, max_seeds: int = 64, first_seed: int = 0,
     configs = Path(configs) if configs is not None else default_configs()
     looks = looks_for(max_seeds)
     if run:
-        for name in PAPER_CAMPAIGNS:
-            if not (configs / f"{name}.toml").is_file():
-                raise ConfigError(f"{configs / (name + '.toml')}: no such campaign file"
-                                  " (--configs)")
+        campaign_files(configs)             # all there, before anything is written
     cs = boundaries([s / looks[-1] for s in looks])
     seeds = tuple(range(first_seed, first_seed + looks[-1]))
     decided: dict[int, Settled] = {}

@@ -7,6 +7,7 @@ import json
 import math
 from typing import Any
 
+from sweep.paper.check import markdown_cell
 from sweep.paper.estimates import FAILS, HOLDS, INCONCLUSIVE
 from sweep.paper.pooling import HONEST_R8, WIDEN_MIN
 from sweep.paper.sequential import ALPHA, POCOCK, crossing_rate
@@ -37,10 +38,6 @@ def settled_json(report: SettleReport) -> str:
     return json.dumps(settled_dict(report), indent=2)
 
 
-def _cell(text: str) -> str:
-    return text.replace("|", "\\|").replace("\n", " ")
-
-
 def format_settled(report: SettleReport) -> str:
     """The settled table (Markdown) with its rule, rate, calibration and cost lines, then
     the threshold curves (:mod:`sweep.paper.thresholds`)."""
@@ -51,7 +48,7 @@ def format_settled(report: SettleReport) -> str:
         values = "; ".join(e.text() for e in c.estimates) or "—"
         why = undecided_reason(r, budget=report.looks[-1])
         why = f"; undecided: {why}" if why else ""
-        lines.append("| " + " | ".join(_cell(s) for s in (
+        lines.append("| " + " | ".join(markdown_cell(s) for s in (
             str(i), f"{c.claim} ({c.source})", f"{c.campaign}: {c.points}",
             f"{r.seeds} ({r.look})", values, f"{c.rule}: {c.evidence}{why}",
             c.verdict, f"{r.audited} ({r.audited_look})" if r.audited else "—")) + " |")
