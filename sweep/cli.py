@@ -115,6 +115,11 @@ def build_parser() -> argparse.ArgumentParser:
                     " --run: run as needed) read group-sequentially (docs/paper-check.md)")
     pc.add_argument("--max-seeds", type=int, default=None, metavar="N",
                     help="--settle: the last look's seeds (4 x a power of 2; default 64)")
+    pc.add_argument("--first-seed", type=int, default=None, metavar="S",
+                    help="--settle: pool seeds S, S+1, ... (default 0; a settling on fresh"
+                    " seeds is independent of one run before)")
+    pc.add_argument("--jobs", type=int, default=None, metavar="N",
+                    help="--settle --run: run a look's seeds in N processes (default 1)")
 
     rp = sub.add_parser("report", help="one self-contained HTML page of a campaign: what ran,"
                         " status, failures, figures, collision-zone statistics")
@@ -291,14 +296,24 @@ def cmd_paper_check(args: argparse.Namespace) -> int:
         from sweep.paper.settled import format_settled, settled_json
 
         most = 64 if args.max_seeds is None else args.max_seeds
-        settled = settle(args.stores, max_seeds=most, run=args.run, configs=args.configs,
-                         compute=args.compute, log=log)
+        first = 0 if args.first_seed is None else args.first_seed
+        jobs = 1 if args.jobs is None else args.jobs
+        if first < 0:
+            raise ConfigError(f"--first-seed {first}: a seed is >= 0")
+        if jobs < 1:
+            raise ConfigError(f"--jobs {jobs}: at least 1")
+        if args.jobs is not None and not args.run:
+            raise ConfigError("--jobs: only with --run (it says how many processes run seeds)")
+        settled = settle(args.stores, max_seeds=most, first_seed=first, run=args.run,
+                         configs=args.configs, compute=args.compute, log=log, jobs=jobs)
         print(settled_json(settled) if args.json else format_settled(settled))
         for name, problem in settled.problems.items():
             _err(f"{name}: {problem}")
         return EXIT_STORE if settled.problems else EXIT_OK
-    if args.max_seeds is not None:
-        raise ConfigError(f"--max-seeds {args.max_seeds}: only with --settle")
+    for flag, value in (("--max-seeds", args.max_seeds), ("--first-seed", args.first_seed),
+                        ("--jobs", args.jobs)):
+        if value is not None:
+            raise ConfigError(f"{flag} {value}: only with --settle")
     if args.seeds:
         from sweep.paper.seeds import across_seeds, check_seeds, format_seed_table
 

@@ -26,12 +26,24 @@ whose error bar is too wide for its margin. Settling buys precision where it is 
    A row is decided at the first look where it holds or fails, and keeps that verdict;
    only the campaigns of undecided rows get the next look's seeds. A row still undecided
    at the last look (or one no seed can change: an analytic value) is inconclusive.
+4. **The resolution floor.** A chain of a / a0 whose undecided steps are all resolved to
+   lie within +-:data:`RESOLUTION_FLOOR` (1 % of a0, the table's "no visible effect":
+   |step| + c_k SE at most that) gets no more seeds (:func:`below_floor`): more seeds could
+   only give a sign to a difference no figure shows. It stays inconclusive, with that
+   reason. Stopping for futility never makes a verdict, so the rate is unchanged.
+
+Seeds ``first_seed``, ``first_seed + 1``, ... are pooled (``--first-seed``): a settling on
+fresh seeds is independent of one already run (the uniform campaign's replica 0 aside, the
+same chain for every seed). ``jobs`` runs a look's seeds in that many processes (each seed's
+stores are its own files; a point's result does not depend on who runs it).
 
 The error bars being pooled must be honest for the rate to hold: :func:`calibration`
 compares the seeds' spread with their stated SEs over every pooled estimate.
 """
 from __future__ import annotations
 
+import math
+import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -41,8 +53,8 @@ from typing import Any
 from sweep.errors import ConfigError
 from sweep.paper.check import campaign_files, check_stores, default_configs, run_campaigns
 from sweep.paper.claims import PAPER_CAMPAIGNS
-from sweep.paper.estimates import FAILS, HOLDS, INCONCLUSIVE, critical, observing
-from sweep.paper.points import Check
+from sweep.paper.estimates import FAILS, HOLDS, INCONCLUSIVE, critical, observing, z_critical
+from sweep.paper.points import NO_EFFECT, Check
 from sweep.paper.pooling import (
     EMPIRICAL_MIN,
     Pooler,
@@ -54,11 +66,42 @@ from sweep.paper.pooling import (
 from sweep.paper.seeds import seeded_configs
 from sweep.paper.sequential import boundaries
 
-__all__ = ["FIRST_LOOK", "Settled", "SettleReport", "looks_for", "pooled_checks", "settle",
-           "stored_cost"]
+__all__ = ["FIRST_LOOK", "RESOLUTION_FLOOR", "Settled", "SettleReport", "below_floor",
+           "looks_for", "pooled_checks", "settle", "stored_cost"]
 
 #: Seeds pooled at the first look: enough for the spread to check the stated SEs.
 FIRST_LOOK = EMPIRICAL_MIN
+
+
+#: The resolution floor [a0] of a chain of a / a0 (:func:`below_floor`).
+RESOLUTION_FLOOR = NO_EFFECT
+
+
+def open_steps(check: Check, c: float) -> list[tuple[float, float, str, str]]:
+    """The consecutive steps (difference, SE, labels) of a chain row's estimates with a
+    value and an error bar whose |z| is below the boundary ``c`` (Student-t carried as the
+    rules do)."""
+    est = [e for e in check.estimates if math.isfinite(e.value) and math.isfinite(e.se)]
+    out = []
+    with critical(c):
+        for a, b in zip(est[:-1], est[1:], strict=False):
+            d, se = b.value - a.value, math.hypot(a.se, b.se)
+            if se > 0 and abs(d) / se < z_critical(min(a.dof, b.dof)):
+                out.append((d, se, a.label, b.label))
+    return out
+
+
+def below_floor(check: Check, c: float) -> bool:
+    """Whether an undecided chain of a / a0 (``/a0`` in its quantity) has every undecided
+    step (:func:`open_steps`) inside +-:data:`RESOLUTION_FLOOR`: |d| + c' SE at most the
+    floor, c' the boundary ``c`` as its rule reads it."""
+    if check.verdict != INCONCLUSIVE or not check.rule.startswith("chain") \
+            or "/a0" not in check.quantity:
+        return False
+    steps = open_steps(check, c)
+    with critical(c):
+        return bool(steps) and all(
+            abs(d) + z_critical(math.inf) * se <= RESOLUTION_FLOOR for d, se, _, _ in steps)
 
 
 def looks_for(max_seeds: int) -> tuple[int, ...]:
@@ -106,6 +149,8 @@ class Settled:
     extendable: bool = True
     audited: str = ""
     audited_look: int = 0
+    #: stopped at the resolution floor (:func:`below_floor`)
+    floored: bool = False
 
 
 @dataclass
@@ -161,9 +206,30 @@ def _run_seed(stores: Path, configs: Path, seed: int, names: Sequence[str],
             "wall_s": round(time.monotonic() - wall, 2)}
 
 
+def _stderr(msg: str) -> None:
+    print(f"sweep: {msg}", file=sys.stderr, flush=True)
+
+
+def _run_seeds(stores: Path, configs: Path, seeds: Sequence[int], names: Sequence[str],
+               compute: str | None, log: Callable[[str], None] | None, jobs: int
+               ) -> list[dict[str, Any]]:
+    """:func:`_run_seed` for each of ``seeds``, in ``jobs`` processes (spawned: a fresh
+    interpreter each; their messages go to stderr when ``log`` is given)."""
+    if jobs <= 1 or len(seeds) <= 1:
+        return [_run_seed(stores, configs, s, names, compute, log) for s in seeds]
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(max_workers=min(jobs, len(seeds)),
+                             mp_context=multiprocessing.get_context("spawn")) as pool:
+        futures = [pool.submit(_run_seed, stores, configs, s, names, compute,
+                               _stderr if log else None) for s in seeds]
+        return [f.result() for f in futures]
+
+
 def settle(stores: str | Path, *, max_seeds: int = 64, first_seed: int = 0,
            run: bool = False, configs: str | Path | None = None, compute: str | None = None,
-           log: Callable[[str], None] | None = None) -> SettleReport:
+           log: Callable[[str], None] | None = None, jobs: int = 1) -> SettleReport:
     """Settle every row (the module docstring). ``run``: run (or resume) the seeds'
     campaigns as the looks need them; without it only stores already there are read. A
     row is read at a look only if every seed of that look has its stores; else it stops at
@@ -193,11 +259,10 @@ def settle(stores: str | Path, *, max_seeds: int = 64, first_seed: int = 0,
             names = [nm for nm in PAPER_CAMPAIGNS
                      if any(nm in campaigns_of(rows[i]) for i in open_rows)]
         if run:
-            for s in seeds[:n]:
-                r = _run_seed(stores, configs, s, names, compute, log)
+            for r in _run_seeds(stores, configs, seeds[:n], names, compute, log, jobs):
                 if r["points"]:
                     runs.append(r)
-                    recorded.pop(s, None)
+                    recorded.pop(r["seed"], None)
         elif not stores.is_dir():
             raise ConfigError(f"--stores {stores}: no such directory (run with --run)")
         if log:
@@ -214,6 +279,9 @@ def settle(stores: str | Path, *, max_seeds: int = 64, first_seed: int = 0,
             if row.verdict in (HOLDS, FAILS):
                 decided[i] = last[i]
             elif not _extendable(row):
+                stopped.add(i)
+            elif below_floor(row, c):
+                last[i].floored = True
                 stopped.add(i)
     out = [decided.get(i, last[i]) for i in range(len(rows))]
     report = SettleReport(out, looks, cs, seeds, runs)
@@ -244,7 +312,8 @@ def _audit(stores: Path, rows: list[Settled], looks: Sequence[int], cs: Sequence
                 done.add(i)
                 continue
             r.audited, r.audited_look = checks[i].verdict, k
-            if checks[i].verdict in (HOLDS, FAILS) or not r.extendable:
+            if checks[i].verdict in (HOLDS, FAILS) or not r.extendable \
+                    or below_floor(checks[i], c):
                 done.add(i)
 
 

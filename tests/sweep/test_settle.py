@@ -269,6 +269,10 @@ def _check(row):
     (["--settle", "--max-seeds", "12"], "--max-seeds 12: 4 times a power of 2"),
     (["--settle", "--seeds", "0", "1"], "--settle and --seeds: give one"),
     (["--max-seeds", "8"], "--max-seeds 8: only with --settle"),
+    (["--first-seed", "64"], "--first-seed 64: only with --settle"),
+    (["--settle", "--first-seed", "-1"], "--first-seed -1: a seed is >= 0"),
+    (["--settle", "--run", "--jobs", "0"], "--jobs 0: at least 1"),
+    (["--settle", "--jobs", "2"], "--jobs: only with --run"),
     (["--settle", "--run", "--configs", "nowhere"], "no such campaign file")])
 def test_cli_settle_bad_input_exits_2_and_writes_nothing(tmp_path, capsys, argv, message):
     d = tmp_path / "paper"
@@ -305,3 +309,49 @@ def test_widening_finds_too_small_error_bars_and_the_pooler_applies_it():
     w = next(c for c in pooled if c.claim.startswith("higher eps -> narrower") and "(ml)"
              in c.claim)
     assert all(e.se == pytest.approx(40.0 * plain) for e in w.estimates)
+
+
+# ---------------------------------------------------------------------- resolution floor
+def _chain(values, se, quantity="a/a0 at x = 5 m", verdict=INCONCLUSIVE):
+    est = tuple(Estimate(f"d_f={i}", v, se, "seeds", 63.0) for i, v in enumerate(values))
+    return Check("smaller d_f attenuates more near the edge", "§4.2", "fig6a", "T 1.2 s",
+                 quantity, "chain, increasing in d_f", est, verdict, "")
+
+
+def test_resolution_floor_stops_a_chain_whose_open_step_is_below_it():
+    c = 2.5
+    # the open step: -0.0008 +- 0.00085 (|z| ~ 0.9): |d| + c se = 0.0029 < 0.01
+    flat = _chain([0.50, 0.4992, 0.55, 0.60], 0.0006)
+    assert [round(d, 6) for d, *_ in settle.open_steps(flat, c)] == [-0.0008]
+    assert settle.below_floor(flat, c)
+    # the same step, its SE 5x: |d| + c se = 0.0114 > 0.01: more seeds may still show it
+    wide = _chain([0.50, 0.4992, 0.55, 0.60], 0.003)
+    assert settle.open_steps(wide, c) and not settle.below_floor(wide, c)
+    # a step that is 0.9 % of a0 is not resolved below the 1 % floor even when precise
+    near = _chain([0.50, 0.491, 0.55, 0.60], 0.004)
+    assert not settle.below_floor(near, c)
+    # not a chain of a/a0, or decided: never floored
+    assert not settle.below_floor(_chain([0.50, 0.4992, 0.55], 0.0006, quantity="W_c [m]"), c)
+    assert not settle.below_floor(_chain([0.50, 0.4992, 0.55], 0.0006, verdict=FAILS), c)
+    # every step decided (none open): nothing to floor
+    assert not settle.below_floor(_chain([0.50, 0.55, 0.60], 0.0006), c)
+
+
+def test_run_seeds_in_processes_stores_what_one_process_stores(tmp_path):
+    from sweep.analysis.load import load
+    from sweep.paper.check import default_configs
+
+    names = ["spring_soft", "fig2"]
+    seeds = (5, 6)
+    one = settle._run_seeds(tmp_path / "one", default_configs(), seeds, names,
+                            "sweep.testing:fake_point", None, 1)
+    two = settle._run_seeds(tmp_path / "two", default_configs(), seeds, names,
+                            "sweep.testing:fake_point", None, 2)
+    assert [r["seed"] for r in two] == list(seeds)
+    assert [r["points"] for r in two] == [r["points"] for r in one] == [9, 9]
+    for s in seeds:
+        for n in names:
+            a = load(tmp_path / "one" / f"seed{s}" / f"{n}.h5").sort_index()
+            b = load(tmp_path / "two" / f"seed{s}" / f"{n}.h5").sort_index()
+            cols = [k for k in a.columns if k.startswith(("a_end", "W_c", "alpha"))]
+            assert cols and a[cols].equals(b[cols])
