@@ -24,9 +24,10 @@ records) and prints, labelled as in the docs:
   numba cache (``floewave run``'s ``kernels ready in`` line), the cost projection
   (``benchmarks/plan_check.py --n 32 --seed 7`` against model version 7's numerics in the
   same run) and ``sweep paper-check --run --seeds 0 1`` (about 6 minutes more);
-- with ``--timings --settle``, the settled table (``sweep paper-check --run --settle`` on
-  those seed stores, about 30 minutes more); ``--settle-only --out DIR`` prints that
-  section alone, for a record whose other sections stand.
+- with ``--timings --settle``, the settled table (``sweep paper-check --run --settle
+  --first-seed 64 --max-seeds 256 --jobs 2`` into ``DIR/paper-settle-64``, about 30 minutes
+  more on 2 cores); ``--settle-only --out DIR`` prints that section alone, for a record
+  whose other sections stand.
 
 ``--record FILE`` also writes the output to FILE under a header naming the model version
 and the SHA-256 of the campaign files (:func:`stamp`). ``docs/numbers.txt`` is that record
@@ -146,16 +147,25 @@ def timings(out: Path) -> None:
     print(proc.stdout)
 
 
+#: The settled table's design (docs/paper-check.md "Settled verdicts"): fresh seeds from 64
+#: (seeds 0-63 were the pilot that chose the budget), a budget of 256 seeds, 2 processes.
+SETTLE_FIRST_SEED, SETTLE_MAX_SEEDS, SETTLE_JOBS = 64, 256, 2
+
+
 def settled(out: Path) -> None:
-    """``sweep paper-check --run --settle`` on the seed stores of :func:`timings` (seeds 0
-    and 1 there; the settling adds the rest: about 30 minutes on 2 cores), timed."""
-    seeds = out / "paper-seeds"
+    """``sweep paper-check --run --settle --first-seed 64 --max-seeds 256 --jobs 2`` into
+    ``<out>/paper-settle-64`` (resumed if there: stored points are not recomputed; about
+    30 minutes on 2 cores from nothing), timed."""
+    seeds = out / f"paper-settle-{SETTLE_FIRST_SEED}"
+    flags = ["--first-seed", str(SETTLE_FIRST_SEED), "--max-seeds", str(SETTLE_MAX_SEEDS),
+             "--jobs", str(SETTLE_JOBS)]
     t = time.perf_counter()
     proc = subprocess.run([sys.executable, "-m", "sweep", "paper-check", "--stores",
-                           str(seeds), "--run", "--settle"], capture_output=True, text=True)
+                           str(seeds), "--run", "--settle", *flags], capture_output=True,
+                          text=True)
     t = time.perf_counter() - t
     print(f"\n[ensembles, stochastic] sweep paper-check --stores DIR --run --settle"
-          f" ({t:.0f} s, on [machine] above)")
+          f" {' '.join(flags)} ({t:.0f} s, on [machine] above)")
     print(proc.stdout if proc.returncode == 0 else proc.stderr[-2000:])
 
 
@@ -173,7 +183,7 @@ def main() -> int:
     args = ap.parse_args()
     if args.settle_only:
         if args.out is None:
-            ap.error("--settle-only needs --out (the directory of paper-seeds/)")
+            ap.error("--settle-only needs --out (the directory of paper-settle-64/)")
         print(f"[machine] {machine()}")
         settled(args.out)
         return 0

@@ -164,6 +164,10 @@ class SettleReport:
     stored: dict[str, float] = field(default_factory=dict)
     #: "seed S: campaign" -> a store that exists but cannot be read (exit status 3)
     problems: dict[str, str] = field(default_factory=dict)
+    #: processes that ran the seeds (``jobs``)
+    jobs: int = 1
+    #: the settling's wall time [s], running and reading
+    elapsed_s: float = 0.0
 
     def counts(self, audited: bool = False) -> dict[str, int]:
         return {v: sum((r.audited if audited else r.check.verdict) == v for r in self.rows)
@@ -175,7 +179,8 @@ class SettleReport:
         and their summed ``wall_time`` (one core each)."""
         return {"points_added": sum(r["points"] for r in self.runs),
                 "cpu_s": sum(r["cpu_s"] for r in self.runs),
-                "wall_s": sum(r["wall_s"] for r in self.runs), **self.stored}
+                "wall_s": sum(r["wall_s"] for r in self.runs),
+                "elapsed_s": round(self.elapsed_s), **self.stored}
 
 
 def _extendable(check: Check) -> bool:
@@ -234,6 +239,7 @@ def settle(stores: str | Path, *, max_seeds: int = 64, first_seed: int = 0,
     campaigns as the looks need them; without it only stores already there are read. A
     row is read at a look only if every seed of that look has its stores; else it stops at
     its last look (undecided there, if it was)."""
+    started = time.monotonic()
     stores = Path(stores)
     configs = Path(configs) if configs is not None else default_configs()
     looks = looks_for(max_seeds)
@@ -284,13 +290,15 @@ def settle(stores: str | Path, *, max_seeds: int = 64, first_seed: int = 0,
                 last[i].floored = True
                 stopped.add(i)
     out = [decided.get(i, last[i]) for i in range(len(rows))]
-    report = SettleReport(out, looks, cs, seeds, runs)
+    report = SettleReport(out, looks, cs, seeds, runs, jobs=jobs)
     have = [s for s in seeds if s in recorded]
     report.calibration = calibration(have, recorded)
-    _audit(stores, out, looks[:performed], cs, seeds, recorded, widening(have, recorded))
+    _audit(stores, out, looks[:performed], cs[:performed], seeds, recorded,
+           widening(have, recorded))
     report.problems = {f"seed {s}: {name}": p for s in have
                        for name, p in recorded[s].problems.items()}
     report.stored = stored_cost(stores, [s for s in seeds if s in recorded])
+    report.elapsed_s = time.monotonic() - started
     return report
 
 

@@ -11,7 +11,7 @@ from sweep.paper.check import markdown_cell
 from sweep.paper.estimates import FAILS, HOLDS, INCONCLUSIVE
 from sweep.paper.pooling import HONEST_R8, WIDEN_MIN
 from sweep.paper.sequential import ALPHA, POCOCK, crossing_rate
-from sweep.paper.settle import SettleReport
+from sweep.paper.settle import RESOLUTION_FLOOR, SettleReport
 from sweep.paper.thresholds import curves, format_curves, undecided_reason
 
 __all__ = ["settled_dict", "settled_json", "format_settled"]
@@ -21,6 +21,8 @@ def settled_dict(report: SettleReport) -> dict[str, Any]:
     """Everything the settled table says, machine-readable."""
     looks = report.looks
     return {"looks": list(looks), "boundaries": list(report.boundaries),
+            "first_seed": report.seeds[0], "resolution_floor": RESOLUTION_FLOOR,
+            "floored": [i for i, r in enumerate(report.rows, 1) if r.floored],
             "alpha_one_sided": ALPHA, "spending": POCOCK,
             "rate_if_c2_every_look": crossing_rate([s / looks[-1] for s in looks],
                                                    [2.0] * len(looks)),
@@ -29,7 +31,7 @@ def settled_dict(report: SettleReport) -> dict[str, Any]:
             "calibration": report.calibration, "curves": curves(report),
             "rows": [{"look": r.look, "seeds": r.seeds, "boundary": r.boundary,
                       "extendable": r.extendable, "audited": r.audited,
-                      "audited_look": r.audited_look,
+                      "audited_look": r.audited_look, "floored": r.floored,
                       "undecided": undecided_reason(r, budget=looks[-1]),
                       **r.check.to_dict()} for r in report.rows]}
 
@@ -57,10 +59,15 @@ def format_settled(report: SettleReport) -> str:
     cal = report.calibration
     fr = [s / report.looks[-1] for s in report.looks]
     lines += ["", f"{counts[HOLDS]} hold, {counts[FAILS]} fail, {counts[INCONCLUSIVE]}"
-              f" inconclusive. Looks at {', '.join(map(str, report.looks))} seeds pooled,"
+              f" inconclusive. Seeds {report.seeds[0]}-{report.seeds[-1]}; looks at"
+              f" {', '.join(map(str, report.looks))} seeds pooled,"
               f" boundaries |z| >= {', '.join(f'{c:.3f}' for c in report.boundaries)}"
               f" (Pocock-type alpha spending, one-sided alpha {ALPHA:.4f} per z; reading"
               f" every look at 2 would be {crossing_rate(fr, [2.0] * len(fr)):.4f})."]
+    floored = [f"#{i}" for i, r in enumerate(report.rows, 1) if r.floored]
+    lines.append(f"Resolution floor: a chain of a/a0 whose undecided steps all lie within"
+                 f" ±{RESOLUTION_FLOOR:g} (1 % of a0) at a look gets no more seeds; stopped"
+                 " there: " + (", ".join(floored) if floored else "none") + ".")
     moved = [f"#{i} ({r.check.verdict} -> {r.audited})" for i, r in enumerate(report.rows, 1)
              if r.audited and r.audited != r.check.verdict]
     ca = report.counts(audited=True)
@@ -76,7 +83,9 @@ def format_settled(report: SettleReport) -> str:
                      f" 1 ± {math.sqrt(2 / cal['dof']):.3f}, honest SEs estimated from 8"
                      f" replicas about {HONEST_R8:.1f}).")
     lines.append(f"Settling's cost: this run added {cost['points_added']} points in"
-                 f" {cost['cpu_s']:.0f} CPU s ({cost['wall_s']:.0f} s wall, in-process); the"
+                 f" {cost['cpu_s']:.0f} CPU s ({cost['wall_s']:.0f} s wall summed over the"
+                 f" seeds, in {report.jobs} process{'es' if report.jobs > 1 else ''}; the"
+                 f" settling took {cost['elapsed_s']:.0f} s wall, reading included); the"
                  f" table rests on {cost.get('stored_points', 0)} stored points"
                  f" ({cost.get('stored_core_s', 0)} core-s), of which seeds 2 and up:"
                  f" {cost.get('stored_points_seeds_2_up', 0)} points"

@@ -114,6 +114,15 @@ def undecided_reason(row: Settled, *, budget: int) -> str:
     where = f"at {row.seeds} seeds (the budget: {budget}), boundary {row.boundary:.2f}"
     if not est:
         return f"no estimate with an error bar {where}"
+    if row.floored:
+        from sweep.paper.settle import RESOLUTION_FLOOR, open_steps
+
+        parts = [f"the step {_short(a)} -> {_short(b)} is {d:+.5f} ± {se:.5f}"
+                 f" ({_z(d, se):+.1f} SE; within ±{abs(d) + row.boundary * se:.4f} at the"
+                 f" boundary)" for d, se, a, b in open_steps(c, row.boundary)]
+        return (f"{'; '.join(parts)} {where}: below the resolution floor ±{RESOLUTION_FLOOR:g}"
+                " (1 % of a0, the table's no visible effect), so no seeds were added: its"
+                " sign is not what any figure shows")
     if c.rule.startswith("chain"):
         steps = [(b.value - a.value, math.hypot(a.se, b.se), a.label, b.label)
                  for a, b in zip(est[:-1], est[1:], strict=True)]

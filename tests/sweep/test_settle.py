@@ -355,3 +355,32 @@ def test_run_seeds_in_processes_stores_what_one_process_stores(tmp_path):
             b = load(tmp_path / "two" / f"seed{s}" / f"{n}.h5").sort_index()
             cols = [k for k in a.columns if k.startswith(("a_end", "W_c", "alpha"))]
             assert cols and a[cols].equals(b[cols])
+
+
+def test_a_floored_row_says_why_in_numbers():
+    from sweep.paper.thresholds import undecided_reason
+
+    row = settle.Settled(_chain([0.50, 0.4992, 0.55, 0.60], 0.0006), 1, 4, 3.2, floored=True)
+    why = undecided_reason(row, budget=256)
+    assert "the step d_f=1 -> d_f=2 is" not in why            # only the open step
+    assert "the step d_f=0 -> d_f=1 is -0.00080 ± 0.00085" in why
+    assert "within ±0.0035 at the boundary" in why             # 0.0008 + 3.2 x 0.00085
+    assert "below the resolution floor ±0.01" in why and "at 4 seeds (the budget: 256)" in why
+
+
+def test_a_settling_that_decides_everything_early_stops_and_audits(tmp_path, monkeypatch):
+    """Every row decided at the first look of a 7-look budget: no more seeds are run, and
+    the audit reads only the look performed (it once zipped 1 look with 7 boundaries)."""
+    calls = []
+
+    def fake_checks(stores, seeds, z, recorded, widen=None):
+        calls.append((len(seeds), widen is not None))
+        row = _chain([0.50, 0.55, 0.60], 0.001, verdict=HOLDS)
+        return [row, row], [len(seeds), len(seeds)]
+
+    monkeypatch.setattr(settle, "pooled_checks", fake_checks)
+    rep = settle.settle(tmp_path, max_seeds=256, first_seed=64)
+    assert calls == [(4, False), (4, True)]            # one look, then its audit
+    assert [(r.look, r.seeds, r.audited, r.audited_look) for r in rep.rows] == \
+        [(1, 4, HOLDS, 1)] * 2
+    assert rep.seeds[0] == 64 and len(rep.boundaries) == 7
