@@ -87,9 +87,11 @@ def format_settled(report: SettleReport) -> str:
                  f" seeds, in {report.jobs} process{'es' if report.jobs > 1 else ''}; the"
                  f" settling took {cost['elapsed_s']:.0f} s wall, reading included); the"
                  f" table rests on {cost.get('stored_points', 0)} stored points"
-                 f" ({cost.get('stored_core_s', 0)} core-s), of which seeds 2 and up:"
-                 f" {cost.get('stored_points_seeds_2_up', 0)} points"
-                 f" ({cost.get('stored_core_s_seeds_2_up', 0)} core-s).")
+                 f" ({cost.get('stored_core_s', 0)} core-s)"
+                 + (f", of which seeds 2 and up (beyond --seeds 0 1):"
+                    f" {cost.get('stored_points_seeds_2_up', 0)} points"
+                    f" ({cost.get('stored_core_s_seeds_2_up', 0)} core-s)."
+                    if report.seeds[0] < 2 else "."))
     lines += ["", "Verdicts against the thresholds the paper's words leave open:", "",
               format_curves(curves(report))]
     return "\n".join(lines)
