@@ -118,6 +118,9 @@ def build_parser() -> argparse.ArgumentParser:
     pc.add_argument("--first-seed", type=int, default=None, metavar="S",
                     help="--settle: pool seeds S, S+1, ... (default 0; a settling on fresh"
                     " seeds is independent of one run before)")
+    pc.add_argument("--floor", type=float, default=None, metavar="M",
+                    help="--settle: stop adding seeds to a chain of a/a0 whose undecided"
+                    " steps all lie within +-M of a0 (off by default; docs/paper-check.md)")
     pc.add_argument("--jobs", type=int, default=None, metavar="N",
                     help="--settle --run: run a look's seeds in N processes (default 1)")
 
@@ -300,18 +303,21 @@ def cmd_paper_check(args: argparse.Namespace) -> int:
         jobs = 1 if args.jobs is None else args.jobs
         if first < 0:
             raise ConfigError(f"--first-seed {first}: a seed is >= 0")
+        if args.floor is not None and not 0.0 < args.floor < 1.0:
+            raise ConfigError(f"--floor {args.floor}: a fraction of a0 in (0, 1), e.g. 0.01")
         if jobs < 1:
             raise ConfigError(f"--jobs {jobs}: at least 1")
         if args.jobs is not None and not args.run:
             raise ConfigError("--jobs: only with --run (it says how many processes run seeds)")
         settled = settle(args.stores, max_seeds=most, first_seed=first, run=args.run,
-                         configs=args.configs, compute=args.compute, log=log, jobs=jobs)
+                         configs=args.configs, compute=args.compute, log=log, jobs=jobs,
+                         floor=args.floor)
         print(settled_json(settled) if args.json else format_settled(settled))
         for name, problem in settled.problems.items():
             _err(f"{name}: {problem}")
         return EXIT_STORE if settled.problems else EXIT_OK
     for flag, value in (("--max-seeds", args.max_seeds), ("--first-seed", args.first_seed),
-                        ("--jobs", args.jobs)):
+                        ("--jobs", args.jobs), ("--floor", args.floor)):
         if value is not None:
             raise ConfigError(f"{flag} {value}: only with --settle")
     if args.seeds:

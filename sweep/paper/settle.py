@@ -26,11 +26,14 @@ whose error bar is too wide for its margin. Settling buys precision where it is 
    A row is decided at the first look where it holds or fails, and keeps that verdict;
    only the campaigns of undecided rows get the next look's seeds. A row still undecided
    at the last look (or one no seed can change: an analytic value) is inconclusive.
-4. **The resolution floor.** A chain of a / a0 whose undecided steps are all resolved to
-   lie within +-:data:`RESOLUTION_FLOOR` (1 % of a0, the table's "no visible effect":
-   |step| + c_k SE at most that) gets no more seeds (:func:`below_floor`): more seeds could
-   only give a sign to a difference no figure shows. It stays inconclusive, with that
-   reason. Stopping for futility never makes a verdict, so the rate is unchanged.
+4. **The resolution floor** (``floor``, ``--floor M``; off by default). A chain of a / a0
+   whose undecided steps are all resolved to lie within +-M (|step| + z_c SE at most M)
+   gets no more seeds (:func:`below_floor`): the settling stops buying the sign of a
+   difference smaller than M. It stays inconclusive, with that reason. Stopping for
+   futility never makes a verdict, so it cannot raise the false-verdict rate. It does
+   change what a row can say: the chain rule reads signs, so a row whose reversal below M
+   was decided at an early look (as #10 and #37 are) fails, while one the floor stopped
+   stays inconclusive. So the shipped table runs without it.
 
 Seeds ``first_seed``, ``first_seed + 1``, ... are pooled (``--first-seed``): a settling on
 fresh seeds is independent of one already run (the uniform campaign's replica 0 aside, the
@@ -73,35 +76,38 @@ __all__ = ["FIRST_LOOK", "RESOLUTION_FLOOR", "Settled", "SettleReport", "below_f
 FIRST_LOOK = EMPIRICAL_MIN
 
 
-#: The resolution floor [a0] of a chain of a / a0 (:func:`below_floor`).
+#: The resolution floor [a0] of ``--floor`` (off by default): 1 % of a0, the table's "no
+#: visible effect".
 RESOLUTION_FLOOR = NO_EFFECT
+#: The largest seed a campaign takes (``[base] seed`` is a 63-bit integer).
+MAX_SEED = 2 ** 63 - 1
 
 
-def open_steps(check: Check, c: float) -> list[tuple[float, float, str, str]]:
-    """The consecutive steps (difference, SE, labels) of a chain row's estimates with a
-    value and an error bar whose |z| is below the boundary ``c`` (Student-t carried as the
-    rules do)."""
-    est = [e for e in check.estimates if math.isfinite(e.value) and math.isfinite(e.se)]
+def open_steps(check: Check, c: float) -> list[tuple[float, float, str, str, float]]:
+    """The consecutive steps (difference, SE, labels, the critical |z| the rule reads
+    it with at boundary ``c``: Student-t where an SE has finite dof) between a chain
+    row's estimates with a value (as the rule takes them), that the rule leaves
+    undecided: |z| below that critical value, or no SE."""
+    est = [e for e in check.estimates if math.isfinite(e.value)]
     out = []
     with critical(c):
         for a, b in zip(est[:-1], est[1:], strict=False):
             d, se = b.value - a.value, math.hypot(a.se, b.se)
-            if se > 0 and abs(d) / se < z_critical(min(a.dof, b.dof)):
-                out.append((d, se, a.label, b.label))
+            zc = z_critical(min(a.dof, b.dof))
+            if not (se > 0 and abs(d) / se >= zc):        # a NaN SE leaves it open
+                out.append((d, se, a.label, b.label, zc))
     return out
 
 
-def below_floor(check: Check, c: float) -> bool:
+def below_floor(check: Check, c: float, floor: float = RESOLUTION_FLOOR) -> bool:
     """Whether an undecided chain of a / a0 (``/a0`` in its quantity) has every undecided
-    step (:func:`open_steps`) inside +-:data:`RESOLUTION_FLOOR`: |d| + c' SE at most the
-    floor, c' the boundary ``c`` as its rule reads it."""
+    step (:func:`open_steps`) inside +-``floor``: |d| + z_c SE at most ``floor``, z_c the
+    critical value its rule reads the step with (a step with no SE is never inside)."""
     if check.verdict != INCONCLUSIVE or not check.rule.startswith("chain") \
             or "/a0" not in check.quantity:
         return False
     steps = open_steps(check, c)
-    with critical(c):
-        return bool(steps) and all(
-            abs(d) + z_critical(math.inf) * se <= RESOLUTION_FLOOR for d, se, _, _ in steps)
+    return bool(steps) and all(abs(d) + zc * se <= floor for d, se, _, _, zc in steps)
 
 
 def looks_for(max_seeds: int) -> tuple[int, ...]:
@@ -168,6 +174,13 @@ class SettleReport:
     jobs: int = 1
     #: the settling's wall time [s], running and reading
     elapsed_s: float = 0.0
+    #: the resolution floor [a0] in force (None: off)
+    floor: float | None = None
+
+    @property
+    def pooled_up_to(self) -> int:
+        """The last seed any row pooled."""
+        return self.seeds[max((r.seeds for r in self.rows), default=1) - 1]
 
     def counts(self, audited: bool = False) -> dict[str, int]:
         return {v: sum((r.audited if audited else r.check.verdict) == v for r in self.rows)
@@ -229,12 +242,24 @@ def _run_seeds(stores: Path, configs: Path, seeds: Sequence[int], names: Sequenc
                              mp_context=multiprocessing.get_context("spawn")) as pool:
         futures = [pool.submit(_run_seed, stores, configs, s, names, compute,
                                _stderr if log else None) for s in seeds]
-        return [f.result() for f in futures]
+        out = []
+        for s, f in zip(seeds, futures, strict=True):
+            try:
+                out.append(f.result())
+            except BaseException:
+                # the seeds not started are not run; the running ones finish their point
+                # set (a store resumes, so nothing is lost)
+                pool.shutdown(wait=True, cancel_futures=True)
+                if log:
+                    log(f"seed {s}: failed; the seeds after it were not started")
+                raise
+        return out
 
 
 def settle(stores: str | Path, *, max_seeds: int = 64, first_seed: int = 0,
            run: bool = False, configs: str | Path | None = None, compute: str | None = None,
-           log: Callable[[str], None] | None = None, jobs: int = 1) -> SettleReport:
+           log: Callable[[str], None] | None = None, jobs: int = 1,
+           floor: float | None = None) -> SettleReport:
     """Settle every row (the module docstring). ``run``: run (or resume) the seeds'
     campaigns as the looks need them; without it only stores already there are read. A
     row is read at a look only if every seed of that look has its stores; else it stops at
@@ -243,6 +268,11 @@ def settle(stores: str | Path, *, max_seeds: int = 64, first_seed: int = 0,
     stores = Path(stores)
     configs = Path(configs) if configs is not None else default_configs()
     looks = looks_for(max_seeds)
+    if not 0 <= first_seed <= MAX_SEED - looks[-1] + 1:
+        raise ConfigError(f"--first-seed {first_seed}: the seeds {first_seed} to"
+                          f" {first_seed + looks[-1] - 1} must lie in 0 to {MAX_SEED}")
+    if floor is not None and not 0.0 < floor < 1.0:
+        raise ConfigError(f"--floor {floor}: a fraction of a0 in (0, 1), e.g. 0.01")
     if run:
         campaign_files(configs)             # all there, before anything is written
     cs = boundaries([s / looks[-1] for s in looks])
@@ -286,15 +316,15 @@ def settle(stores: str | Path, *, max_seeds: int = 64, first_seed: int = 0,
                 decided[i] = last[i]
             elif not _extendable(row):
                 stopped.add(i)
-            elif below_floor(row, c):
+            elif floor is not None and below_floor(row, c, floor):
                 last[i].floored = True
                 stopped.add(i)
     out = [decided.get(i, last[i]) for i in range(len(rows))]
-    report = SettleReport(out, looks, cs, seeds, runs, jobs=jobs)
+    report = SettleReport(out, looks, cs, seeds, runs, jobs=jobs, floor=floor)
     have = [s for s in seeds if s in recorded]
     report.calibration = calibration(have, recorded)
     _audit(stores, out, looks[:performed], cs[:performed], seeds, recorded,
-           widening(have, recorded))
+           widening(have, recorded), floor)
     report.problems = {f"seed {s}: {name}": p for s in have
                        for name, p in recorded[s].problems.items()}
     report.stored = stored_cost(stores, [s for s in seeds if s in recorded])
@@ -304,7 +334,7 @@ def settle(stores: str | Path, *, max_seeds: int = 64, first_seed: int = 0,
 
 def _audit(stores: Path, rows: list[Settled], looks: Sequence[int], cs: Sequence[float],
            seeds: Sequence[int], recorded: dict[int, Recorder],
-           widen: dict[tuple, float]) -> None:
+           widen: dict[tuple, float], floor: float | None = None) -> None:
     """The looks once more on the stored seeds, every stated SE widened by the factor all
     the stored seeds' spread shows it to be too small
     (:func:`sweep.paper.pooling.widening`; the means at each look are its seeds' only):
@@ -321,7 +351,7 @@ def _audit(stores: Path, rows: list[Settled], looks: Sequence[int], cs: Sequence
                 continue
             r.audited, r.audited_look = checks[i].verdict, k
             if checks[i].verdict in (HOLDS, FAILS) or not r.extendable \
-                    or below_floor(checks[i], c):
+                    or (floor is not None and below_floor(checks[i], c, floor)):
                 done.add(i)
 
 

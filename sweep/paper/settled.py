@@ -11,7 +11,7 @@ from sweep.paper.check import markdown_cell
 from sweep.paper.estimates import FAILS, HOLDS, INCONCLUSIVE
 from sweep.paper.pooling import HONEST_R8, WIDEN_MIN
 from sweep.paper.sequential import ALPHA, POCOCK, crossing_rate
-from sweep.paper.settle import RESOLUTION_FLOOR, SettleReport
+from sweep.paper.settle import SettleReport
 from sweep.paper.thresholds import curves, format_curves, undecided_reason
 
 __all__ = ["settled_dict", "settled_json", "format_settled"]
@@ -21,7 +21,8 @@ def settled_dict(report: SettleReport) -> dict[str, Any]:
     """Everything the settled table says, machine-readable."""
     looks = report.looks
     return {"looks": list(looks), "boundaries": list(report.boundaries),
-            "first_seed": report.seeds[0], "resolution_floor": RESOLUTION_FLOOR,
+            "first_seed": report.seeds[0], "pooled_up_to": report.pooled_up_to,
+            "jobs": report.jobs, "resolution_floor": report.floor,
             "floored": [i for i, r in enumerate(report.rows, 1) if r.floored],
             "alpha_one_sided": ALPHA, "spending": POCOCK,
             "rate_if_c2_every_look": crossing_rate([s / looks[-1] for s in looks],
@@ -32,7 +33,7 @@ def settled_dict(report: SettleReport) -> dict[str, Any]:
             "rows": [{"look": r.look, "seeds": r.seeds, "boundary": r.boundary,
                       "extendable": r.extendable, "audited": r.audited,
                       "audited_look": r.audited_look, "floored": r.floored,
-                      "undecided": undecided_reason(r, budget=looks[-1]),
+                      "undecided": undecided_reason(r, budget=looks[-1], floor=report.floor),
                       **r.check.to_dict()} for r in report.rows]}
 
 
@@ -48,7 +49,7 @@ def format_settled(report: SettleReport) -> str:
     for i, r in enumerate(report.rows, 1):
         c = r.check
         values = "; ".join(e.text() for e in c.estimates) or "—"
-        why = undecided_reason(r, budget=report.looks[-1])
+        why = undecided_reason(r, budget=report.looks[-1], floor=report.floor)
         why = f"; undecided: {why}" if why else ""
         lines.append("| " + " | ".join(markdown_cell(s) for s in (
             str(i), f"{c.claim} ({c.source})", f"{c.campaign}: {c.points}",
@@ -59,15 +60,17 @@ def format_settled(report: SettleReport) -> str:
     cal = report.calibration
     fr = [s / report.looks[-1] for s in report.looks]
     lines += ["", f"{counts[HOLDS]} hold, {counts[FAILS]} fail, {counts[INCONCLUSIVE]}"
-              f" inconclusive. Seeds {report.seeds[0]}-{report.seeds[-1]}; looks at"
+              f" inconclusive. Seeds from {report.seeds[0]} (the budget's {report.seeds[0]}-"
+              f"{report.seeds[-1]}; pooled: up to {report.pooled_up_to}); looks at"
               f" {', '.join(map(str, report.looks))} seeds pooled,"
               f" boundaries |z| >= {', '.join(f'{c:.3f}' for c in report.boundaries)}"
               f" (Pocock-type alpha spending, one-sided alpha {ALPHA:.4f} per z; reading"
               f" every look at 2 would be {crossing_rate(fr, [2.0] * len(fr)):.4f})."]
-    floored = [f"#{i}" for i, r in enumerate(report.rows, 1) if r.floored]
-    lines.append(f"Resolution floor: a chain of a/a0 whose undecided steps all lie within"
-                 f" ±{RESOLUTION_FLOOR:g} (1 % of a0) at a look gets no more seeds; stopped"
-                 " there: " + (", ".join(floored) if floored else "none") + ".")
+    if report.floor is not None:
+        floored = [f"#{i}" for i, r in enumerate(report.rows, 1) if r.floored]
+        lines.append(f"Resolution floor: a chain of a/a0 whose undecided steps all lie within"
+                     f" ±{report.floor:g} of a0 at a look gets no more seeds; stopped there: "
+                     + (", ".join(floored) if floored else "none") + ".")
     moved = [f"#{i} ({r.check.verdict} -> {r.audited})" for i, r in enumerate(report.rows, 1)
              if r.audited and r.audited != r.check.verdict]
     ca = report.counts(audited=True)

@@ -101,7 +101,7 @@ def _z(d: float, se: float) -> float:
     return d / se if se > 0 else math.copysign(math.inf, d)
 
 
-def undecided_reason(row: Settled, *, budget: int) -> str:
+def undecided_reason(row: Settled, *, budget: int, floor: float | None = None) -> str:
     """Why an inconclusive row stays so, in numbers: the estimate (or step) nearest its
     bound, against the boundary of the last look."""
     c = row.check
@@ -117,12 +117,13 @@ def undecided_reason(row: Settled, *, budget: int) -> str:
     if row.floored:
         from sweep.paper.settle import RESOLUTION_FLOOR, open_steps
 
+        floor = RESOLUTION_FLOOR if floor is None else floor
+
         parts = [f"the step {_short(a)} -> {_short(b)} is {d:+.5f} ± {se:.5f}"
-                 f" ({_z(d, se):+.1f} SE; within ±{abs(d) + row.boundary * se:.4f} at the"
-                 f" boundary)" for d, se, a, b in open_steps(c, row.boundary)]
-        return (f"{'; '.join(parts)} {where}: below the resolution floor ±{RESOLUTION_FLOOR:g}"
-                " (1 % of a0, the table's no visible effect), so no seeds were added: its"
-                " sign is not what any figure shows")
+                 f" ({_z(d, se):+.1f} SE; within ±{abs(d) + zc * se:.4f} at z_c {zc:.2f})"
+                 for d, se, a, b, zc in open_steps(c, row.boundary)]
+        return (f"{'; '.join(parts)} {where}: below the resolution floor ±{floor:g} of a0,"
+                " where the settling stops buying a step's sign")
     if c.rule.startswith("chain"):
         steps = [(b.value - a.value, math.hypot(a.se, b.se), a.label, b.label)
                  for a, b in zip(est[:-1], est[1:], strict=True)]

@@ -273,6 +273,10 @@ def _check(row):
     (["--settle", "--first-seed", "-1"], "--first-seed -1: a seed is >= 0"),
     (["--settle", "--run", "--jobs", "0"], "--jobs 0: at least 1"),
     (["--settle", "--jobs", "2"], "--jobs: only with --run"),
+    (["--jobs", "2"], "--jobs 2: only with --settle"),
+    (["--floor", "0.01"], "--floor 0.01: only with --settle"),
+    (["--settle", "--floor", "0"], "--floor 0.0: a fraction of a0 in (0, 1)"),
+    (["--settle", "--run", "--first-seed", str(2 ** 63 - 10)], "must lie in 0 to"),
     (["--settle", "--run", "--configs", "nowhere"], "no such campaign file")])
 def test_cli_settle_bad_input_exits_2_and_writes_nothing(tmp_path, capsys, argv, message):
     d = tmp_path / "paper"
@@ -312,29 +316,60 @@ def test_widening_finds_too_small_error_bars_and_the_pooler_applies_it():
 
 
 # ---------------------------------------------------------------------- resolution floor
-def _chain(values, se, quantity="a/a0 at x = 5 m", verdict=INCONCLUSIVE):
-    est = tuple(Estimate(f"d_f={i}", v, se, "seeds", 63.0) for i, v in enumerate(values))
+def _chain(values, se, quantity="a/a0 at x = 5 m", verdict=INCONCLUSIVE, dof=63.0):
+    ses = se if isinstance(se, (list, tuple)) else [se] * len(values)
+    est = tuple(Estimate(f"d_f={i}", v, e, "seeds", dof) for i, (v, e) in
+                enumerate(zip(values, ses, strict=True)))
     return Check("smaller d_f attenuates more near the edge", "§4.2", "fig6a", "T 1.2 s",
                  quantity, "chain, increasing in d_f", est, verdict, "")
 
 
 def test_resolution_floor_stops_a_chain_whose_open_step_is_below_it():
     c = 2.5
-    # the open step: -0.0008 +- 0.00085 (|z| ~ 0.9): |d| + c se = 0.0029 < 0.01
+    # the open step: -0.0008 +- 0.00085 (|z| ~ 0.9): |d| + z_c se ~ 0.003 < 0.01
     flat = _chain([0.50, 0.4992, 0.55, 0.60], 0.0006)
     assert [round(d, 6) for d, *_ in settle.open_steps(flat, c)] == [-0.0008]
     assert settle.below_floor(flat, c)
-    # the same step, its SE 5x: |d| + c se = 0.0114 > 0.01: more seeds may still show it
+    assert not settle.below_floor(flat, c, floor=0.002)       # the floor is a parameter
+    # the same step, its SE 5x: |d| + z_c se ~ 0.011 > 0.01: more seeds may still show it
     wide = _chain([0.50, 0.4992, 0.55, 0.60], 0.003)
     assert settle.open_steps(wide, c) and not settle.below_floor(wide, c)
-    # a step that is 0.9 % of a0 is not resolved below the 1 % floor even when precise
-    near = _chain([0.50, 0.491, 0.55, 0.60], 0.004)
-    assert not settle.below_floor(near, c)
+    # a step of 0.9 % of a0, open (z = -2.1 < 2.5), not resolved below the 1 % floor
+    near = _chain([0.50, 0.491, 0.55, 0.60], 0.003)
+    (d, se, *_), = settle.open_steps(near, c)
+    assert abs(d / se) < c and not settle.below_floor(near, c)
+    # Student-t: with 3 dof the rule reads z_c ~ 12 at the first look's c = 3.24, so the
+    # step's interval (0.0008 + 12 x 0.00085) is not inside the floor, though
+    # 0.0008 + 3.24 x 0.00085 is
+    t3 = _chain([0.50, 0.4992, 0.55, 0.60], 0.0006, dof=3.0)
+    zc = settle.open_steps(t3, 3.24)[0][4]
+    assert 10 < zc < 14 and not settle.below_floor(t3, 3.24)
+    assert settle.below_floor(_chain([0.50, 0.4992, 0.55, 0.60], 0.0006, dof=math.inf), 3.24)
+    # a point without an SE: its steps are open and never inside the floor
+    gap = _chain([0.50, 0.4992, 0.55, 0.60], [0.0006, math.nan, 0.0006, 0.0006])
+    assert len(settle.open_steps(gap, c)) == 2 and not settle.below_floor(gap, c)
     # not a chain of a/a0, or decided: never floored
     assert not settle.below_floor(_chain([0.50, 0.4992, 0.55], 0.0006, quantity="W_c [m]"), c)
     assert not settle.below_floor(_chain([0.50, 0.4992, 0.55], 0.0006, verdict=FAILS), c)
     # every step decided (none open): nothing to floor
     assert not settle.below_floor(_chain([0.50, 0.55, 0.60], 0.0006), c)
+
+
+def test_the_floor_stops_a_row_only_when_asked(tmp_path, monkeypatch):
+    calls = []
+
+    def fake_checks(stores, seeds, z, recorded, widen=None):
+        calls.append(len(seeds))
+        return [_chain([0.50, 0.4992, 0.55, 0.60], 0.0006)], [len(seeds)]
+
+    monkeypatch.setattr(settle, "pooled_checks", fake_checks)
+    floored = settle.settle(tmp_path, max_seeds=16, floor=0.01)
+    assert calls == [4, 4] and floored.rows[0].floored          # one look, its audit
+    assert (floored.rows[0].look, floored.rows[0].check.verdict) == (1, INCONCLUSIVE)
+    calls.clear()
+    plain = settle.settle(tmp_path, max_seeds=16)
+    assert calls == [4, 8, 16, 4, 8, 16] and not plain.rows[0].floored
+    assert plain.rows[0].look == 3
 
 
 def test_run_seeds_in_processes_stores_what_one_process_stores(tmp_path):
@@ -360,27 +395,10 @@ def test_run_seeds_in_processes_stores_what_one_process_stores(tmp_path):
 def test_a_floored_row_says_why_in_numbers():
     from sweep.paper.thresholds import undecided_reason
 
-    row = settle.Settled(_chain([0.50, 0.4992, 0.55, 0.60], 0.0006), 1, 4, 3.2, floored=True)
-    why = undecided_reason(row, budget=256)
+    row = settle.Settled(_chain([0.50, 0.4992, 0.55, 0.60], 0.0006, dof=math.inf), 1, 4,
+                         3.2, floored=True)
+    why = undecided_reason(row, budget=256, floor=0.01)
     assert "the step d_f=1 -> d_f=2 is" not in why            # only the open step
     assert "the step d_f=0 -> d_f=1 is -0.00080 ± 0.00085" in why
-    assert "within ±0.0035 at the boundary" in why             # 0.0008 + 3.2 x 0.00085
-    assert "below the resolution floor ±0.01" in why and "at 4 seeds (the budget: 256)" in why
-
-
-def test_a_settling_that_decides_everything_early_stops_and_audits(tmp_path, monkeypatch):
-    """Every row decided at the first look of a 7-look budget: no more seeds are run, and
-    the audit reads only the look performed (it once zipped 1 look with 7 boundaries)."""
-    calls = []
-
-    def fake_checks(stores, seeds, z, recorded, widen=None):
-        calls.append((len(seeds), widen is not None))
-        row = _chain([0.50, 0.55, 0.60], 0.001, verdict=HOLDS)
-        return [row, row], [len(seeds), len(seeds)]
-
-    monkeypatch.setattr(settle, "pooled_checks", fake_checks)
-    rep = settle.settle(tmp_path, max_seeds=256, first_seed=64)
-    assert calls == [(4, False), (4, True)]            # one look, then its audit
-    assert [(r.look, r.seeds, r.audited, r.audited_look) for r in rep.rows] == \
-        [(1, 4, HOLDS, 1)] * 2
-    assert rep.seeds[0] == 64 and len(rep.boundaries) == 7
+    assert "within ±0.0035 at z_c 3.20" in why                 # 0.0008 + 3.2 x 0.00085
+    assert "below the resolution floor ±0.01 of a0" in why and "at 4 seeds (the budget: 256)" in why
