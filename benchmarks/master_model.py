@@ -2,6 +2,7 @@
 
     python benchmarks/master_model.py [--workers 7 15 31 63 1024 4096] [--cost-scale 1 0.25]
                                       [--shards 1 32] [--seconds 15] [--check RECORD.json]
+                                      [--write-path inline none]
 
 The model is not an equation but the master itself: ``sweep run``'s own code (the
 scheduling loop of :class:`sweep.run.master.Master`, its group commits into a real HDF5
@@ -20,6 +21,9 @@ against ``bench_master.py --scale`` at 8-64 ranks: ``--check``).
 own master and store on its own node, W/S workers each; the shards are independent, so one
 shard's master is simulated with W/S workers and its figures are each master's.
 
+``--write-path none``: the master's write path taken out (:func:`scheduling_only`): what
+a master whose store is written by another process would spend itself (docs/cluster.md).
+
 Reported per run: workers, shards, stored points/s per master and in all, the master's CPU
 share and CPU per point, the hand-out latency (a worker's wait from finishing a point to
 being handed the next) and the workers' idle share while there is work to hand out.
@@ -27,6 +31,7 @@ being handed the next) and the workers' idle share while there is work to hand o
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import heapq
 import json
@@ -83,6 +88,7 @@ class SimTransport:
 
     def send(self, worker: int, task) -> None:
         now = time.monotonic()
+        pickle.dumps(task, protocol=pickle.HIGHEST_PROTOCOL)  # the master's side of a task
         c0 = time.process_time()
         cost = self.cost(task.config)
         out = self.compute_point(task, self.fn, worker)  # the worker's work
@@ -115,8 +121,36 @@ class SimTransport:
         pass
 
 
-def simulate(workers: int, scale: float, seconds: float, tmp: Path) -> dict[str, float]:
-    """One master with ``workers`` simulated workers for about ``seconds`` of real time."""
+@contextlib.contextmanager
+def scheduling_only():
+    """The master's write path taken out of its process: the store's ``add``, ``commit``,
+    ``handout`` and ``release`` do nothing and a result's record is not built, so what is
+    left is the scheduling path (poll, unpickle, queues, the next task), what a master
+    whose writer is another process would spend itself."""
+    import types
+
+    from sweep.run.master import Master
+    from sweep.store.store import Store
+    saved = {(cls, name): getattr(cls, name) for cls, name in
+             ((Store, "add"), (Store, "commit"), (Store, "handout"), (Store, "release"),
+              (Master, "record"))}
+    Store.add = lambda self, record: None
+    Store.commit = lambda self: 0
+    Store.handout = lambda self, hashes, alone=False: None
+    Store.release = lambda self, hashes: None
+    Master.record = lambda self, point, out, config=None: types.SimpleNamespace(
+        status=out.status)
+    try:
+        yield
+    finally:
+        for (cls, name), fn in saved.items():
+            setattr(cls, name, fn)
+
+
+def simulate(workers: int, scale: float, seconds: float, tmp: Path,
+             write_path: str = "inline") -> dict[str, float]:
+    """One master with ``workers`` simulated workers for about ``seconds`` of real time
+    (``write_path`` "none": :func:`scheduling_only`)."""
     import sweep.run.launch as launch
     from sweep.config import parse_campaign
     mean = json.loads(COSTS.read_text())["mean"] * scale
@@ -129,10 +163,11 @@ def simulate(workers: int, scale: float, seconds: float, tmp: Path) -> dict[str,
     real_open = launch._open_transport
     launch._open_transport = lambda comm, compute, mpi: sim
     campaign = campaign.shard(0, shards)
-    import contextlib
     import io
     try:
-        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        with contextlib.redirect_stdout(io.StringIO()), \
+                contextlib.redirect_stderr(io.StringIO()), \
+                (scheduling_only() if write_path == "none" else contextlib.nullcontext()):
             summary = launch.run_campaign(campaign, str(store),
                                           compute="sweep.testing:replay_point",
                                           progress_bar=False)
@@ -165,6 +200,9 @@ def main() -> int:
     ap.add_argument("--cost-scale", type=float, nargs="+", default=[1.0, 0.25])
     ap.add_argument("--shards", type=int, nargs="+", default=[1])
     ap.add_argument("--seconds", type=float, default=15.0)
+    ap.add_argument("--write-path", nargs="+", default=["inline"], choices=["inline", "none"],
+                    help="inline: the master stores every point itself (sweep run today);"
+                    " none: the scheduling path alone (a writer in another process)")
     ap.add_argument("--check", type=Path, help="bench_master.py --scale --record JSON:"
                     " print the model beside each measured row")
     args = ap.parse_args()
@@ -172,24 +210,25 @@ def main() -> int:
     if args.check:
         for r in json.loads(args.check.read_text())["rows"]:
             measured[(r["ranks"] - 1, r["scale"])] = r
-    print("| workers | shards | cost scale | points/s per master | points/s in all | master CPU"
-          " | master CPU per point [ms] | hand-out latency mean / p95 [ms] | workers idle"
-          " | from |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print("| workers | shards | cost scale | write path | points/s per master | points/s in all"
+          " | master CPU | master CPU per point [ms] | hand-out latency mean / p95 [ms]"
+          " | workers idle | from |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as tmp:
         for scale in args.cost_scale:
             for shards in args.shards:
-                for w in args.workers:
+                for w, path in ((w, p) for w in args.workers for p in args.write_path):
                     per = max(1, w // shards)
-                    r = simulate(per, scale, args.seconds, Path(tmp))
-                    print(f"| {w} | {shards} | {scale:g} | {r['rate']:.1f} |"
+                    r = simulate(per, scale, args.seconds, Path(tmp), path)
+                    print(f"| {w} | {shards} | {scale:g} | {path} | {r['rate']:.1f} |"
                           f" {r['rate'] * shards:.0f} | {100 * r['master_cpu_share']:.1f} % |"
                           f" {r['cpu_per_point_ms']:.2f} | {1e3 * r['latency_mean']:.1f} /"
                           f" {1e3 * r['latency_p95']:.1f} | {100 * r['idle']:.1f} % | model",
                           flush=True)
-                    m = measured.get((w, scale)) if shards == 1 else None
+                    m = measured.get((w, scale)) if shards == 1 and path == "inline" else None
                     if m:
-                        print(f"| {w} | 1 | {scale:g} | {m['rate']:.1f} | {m['rate']:.0f} |"
+                        print(f"| {w} | 1 | {scale:g} | inline | {m['rate']:.1f} |"
+                              f" {m['rate']:.0f} |"
                               f" {100 * m['master_cpu_share']:.1f} % |"
                               f" {m['cpu_per_point_ms']:.2f} | {1e3 * m['latency_mean']:.1f} /"
                               f" {1e3 * m['latency_p95']:.1f} | {100 * m['idle']:.1f} % |"
