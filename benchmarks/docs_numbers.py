@@ -25,7 +25,7 @@ records) and prints, labelled as in the docs:
   (``benchmarks/plan_check.py --n 32 --seed 7`` against model version 7's numerics in the
   same run) and ``sweep paper-check --run --seeds 0 1`` (about 6 minutes more);
 - with ``--timings --settle``, the settled table (``sweep paper-check --run --settle
-  --first-seed 64 --max-seeds 256 --jobs 2`` into ``DIR/paper-settle-64``, about 30 minutes
+  --first-seed 64 --max-seeds 256 --jobs 2`` into ``DIR/paper-settle-64``, about 25 minutes
   more on 2 cores); ``--settle-only --out DIR`` prints that section alone, for a record
   whose other sections stand.
 
@@ -155,7 +155,7 @@ SETTLE_FIRST_SEED, SETTLE_MAX_SEEDS, SETTLE_JOBS = 64, 256, 2
 def settled(out: Path) -> None:
     """``sweep paper-check --run --settle --first-seed 64 --max-seeds 256 --jobs 2`` into
     ``<out>/paper-settle-64`` (resumed if there: stored points are not recomputed; about
-    30 minutes on 2 cores from nothing), timed."""
+    25 minutes on 2 cores from nothing: 2,007 core-s of points, then the reading), timed."""
     seeds = out / f"paper-settle-{SETTLE_FIRST_SEED}"
     flags = ["--first-seed", str(SETTLE_FIRST_SEED), "--max-seeds", str(SETTLE_MAX_SEEDS),
              "--jobs", str(SETTLE_JOBS)]
@@ -177,7 +177,7 @@ def main() -> int:
     ap.add_argument("--timings", action="store_true",
                     help="also time the compile, the cost projection and paper-check --seeds")
     ap.add_argument("--settle", action="store_true", help="with --timings: also the settled"
-                    " table (paper-check --settle on the seed stores; ~30 min more)")
+                    " table (paper-check --settle on the seed stores; ~25 min more)")
     ap.add_argument("--settle-only", action="store_true", help="print only the settled"
                     " table's section, on --out's seed stores (to append to a record)")
     args = ap.parse_args()
