@@ -41,6 +41,13 @@ def status_report(path: Path, slowest: int = 5) -> dict[str, Any]:
     total = 1
     for values in campaign["sweep"].values():
         total *= len(values)
+    # a shard's store (``sweep run --shard K/N``) counts against its shard of the grid: the
+    # size its latest run recorded
+    run_attrs = store_runs(path)
+    latest = max(run_attrs, key=lambda r: int(r["index"]), default={})
+    shard = str(latest.get("shard", "")) or None
+    if shard is not None:
+        total = int(latest.get("shard_points", total))
     counts = {str(k): int(v) for k, v in df["status"].value_counts().items() if v}
     failures = [{"hash": r.hash[:12], "status": str(r.status), "swept": swept_values(r, dims),
                  "message": r.message.splitlines()[0] if r.message else ""}
@@ -53,9 +60,9 @@ def status_report(path: Path, slowest: int = 5) -> dict[str, Any]:
     runs = [{"index": int(r["index"]), "started": str(r.get("started", "")),
              "ended": str(r.get("ended", "")), "outcome": str(r.get("outcome", "")),
              "mpi_size": int(r.get("mpi_size", 1)), "host": str(r.get("host", "")),
-             "stored": int((df["run"] == r["index"]).sum())} for r in store_runs(path)]
+             "stored": int((df["run"] == r["index"]).sum())} for r in run_attrs]
     mark_dead_runs(path, runs)
-    return {"store": str(path), "grid_points": total, "stored": len(df),
+    return {"store": str(path), "grid_points": total, "shard": shard, "stored": len(df),
             "journaled": journaled,
             "remaining": max(total - len(df), 0), "counts": counts, "failures": failures,
             "not_converged": not_converged,
@@ -83,7 +90,8 @@ def mark_dead_runs(path: Path, runs: list[dict[str, Any]]) -> None:
 def status_text(rep: dict[str, Any]) -> str:
     """:func:`status_report`'s data as the lines ``sweep status`` prints."""
     out: list[str] = []
-    out.append(f"{rep['store']}: {rep['stored']}/{rep['grid_points']} points stored,"
+    of = f" (shard {rep['shard']} of the grid)" if rep.get("shard") else ""
+    out.append(f"{rep['store']}: {rep['stored']}/{rep['grid_points']} points{of} stored,"
                f" {rep['remaining']} remaining; point wall time {rep['total_wall_time']:.1f} s")
     if rep["journaled"] is not None and rep["journaled"] > rep["stored"]:
         extra = rep["journaled"] - rep["stored"]

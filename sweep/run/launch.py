@@ -65,6 +65,8 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
         info = environment(with_mpi=comm is not None)
         info.update(mpi_size=comm.Get_size() if comm is not None else 1, command=command,
                     compute=compute)
+        if campaign.shard_of is not None:      # what `sweep status` counts a shard against
+            info.update(shard="{}/{}".format(*campaign.shard_of), shard_points=campaign.size)
         summary = RunSummary(total=campaign.size, in_process=not mpi)
         with StopSignals(campaign.run.grace_period, in_process=not mpi) as signals:
             store = Store(store_path, campaign, extend=extend, run_info=info,

@@ -62,3 +62,24 @@ def test_other_campaigns_and_newer_schemas_are_refused(tmp_path, campaign):
         merge(tmp_path / "m2.h5", [a])
     with pytest.raises(StoreError, match="output store itself"):
         merge(other, [other])
+
+
+def test_status_counts_a_shard_against_its_shard_and_the_merge_against_the_grid(
+        tmp_path, campaign):
+    from sweep.analysis.status import status_report, status_text
+
+    parts = split_shards(campaign)
+    n = len(parts)
+    paths = []
+    for k, part in enumerate(parts):
+        path = tmp_path / f"shard{k}.h5"
+        run_campaign(part, str(path), compute="sweep.testing:fake_point", progress_bar=False)
+        paths.append(path)
+        rep = status_report(path)
+        # every point of the shard is stored: nothing remains of it (the whole grid's 6
+        # would leave 6 - size remaining)
+        assert (rep["grid_points"], rep["remaining"], rep["shard"]) == (part.size, 0, f"{k}/{n}")
+        assert f"points (shard {k}/{n} of the grid) stored" in status_text(rep)
+    merge(tmp_path / "all.h5", paths)
+    rep = status_report(tmp_path / "all.h5")
+    assert (rep["grid_points"], rep["remaining"], rep["shard"]) == (6, 0, None)
