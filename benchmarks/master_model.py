@@ -2,7 +2,7 @@
 
     python benchmarks/master_model.py [--workers 7 15 31 63 1024 4096] [--cost-scale 1 0.25]
                                       [--shards 1 32] [--seconds 15] [--check RECORD.json]
-                                      [--write-path inline none]
+                                      [--write-path inline none forward]
 
 The model is not an equation but the master itself: ``sweep run``'s own code (the
 scheduling loop of :class:`sweep.run.master.Master`, its group commits into a real HDF5
@@ -22,7 +22,9 @@ own master and store on its own node, W/S workers each; the shards are independe
 shard's master is simulated with W/S workers and its figures are each master's.
 
 ``--write-path none``: the master's write path taken out (:func:`scheduling_only`): what
-a master whose store is written by another process would spend itself (docs/cluster.md).
+a master whose store is written by another process would spend itself (docs/cluster.md);
+``forward``: the same with each result read only for its header (hash, status, wall
+time) and its record passed on as bytes (to ``/dev/null``, for a writer's pipe).
 
 Reported per run: workers, shards, stored points/s per master and in all, the master's CPU
 share and CPU per point, the hand-out latency (a worker's wait from finishing a point to
@@ -54,7 +56,7 @@ class SimTransport:
     """W simulated workers: a task sent at time t to a worker free at f completes at
     max(t, f) + cost; ``poll`` returns completed results in completion order."""
 
-    def __init__(self, workers: int, scale: float) -> None:
+    def __init__(self, workers: int, scale: float, forward: bool = False) -> None:
         from sweep.protocol import Kind
         from sweep.provenance import environment
         from sweep.run.compute import compute_point, resolve_compute
@@ -68,6 +70,10 @@ class SimTransport:
         self.worker_env = {w: env for w in self.workers}
         self.compute = "sweep.testing:replay_point"
         self.scale = scale
+        #: ``--write-path forward``: a result travels as a small header (hash, status,
+        #: wall time) plus its record's pickled bytes, which the master passes on unread
+        self.forward = forward
+        self._sink = os.open(os.devnull, os.O_WRONLY) if forward else -1
         self.free_at = {w: 0.0 for w in self.workers}
         self.events: list[tuple[float, int, int, bytes]] = []
         self.seq = 0
@@ -93,7 +99,15 @@ class SimTransport:
         cost = self.cost(task.config)
         out = self.compute_point(task, self.fn, worker)  # the worker's work
         out = dataclasses.replace(out, wall_time=cost)  # as long as the point it replays
-        blob = pickle.dumps((self.Kind.RESULT, out), protocol=pickle.HIGHEST_PROTOCOL)
+        if self.forward:
+            import types
+            header = types.SimpleNamespace(hash=out.hash, status=out.status,
+                                           wall_time=out.wall_time)
+            body = pickle.dumps(out, protocol=pickle.HIGHEST_PROTOCOL)
+            blob = pickle.dumps((self.Kind.RESULT, header, body),
+                                protocol=pickle.HIGHEST_PROTOCOL)
+        else:
+            blob = pickle.dumps((self.Kind.RESULT, out), protocol=pickle.HIGHEST_PROTOCOL)
         self.worker_cpu += time.process_time() - c0
         free = self.free_at[worker]
         start = max(now, free)
@@ -111,6 +125,10 @@ class SimTransport:
         if not self._backoff.wait(ready, deadline):
             return None
         done, _, worker, blob = heapq.heappop(self.events)
+        if self.forward:                 # the header read, the record passed on unread
+            kind, out, body = pickle.loads(blob)
+            os.write(self._sink, body)
+            return worker, kind, out
         kind, out = pickle.loads(blob)  # the master's side of a message
         return worker, kind, out
 
@@ -150,7 +168,8 @@ def scheduling_only():
 def simulate(workers: int, scale: float, seconds: float, tmp: Path,
              write_path: str = "inline") -> dict[str, float]:
     """One master with ``workers`` simulated workers for about ``seconds`` of real time
-    (``write_path`` "none": :func:`scheduling_only`)."""
+    (``write_path`` "none": :func:`scheduling_only`; "forward": that, each result's record
+    passed on unread, as bytes, to ``/dev/null`` for a writer's pipe)."""
     import sweep.run.launch as launch
     from sweep.config import parse_campaign
     mean = json.loads(COSTS.read_text())["mean"] * scale
@@ -159,7 +178,7 @@ def simulate(workers: int, scale: float, seconds: float, tmp: Path,
     campaign = parse_campaign(GRID.read_text(), str(GRID))
     shards = max(1, campaign.size // want)
     store = tmp / f"model-{workers}-{scale}.h5"
-    sim = SimTransport(workers, scale)
+    sim = SimTransport(workers, scale, forward=write_path == "forward")
     real_open = launch._open_transport
     launch._open_transport = lambda comm, compute, mpi: sim
     campaign = campaign.shard(0, shards)
@@ -167,7 +186,7 @@ def simulate(workers: int, scale: float, seconds: float, tmp: Path,
     try:
         with contextlib.redirect_stdout(io.StringIO()), \
                 contextlib.redirect_stderr(io.StringIO()), \
-                (scheduling_only() if write_path == "none" else contextlib.nullcontext()):
+                (scheduling_only() if write_path != "inline" else contextlib.nullcontext()):
             summary = launch.run_campaign(campaign, str(store),
                                           compute="sweep.testing:replay_point",
                                           progress_bar=False)
@@ -200,9 +219,10 @@ def main() -> int:
     ap.add_argument("--cost-scale", type=float, nargs="+", default=[1.0, 0.25])
     ap.add_argument("--shards", type=int, nargs="+", default=[1])
     ap.add_argument("--seconds", type=float, default=15.0)
-    ap.add_argument("--write-path", nargs="+", default=["inline"], choices=["inline", "none"],
+    ap.add_argument("--write-path", nargs="+", default=["inline"], choices=["inline", "none", "forward"],
                     help="inline: the master stores every point itself (sweep run today);"
-                    " none: the scheduling path alone (a writer in another process)")
+                    " none: the scheduling path alone (a writer in another process); forward: that,"
+                    " each result's record passed on unread")
     ap.add_argument("--check", type=Path, help="bench_master.py --scale --record JSON:"
                     " print the model beside each measured row")
     args = ap.parse_args()
