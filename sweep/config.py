@@ -69,6 +69,9 @@ class RunOptions:
         billions of points).
     point_timeout : seconds a point may run; one that runs longer is stored as
         ``timeout`` (0: no limit; ``--point-timeout`` overrides it).
+    writer : who writes the store of an MPI run: ``"process"`` (a writer process beside
+        the master, :mod:`sweep.run.store_process`; the master only schedules) or
+        ``"inline"`` (the master itself). In-process runs always write inline.
     """
 
     name: str = ""
@@ -79,6 +82,7 @@ class RunOptions:
     max_attempts: int = 3
     max_points: int = 1_000_000
     point_timeout: float = 0.0
+    writer: str = "process"
 
 
 @dataclass(frozen=True)
@@ -385,6 +389,9 @@ def _parse_run(table: dict[str, Any], source: str, errors: list[str]) -> RunOpti
             errors.append(f"{source}: [run] {key} = {value!r}: expected an integer >= 0")
         else:
             ok[key] = float(value) if kind == "float" else value
+    if "writer" in ok and ok["writer"] not in ("process", "inline"):
+        errors.append(f"{source}: [run] writer = {ok.pop('writer')!r}: expected \"process\""
+                      " or \"inline\"")
     if ok.get("progress_interval") == 0:
         errors.append(f"{source}: [run] progress_interval = 0: must be > 0")
     for key in ("progress_interval", "grace_period", "point_timeout"):

@@ -7,11 +7,15 @@ with a ``(kind, payload)`` pair, ``kind`` a :class:`Kind`:
 =========== ====================================================================
 ``READY``   the worker started; payload: its environment (a dict, for provenance)
 ``ERROR``   it failed outside a point (start-up, import); payload: :class:`WorkerFailure`
-``RESULT``  one point computed; payload: its :class:`Outcome`
+``RESULT``  one point computed; payload: its :class:`Packed` outcome (an
+            :class:`Outcome` from the in-process transport)
 ``WARM``    the warm-up is done; payload: (seconds, problem or ``""``)
 =========== ====================================================================
 
-The in-process transport passes the same objects without pickling them. An
+A worker sends its outcome :class:`Packed`: a small header (hash, status, wall time) and
+the outcome's pickled bytes, which a master whose store is written by another process
+(:mod:`sweep.run.store_process`) passes on unread. The in-process transport passes the
+:class:`Outcome` itself, without pickling it. An
 :class:`Outcome` becomes one stored row through :meth:`sweep.store.record.Record.from_outcome`.
 """
 from __future__ import annotations
@@ -19,6 +23,7 @@ from __future__ import annotations
 import dataclasses
 import enum
 import os
+import pickle
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -27,8 +32,8 @@ import numpy as np
 from sweep.provenance import host
 from sweep.system import utc_now
 
-__all__ = ["Kind", "Task", "WarmUp", "Outcome", "WorkerFailure", "TAG_TASK", "TAG_RESULT",
-           "plain"]
+__all__ = ["Kind", "Task", "WarmUp", "Outcome", "Packed", "WorkerFailure", "TAG_TASK",
+           "TAG_RESULT", "plain", "unpacked"]
 
 #: MPI tags: master -> worker (tasks), worker -> master (replies).
 TAG_TASK, TAG_RESULT = 1, 2
@@ -112,3 +117,28 @@ class Outcome:
         """This outcome as a point without results: no scalars, profiles or history."""
         return dataclasses.replace(self, status=status, message=message, scalars={},
                                    profiles={}, residual_history=np.zeros(0))
+
+
+@dataclass(frozen=True)
+class Packed:
+    """An :class:`Outcome` as a worker sends it: the header the master reads (``hash``,
+    ``status``, ``wall_time``) and the outcome's pickled bytes (``data``), which the master
+    unpickles (:meth:`outcome`) or passes on unread to the store's writer process."""
+
+    hash: str
+    status: str
+    wall_time: float
+    data: bytes
+
+    @classmethod
+    def of(cls, out: Outcome) -> Packed:
+        return cls(out.hash, out.status, float(out.wall_time),
+                   pickle.dumps(out, protocol=pickle.HIGHEST_PROTOCOL))
+
+    def outcome(self) -> Outcome:
+        return pickle.loads(self.data)
+
+
+def unpacked(payload: Outcome | Packed) -> Outcome:
+    """The :class:`Outcome` of a ``RESULT`` payload, packed or not."""
+    return payload.outcome() if isinstance(payload, Packed) else payload

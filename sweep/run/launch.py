@@ -22,6 +22,7 @@ from sweep.run.compute import DEFAULT_COMPUTE
 from sweep.run.master import Master, RunSummary
 from sweep.run.progress import Progress, log_line
 from sweep.run.signals import GraceExpired, StopSignals
+from sweep.run.store_process import StoreProcess
 from sweep.run.transport import InProcessTransport, MPITransport, Transport
 from sweep.run.warmup import warm_up_configs
 from sweep.run.worker import worker_loop
@@ -69,8 +70,16 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
             info.update(shard="{}/{}".format(*campaign.shard_of), shard_points=campaign.size)
         summary = RunSummary(total=campaign.size, in_process=not mpi)
         with StopSignals(campaign.run.grace_period, in_process=not mpi) as signals:
-            store = Store(store_path, campaign, extend=extend, run_info=info,
-                          verify=verify)
+            git = {"git_commit": info["git_commit"], "git_dirty": info["git_dirty"],
+                   "sweep_version": info["sweep_version"]}
+            if mpi and campaign.run.writer == "process":  # the master only schedules
+                store: Any = StoreProcess(store_path, campaign, extend=extend,
+                                          run_info=info, verify=verify,
+                                          worker_env=transport.worker_env, git=git,
+                                          opener=Store)
+            else:
+                store = Store(store_path, campaign, extend=extend, run_info=info,
+                              verify=verify)
             outcome = "complete"
             try:
                 if signals.requested:
@@ -78,8 +87,6 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
                     raise Interrupted(f"campaign stopped by {signals.requested} while the"
                                       " store was being opened; nothing was lost — the"
                                       " campaign is resumable: run the same command again")
-                git = {"git_commit": info["git_commit"], "git_dirty": info["git_dirty"],
-                       "sweep_version": info["sweep_version"]}
                 limit = campaign.run.point_timeout if point_timeout is None else point_timeout
                 master = Master(store, transport, compute, git, limit)
                 _run_points(campaign, store, master, signals, summary, retry_failed,
@@ -97,6 +104,7 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
                     with contextlib.suppress(Exception):
                         master.release_abandoned()
                 store.close(outcome)
+                summary.writer_cpu = getattr(store, "writer_cpu", 0.0)
     except BaseException as exc:
         if mpi and transport is not None:
             _end_mpi_job(exc, transport, master)
@@ -151,8 +159,9 @@ def _warm_up(master: Master, todo: list[Point], signals: StopSignals,
              f" or loaded from the numba cache){note}")
 
 
-def _run_points(campaign: Campaign, store: Store, master: Master, signals: StopSignals,
-                summary: RunSummary, retry_failed: bool, progress_bar: bool | None) -> None:
+def _run_points(campaign: Campaign, store: Store | StoreProcess, master: Master,
+                signals: StopSignals, summary: RunSummary, retry_failed: bool,
+                progress_bar: bool | None) -> None:
     """The campaign loop of :func:`run_campaign` (the store is open)."""
     todo = []
     for p in campaign.points():
@@ -185,8 +194,8 @@ def _run_points(campaign: Campaign, store: Store, master: Master, signals: StopS
         progress.close()
 
 
-def _known_outcomes(todo: list[Point], store: Store, master: Master, limit: int,
-                    retry_failed: bool) -> list[tuple[Point, str, str]]:
+def _known_outcomes(todo: list[Point], store: Store | StoreProcess, master: Master,
+                    limit: int, retry_failed: bool) -> list[tuple[Point, str, str]]:
     """The points whose outcome is known without a worker, as ``(point, status,
     message)``: impossible points (``invalid``) and points that killed their worker
     ``limit`` (``[run] max_attempts``) times (``crashed``). Points in flight when an

@@ -9,6 +9,11 @@ message. A worker holds one task at a time while points are slow; when points ta
 than a few commits' time it is given a short queue of tasks (up to :data:`_MAX_DEPTH`)
 so that it computes while the master commits. Each result becomes one
 :class:`sweep.store.record.Record` (:meth:`Master.record`).
+
+With a store written by another process (:class:`sweep.run.store_process.StoreProcess`,
+MPI runs by default) the master *forwards* each result's bytes unread and hands its worker
+the next task at once (after the hand-out is journaled); the writer commits in groups and
+reports what it stored, and only then is a point counted as stored.
 """
 from __future__ import annotations
 
@@ -20,7 +25,7 @@ from typing import Any
 
 from sweep.config import Point
 from sweep.errors import Interrupted, WorkerError
-from sweep.protocol import Kind, Outcome, Task, WorkerFailure
+from sweep.protocol import Kind, Outcome, Task, WorkerFailure, unpacked
 from sweep.run.compute import DEFAULT_COMPUTE
 from sweep.run.progress import Progress
 from sweep.run.signals import GraceExpired, StopSignals
@@ -57,6 +62,8 @@ class RunSummary:
     in_process: bool = False
     #: [s] compiling or loading the kernels before the first point (:mod:`sweep.run.warmup`)
     warm_up: float = 0.0
+    #: CPU seconds of the store's writer process (0: the master wrote the store itself)
+    writer_cpu: float = 0.0
 
     @property
     def master_cpu_share(self) -> float:
@@ -71,7 +78,10 @@ class RunSummary:
                 f" stored now ({counts}) in {self.elapsed:.2f} s")
         if self.in_process:
             return text + " (computed in-process)"
-        return text + f"; master CPU {100 * self.master_cpu_share:.1f}% of a core"
+        text += f"; master CPU {100 * self.master_cpu_share:.1f}% of a core"
+        if self.writer_cpu and self.loop_elapsed > 0:
+            text += (f", its store writer {100 * self.writer_cpu / self.loop_elapsed:.1f}%")
+        return text
 
 
 class Master:
@@ -79,7 +89,9 @@ class Master:
 
     Parameters
     ----------
-    store : the open :class:`sweep.store.store.Store` (this process is its only writer).
+    store : the open :class:`sweep.store.store.Store` (this process is its only writer), or
+        a :class:`sweep.run.store_process.StoreProcess` (a writer process is): results
+        are then forwarded, not stored here.
     transport : :class:`sweep.run.transport.InProcessTransport` or
         :class:`sweep.run.transport.MPITransport`.
     compute : the compute function spec (its kernels are warmed up before the run).
@@ -100,6 +112,9 @@ class Master:
         self._queues: dict[int, collections.deque[tuple[Point, dict[str, Any]]]] = {}
         self.point_time = math.nan  # [s] moving average of a point's compute time
         self.commit_time = math.nan  # [s] moving average of a batch's store time
+        #: the store is written by another process: results are forwarded to it
+        self.forwarding = hasattr(store, "forward")
+        self.at_workers = 0  # tasks sent whose results have not arrived
 
     @property
     def depth(self) -> int:
@@ -148,7 +163,7 @@ class Master:
         queues: dict[int, collections.deque[tuple[Point, dict[str, Any]]]] = {
             w: collections.deque() for w in self.transport.workers}
         self._queues = queues
-        self.outstanding = 0
+        self.outstanding = self.at_workers = 0
         stop_at = math.inf
         try:
             while pending or suspects or self.outstanding:
@@ -163,6 +178,7 @@ class Master:
                     queues[worker].append((point, point.config.to_dict()))
                     self.store.handout([(point.hash, worker)], alone=True)
                     self.outstanding += 1
+                    self.at_workers += 1
                     self.transport.send(worker, self._task(point, queues[worker][-1][1]))
                 elif not signals.requested and not suspects:
                     depth = self.depth
@@ -173,17 +189,29 @@ class Master:
                             sent.append((point, point.config.to_dict(), worker))
                             queue.append(sent[-1][:2])
                     # journaled before they go out: a point whose worker dies is counted
+                    t0 = time.perf_counter()
                     self.store.handout([(p.hash, w) for p, _, w in sent])
+                    if self.forwarding and sent:  # the round trip a worker waits for
+                        self.commit_time = _average(self.commit_time,
+                                                    time.perf_counter() - t0)
                     for point, config, worker in sent:
                         self.outstanding += 1
+                        self.at_workers += 1
                         self.transport.send(worker, self._task(point, config))
                 if not self.outstanding:
                     break
                 if time.monotonic() > stop_at:
                     break
-                msg = self.transport.poll(min(1.0, max(stop_at - time.monotonic(), 0.0)))
+                wait = min(1.0, max(stop_at - time.monotonic(), 0.0))
+                if self.forwarding and not self.at_workers:  # only the writer has them
+                    self.outstanding -= self._count(self.store.wait(wait), progress, summary)
+                    continue
+                msg = self.transport.poll(wait)
                 progress.tick()
                 if msg is None:
+                    if self.forwarding:
+                        self.outstanding -= self._count(self.store.take_stored(), progress,
+                                                        summary)
                     continue
                 batch = [msg]
                 window_end = time.monotonic() + _BATCH_WINDOW
@@ -196,6 +224,8 @@ class Master:
                 self.outstanding -= self._store_batch(batch, queues, progress, summary)
         except GraceExpired:
             summary.interrupted = summary.interrupted or "signal"
+        if self.forwarding and self.outstanding:  # results at the writer: wait for them
+            self.outstanding -= self._count(self.store.sync(), progress, summary)
         if summary.interrupted:
             summary.abandoned = abandoned = self.outstanding
             raise Interrupted(
@@ -215,7 +245,8 @@ class Master:
                      progress: Progress, summary: RunSummary) -> int:
         """Stage the results of ``batch``, commit them together, count them as stored.
 
-        Returns the number of results taken. A worker's error message is raised (as
+        Returns the number of points now stored (forwarding: those the writer reported
+        committed since the last call). A worker's error message is raised (as
         :class:`WorkerError`) after the results before it are committed.
         """
         t0 = time.perf_counter()
@@ -227,25 +258,42 @@ class Master:
                 error = payload
                 break
             point, config = queues[worker].popleft()
+            self.at_workers -= 1
             if kind != Kind.RESULT or payload.hash != point.hash:
                 raise WorkerError(f"worker rank {worker} returned {kind} of point"
                                   f" {str(getattr(payload, 'hash', ''))[:12]}, expected the"
                                   f" result of {point.hash[:12]} (protocol error)")
-            rec = self.record(point, payload, config)
-            self.store.add(rec)
-            statuses.append(rec.status)
+            if self.forwarding:  # the writer builds and stores its record
+                self.store.forward(payload)
+                statuses.append(payload.status)
+            else:
+                rec = self.record(point, unpacked(payload), config)
+                self.store.add(rec)
+                statuses.append(rec.status)
             wall += float(payload.wall_time)
-        self.store.commit()  # now they are stored: count them
-        for status in statuses:
-            summary.computed += 1
-            summary.counts[status] = summary.counts.get(status, 0) + 1
-            progress.update(status)
+        if self.forwarding:
+            # stored when the writer says so (a worker's error: after the results before it)
+            stored = self._count(self.store.sync() if error is not None
+                                 else self.store.take_stored(), progress, summary)
+        else:
+            self.store.commit()  # now they are stored: count them
+            stored = self._count(statuses, progress, summary)
         if error is not None:
             raise WorkerError(f"worker rank {error.rank} on {error.host}:"
                               f" {error.message}\n{error.traceback}")
         if statuses:
             self.point_time = _average(self.point_time, wall / len(statuses))
-            self.commit_time = _average(self.commit_time, time.perf_counter() - t0)
+            if not self.forwarding:
+                self.commit_time = _average(self.commit_time, time.perf_counter() - t0)
+        return stored
+
+    @staticmethod
+    def _count(statuses: list[str], progress: Progress, summary: RunSummary) -> int:
+        """Count stored points (their statuses) in the summary and the progress."""
+        for status in statuses:
+            summary.computed += 1
+            summary.counts[status] = summary.counts.get(status, 0) + 1
+            progress.update(status)
         return len(statuses)
 
 

@@ -3,7 +3,8 @@
 A worker (ranks 1..N-1) first reports :attr:`~sweep.protocol.Kind.READY` with its
 environment (or :attr:`~sweep.protocol.Kind.ERROR` if its compute function cannot be
 imported), then answers each :class:`~sweep.protocol.Task` with a
-:attr:`~sweep.protocol.Kind.RESULT` (:func:`sweep.run.compute.compute_point`) and each
+:attr:`~sweep.protocol.Kind.RESULT` (:func:`sweep.run.compute.compute_point`, its outcome
+:class:`~sweep.protocol.Packed`) and each
 :class:`~sweep.protocol.WarmUp` with :attr:`~sweep.protocol.Kind.WARM`; ``None`` ends it.
 """
 from __future__ import annotations
@@ -14,7 +15,7 @@ import traceback
 from typing import Any
 
 from sweep.errors import SweepError
-from sweep.protocol import TAG_RESULT, TAG_TASK, Kind, WarmUp, WorkerFailure
+from sweep.protocol import TAG_RESULT, TAG_TASK, Kind, Packed, WarmUp, WorkerFailure
 from sweep.provenance import environment, host
 from sweep.run.compute import DEFAULT_COMPUTE, compute_point, resolve_compute
 from sweep.run.transport import wait_message
@@ -55,4 +56,5 @@ def worker_loop(comm: Any, compute: str = DEFAULT_COMPUTE) -> None:
             comm.send((Kind.WARM, warm_up(list(task.configs), compute)), dest=0,
                       tag=TAG_RESULT)
             continue
-        comm.send((Kind.RESULT, compute_point(task, fn, rank)), dest=0, tag=TAG_RESULT)
+        comm.send((Kind.RESULT, Packed.of(compute_point(task, fn, rank))), dest=0,
+                  tag=TAG_RESULT)

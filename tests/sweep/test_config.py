@@ -152,6 +152,7 @@ BAD = [
     ("run_negative_grace", MINIMAL + "[run]\ngrace_period = -1\n", "grace_period"),
     ("run_name_type", MINIMAL + "[run]\nname = 3\n", "name"),
     ("run_zero_interval", MINIMAL + "[run]\nprogress_interval = 0\n", "progress_interval"),
+    ("run_writer", MINIMAL + "[run]\nwriter = \"threads\"\n", "writer"),
     ("not_toml", "[sweep\neps = [0.2]\n", "TOML"),
     # issue *first hour* 2: a base value a [sweep] list silently replaced
     ("base_and_sweep", "[base]\neps = 0.5\n[sweep]\neps = [0.6]\n",

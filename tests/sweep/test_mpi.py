@@ -6,11 +6,13 @@ import sys
 import time
 
 import numpy as np
+import pandas as pd
 import pytest
 
 import sweep
 import sweep.cli
 from sweep.testing import TINY_TOML, find_mpiexec
+from tests.sweep.helpers import table
 
 MPIEXEC = find_mpiexec()
 pytestmark = pytest.mark.skipif(MPIEXEC is None, reason="no mpiexec (pip install mpich)")
@@ -99,6 +101,35 @@ def test_mpiexec_3_real_points_equal_one_rank(tmp_path, tiny, inproc):
     assert "8 already stored, 0 stored now" in again.stdout
     after = sweep.load(mpi_store)
     assert list(after["seq"]) == list(df["seq"])
+
+
+def test_writer_process_and_inline_master_store_the_same(tmp_path):
+    """``[run] writer = "process"`` (the default under MPI) and ``"inline"``: the same
+    stored table; the summary names the writer's CPU only when there is one; a store
+    begun by one is resumed by the other."""
+    stores = {}
+    for writer in ("process", "inline"):
+        cfg = tmp_path / f"{writer}.toml"
+        cfg.write_text(FAKE_TOML + f'writer = "{writer}"\n')
+        stores[writer] = tmp_path / f"{writer}.h5"
+        proc = mpirun(3, "run", cfg, "--store", stores[writer], "--compute",
+                      "sweep.testing:fake_point", "--no-bar")
+        assert proc.returncode == 0, proc.stderr
+        assert "32 stored now" in proc.stdout
+        assert ("its store writer" in proc.stdout) == (writer == "process"), proc.stdout
+        assert sweep.validate(stores[writer]) == []
+    pd.testing.assert_frame_equal(table(stores["process"]).drop(columns="rank"),
+                                  table(stores["inline"]).drop(columns="rank"))
+    assert set(sweep.load(stores["process"])["rank"]) <= {1, 2}
+
+    cfg = tmp_path / "more.toml"  # a larger grid resumed by the other writer
+    cfg.write_text(FAKE_TOML.replace("[0.5, 1.5]", "[0.5, 1.0, 1.5]") + 'writer = "inline"\n')
+    proc = mpirun(3, "run", cfg, "--store", stores["process"], "--extend", "--compute",
+                  "sweep.testing:fake_point", "--no-bar")
+    assert proc.returncode == 0, proc.stderr
+    assert "32 already stored, 16 stored now" in proc.stdout
+    df = sweep.load(stores["process"])
+    assert len(df) == 48 and df["hash"].is_unique
 
 
 @pytest.mark.slow  # fast: test_store_safety.py::test_compute_faults_are_failed_points

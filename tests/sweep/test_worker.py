@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from sweep.errors import ConfigError
-from sweep.protocol import TAG_RESULT, TAG_TASK, Kind, Outcome, Task, WarmUp, WorkerFailure
+from sweep.protocol import (TAG_RESULT, TAG_TASK, Kind, Outcome, Packed, Task, WarmUp,
+                            WorkerFailure)
 from sweep.run.compute import compute_point, resolve_compute
 from sweep.run.worker import worker_loop
 from sweep.testing import fake_point, nan_point, raising_point
@@ -43,7 +44,10 @@ def test_worker_says_ready_answers_tasks_in_order_and_stops_on_none(campaign):
     kinds = [k for k, _ in comm.sent]
     assert kinds == [Kind.READY, Kind.RESULT, Kind.RESULT]
     assert isinstance(comm.sent[0][1], dict) and "python" in comm.sent[0][1]
-    results = [o for _, o in comm.sent[1:]]
+    assert all(isinstance(o, Packed) for _, o in comm.sent[1:])  # header + pickled bytes
+    assert all((o.hash, o.status) == (o.outcome().hash, o.outcome().status)
+               for _, o in comm.sent[1:])
+    results = [o.outcome() for _, o in comm.sent[1:]]
     assert all(isinstance(o, Outcome) for o in results)
     assert [o.hash for o in results] == [q.hash for q in p[:2]]
     assert all(o.rank == 1 and o.status == "converged" for o in results)

@@ -1,0 +1,432 @@
+"""The store's writer in a process of its own: the master schedules, this process stores.
+
+Under MPI the master (rank 0) forks one child process before any task goes out. It opens
+the campaign's :class:`sweep.store.store.Store` and is its only writer: it takes the lock,
+journals every hand-out and result, commits the results in groups and closes the store.
+The master keeps its scheduling path only: it reads each result's header
+(:class:`sweep.protocol.Packed`), passes the result's bytes on unread, and hands a worker
+its next task once the writer has journaled the hand-out (measured in docs/cluster.md,
+"The store's writer process").
+
+The store's guarantees are kept, across the two processes:
+
+- a hand-out is journaled before its task goes out: :meth:`StoreProcess.handout` returns
+  once the writer has written it;
+- a result counts as stored (``sweep run``'s counts and progress) only when the writer
+  reports it committed (a ``STORED`` frame, sent after :meth:`Store.commit` returned);
+- the writer ignores stop signals, like a worker: the master decides when to stop, waits
+  for the results in flight and closes the store;
+- kill -9 of the whole job kills the writer with it (it is in the job's process group and
+  cgroup): a kill inside a commit, which the journal and the rebuild on the next open
+  already cover (the kill -9 torture tests);
+- a master that ends without closing the store (killed alone): the writer sees its pipe
+  close, commits the results it was given (each a whole result) and closes the store,
+  the run's outcome saying so;
+- a writer that dies: the master's next call raises :class:`StoreError` (exit status 3),
+  and the next open rebuilds the store from its journal.
+
+The pipe and its frames: :mod:`sweep.run.pipe`.
+"""
+from __future__ import annotations
+
+import contextlib
+import os
+import pickle
+import signal
+import subprocess
+import sys
+import time
+import traceback
+from pathlib import Path
+from typing import Any
+
+from sweep.errors import StoreError
+from sweep.protocol import Outcome, Packed
+from sweep.run.pipe import (
+    ADD,
+    CLOSE,
+    COMMIT,
+    FAIL,
+    HANDOUT,
+    OK,
+    RELEASE,
+    RESULT,
+    STORED,
+    Channel,
+    Child,
+    dumps,
+    error_bytes,
+)
+
+__all__ = ["StoreProcess", "serve", "WRITER_MODES"]
+
+#: ``[run] writer``: "process" (a writer process beside the master, MPI runs) or "inline"
+#: (the master writes the store itself, as an in-process run always does).
+WRITER_MODES = ("process", "inline")
+
+#: [s] how long :meth:`StoreProcess.close` waits for the writer to close the store
+CLOSE_WAIT = 600.0
+#: the outcome recorded when the master's pipe closed without a ``CLOSE``
+ORPHANED = "error: the master ended without closing the store"
+
+
+class _Writer:
+    """The writer process's side: one open store, the campaign's points, provenance."""
+
+    def __init__(self, chan: Channel, store: Any, campaign: Any,
+                 worker_env: dict[int, dict[str, Any]], git: dict[str, Any]) -> None:
+        self.chan = chan
+        self.store = store
+        self.points = {p.hash: p for p in campaign.points()}
+        self.worker_env, self.git = worker_env, git
+        self._provenance: dict[tuple[int, str], str] = {}
+        self.staged: list[str] = []   # statuses of the results staged, in order
+        self.failed = False           # an error was sent: nothing more is stored
+
+    def _tell(self, kind: int, payload: bytes = b"") -> None:
+        """Send the master a frame; a master gone (its pipe closed) is no error here: the
+        end of its pipe ends the loop, after what it sent is stored."""
+        with contextlib.suppress(BrokenPipeError, ConnectionResetError):
+            self.chan.write(kind, payload)
+
+    def provenance_of(self, rank: int, kernel_mode: str) -> str:
+        from sweep.store.record import provenance_json
+
+        key = (rank, kernel_mode)
+        prov = self._provenance.get(key)
+        if prov is None:
+            prov = self._provenance[key] = provenance_json(
+                self.worker_env.get(rank, {}), self.git, kernel_mode)
+        return prov
+
+    def commit(self) -> None:
+        if self.failed:
+            return
+        self.store.commit()
+        if self.staged:
+            self._tell(STORED, dumps(self.staged))
+            self.staged = []
+
+    def handle(self, kind: int, body: bytes) -> str | None:
+        """Act on one frame; the run's outcome once it is a ``CLOSE``."""
+        from sweep.store.record import Record
+
+        if kind == RESULT:
+            if not self.failed:
+                out: Outcome = pickle.loads(body)
+                point = self.points.get(out.hash)
+                if point is None:
+                    raise StoreError(f"the store's writer process: a result of point"
+                                     f" {out.hash[:12]}, which is not in the campaign"
+                                     " (protocol error)")
+                rec = Record.from_outcome(point, out, None, self.provenance_of)
+                self.store.add(rec)
+                self.staged.append(rec.status)
+        elif kind == ADD:
+            if not self.failed:
+                self.store.add(pickle.loads(body))
+        elif kind == HANDOUT:
+            pairs, alone = pickle.loads(body)
+            self.store.handout(pairs, alone=alone)
+            self._tell(OK)
+        elif kind == RELEASE:
+            self.store.release(pickle.loads(body))
+        elif kind == COMMIT:
+            self.commit()
+            self._tell(OK)
+        elif kind == CLOSE:
+            return pickle.loads(body)
+        else:
+            raise StoreError(f"the store's writer process: unknown frame kind {kind}")
+        return None
+
+    def loop(self) -> None:
+        """Serve frames until ``CLOSE`` (or the end of the pipe); commit after each read."""
+        cpu0 = time.process_time()
+        while True:
+            frames = self.chan.read()
+            outcome = None
+            for kind, body in frames:
+                try:
+                    outcome = self.handle(kind, body)
+                except Exception as exc:  # noqa: BLE001 - reported to the master
+                    self._fail(exc)
+                if outcome is not None:
+                    break
+            if outcome is None and self.chan.eof:
+                outcome = ORPHANED
+            try:
+                self.commit()
+            except Exception as exc:  # noqa: BLE001 - reported to the master
+                self._fail(exc)
+            if outcome is not None:
+                self.store.close(outcome)
+                if outcome != ORPHANED:
+                    self._tell(OK, dumps(time.process_time() - cpu0))
+                return
+
+    def _fail(self, exc: BaseException) -> None:
+        if not self.failed:
+            self.failed = True
+            self.staged = []
+            with contextlib.suppress(OSError):
+                self._tell(FAIL, error_bytes(exc))
+
+
+def serve(chan: Channel, opener: Any, args: dict[str, Any]) -> int:
+    """The writer process: open the store (``opener(path, campaign, ...)``, as
+    :class:`sweep.store.store.Store`), reply what the master asks of it, serve, close."""
+    try:
+        store = opener(args["path"], args["campaign"], extend=args["extend"],
+                       run_info=args["run_info"], verify=args["verify"])
+    except BaseException as exc:  # noqa: BLE001 - reported to the master
+        chan.write(FAIL, error_bytes(exc))
+        return 1
+    try:
+        from sweep.store.cells import text
+
+        column = store.file["table"]["status"][:] if len(store) else []
+        statuses = {h: text(column[i]) for h, i in store.rows.items()}
+        writer = _Writer(chan, store, args["campaign"], args["worker_env"], args["git"])
+        chan.write(OK, dumps({"path": str(store.path), "run_index": store.run_index,
+                               "statuses": statuses, "pid": os.getpid(),
+                               "handouts": dict(store.scan.handouts)}))
+    except BaseException as exc:  # noqa: BLE001 - reported to the master
+        with contextlib.suppress(Exception):
+            chan.write(FAIL, error_bytes(exc))
+        store.close(f"error: {type(exc).__name__}: {exc}")
+        return 1
+    writer.loop()
+    return 0
+
+
+def _become_writer(keep: tuple[int, int]) -> None:
+    """In the forked child: stop signals ignored (the master decides when to stop), no
+    signal wake-up descriptor, and no descriptor of the master's kept open (MPI's among
+    them) but stdin/stdout/stderr and the two pipe ends ``keep``."""
+    from sweep.system import STOP_SIGNALS
+
+    for sig in STOP_SIGNALS:
+        with contextlib.suppress(ValueError, OSError):
+            signal.signal(sig, signal.SIG_IGN)
+    with contextlib.suppress(ValueError, OSError):
+        signal.set_wakeup_fd(-1)
+    try:
+        fds = [int(name) for name in os.listdir("/proc/self/fd")]
+    except OSError:
+        fds = list(range(3, 1024))
+    for fd in fds:
+        if fd > 2 and fd not in keep:
+            with contextlib.suppress(OSError):
+                os.close(fd)
+
+
+class StoreProcess:
+    """The master's side: a :class:`sweep.store.store.Store` written by a child process.
+
+    It answers what the campaign loop asks of a store before the run (``h in store``,
+    :meth:`status_of`, :meth:`handouts`), stages and commits the master's own records
+    (:meth:`add`, :meth:`commit`), journals hand-outs and releases, passes results on
+    (:meth:`forward`) and reports which are stored (:meth:`take_stored`, :meth:`wait`).
+
+    Raises (on opening, as :class:`Store` does)
+    ------
+    StoreLockedError, SchemaVersionError, CampaignMismatchError, StoreError
+    """
+
+    def __init__(self, path: str | Path, campaign: Any, *, extend: bool = False,
+                 run_info: dict[str, Any] | None = None, verify: bool = False,
+                 worker_env: dict[int, dict[str, Any]] | None = None,
+                 git: dict[str, Any] | None = None, opener: Any = None) -> None:
+        if opener is None:
+            from sweep.store.store import Store as opener
+        args = {"path": str(path), "campaign": campaign, "extend": extend,
+                "run_info": run_info or {}, "verify": verify,
+                "worker_env": worker_env or {}, "git": git or {}}
+        to_writer = os.pipe()
+        to_master = os.pipe()
+        for stream in (sys.stdout, sys.stderr):  # not written twice by the child
+            with contextlib.suppress(Exception):
+                stream.flush()
+        try:
+            pid = os.fork()
+        except OSError as exc:
+            for fd in (*to_writer, *to_master):
+                os.close(fd)
+            raise StoreError(f"{path}: cannot start the store's writer process: {exc}"
+                             ) from None
+        if pid == 0:  # the writer: never returns
+            code = 1
+            try:
+                _become_writer(keep=(to_writer[0], to_master[1]))
+                code = serve(Channel(to_writer[0], to_master[1], nonblocking_writes=False),
+                             opener, args)
+            except BaseException:  # noqa: BLE001 - a writer that cannot report it
+                with contextlib.suppress(Exception):
+                    traceback.print_exc()
+            finally:
+                with contextlib.suppress(Exception):
+                    sys.stderr.flush()
+                os._exit(code)  # no atexit handlers: MPI belongs to the master
+        self.proc = Child(pid)
+        os.close(to_writer[0])
+        os.close(to_master[1])
+        self._chan = Channel(to_master[0], to_writer[1], nonblocking_writes=True)
+        self._stored: list[str] = []
+        self._closed = False
+        self.writer_cpu = 0.0
+        self.label = str(path)
+        try:
+            info = self._reply()
+        except BaseException:
+            self._reap()
+            raise
+        self.path = Path(info["path"])
+        self.label = str(self.path)
+        self.run_index = info["run_index"]
+        self._statuses: dict[str, str] = info["statuses"]
+        self._handouts: dict[str, list[tuple[int, int, bool]]] = info["handouts"]
+
+    # ------------------------------------------------------------------ queries
+    def __contains__(self, h: str) -> bool:
+        return h in self._statuses
+
+    def __len__(self) -> int:
+        return len(self._statuses)
+
+    def status_of(self, h: str) -> str:
+        return self._statuses[h]
+
+    def handouts(self, h: str) -> list[tuple[int, int, bool]]:
+        return self._handouts.get(h, [])
+
+    @property
+    def pid(self) -> int:
+        return self.proc.pid
+
+    # ------------------------------------------------------------------ the pipe
+    def _died(self) -> StoreError:
+        self._closed = True
+        code = self.proc.poll()
+        if code is None:
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                code = self.proc.wait(5.0)
+        how = ("is still running" if code is None else
+               f"was killed by signal {-code}" if code < 0 else f"exited with status {code}")
+        return StoreError(f"{self.label}: the store's writer process (pid {self.proc.pid})"
+                          f" {how}; what it committed is stored, and the next run opens the"
+                          " store from its journal")
+
+    def _send(self, kind: int, payload: bytes = b"") -> None:
+        if self._closed:
+            raise StoreError(f"{self.label}: the store's writer process has ended")
+        try:
+            self._chan.write(kind, payload)
+        except (BrokenPipeError, ConnectionResetError):
+            raise self._died() from None
+
+    def _take(self, frames: list[tuple[int, bytes]]) -> list[tuple[int, bytes]]:
+        """Keep the ``STORED`` frames' statuses, raise a ``FAIL``; return the rest."""
+        rest = []
+        for kind, body in frames:
+            if kind == STORED:
+                self._stored += pickle.loads(body)
+            elif kind == FAIL:
+                raise pickle.loads(body)
+            else:
+                rest.append((kind, body))
+        return rest
+
+    def _reply(self) -> Any:
+        """Wait for the writer's ``OK`` (keeping the ``STORED`` frames before it)."""
+        while True:
+            frames = self._take(self._chan.read())
+            if frames:
+                kind, body = frames[0]
+                # frames after an OK: only STORED/FAIL can follow unasked (kept above)
+                return pickle.loads(body) if body else None
+            if self._chan.eof:
+                raise self._died()
+
+    # ------------------------------------------------------------------ writing
+    def add(self, record: Any) -> None:
+        """Stage one record built by the master (``invalid``, ``crashed``)."""
+        self._send(ADD, dumps(record))
+
+    def commit(self) -> int:
+        """Wait until everything sent so far is committed (group commit in the writer)."""
+        self._send(COMMIT)
+        self._reply()
+        return 0
+
+    def forward(self, payload: Packed | Outcome) -> None:
+        """Pass one result on to the writer (its bytes as the worker packed them)."""
+        data = payload.data if isinstance(payload, Packed) else dumps(payload)
+        self._send(RESULT, data)
+
+    def handout(self, hashes: list[tuple[str, int]], alone: bool = False) -> None:
+        """Journal hand-outs ``[(hash, worker), ...]``; returns once they are written."""
+        if not hashes:
+            return
+        self._send(HANDOUT, dumps((hashes, alone)))
+        self._reply()
+
+    def release(self, hashes: list[str]) -> None:
+        if hashes and not self._closed:
+            with contextlib.suppress(StoreError):
+                self._send(RELEASE, dumps(hashes))
+
+    def take_stored(self) -> list[str]:
+        """The statuses of the results committed since the last call (not waiting)."""
+        if not self._closed:
+            self._take(self._chan.read(0.0))
+            if self._chan.eof:
+                raise self._died()
+        stored, self._stored = self._stored, []
+        return stored
+
+    def wait(self, timeout: float) -> list[str]:
+        """:meth:`take_stored`, waiting up to ``timeout`` [s] for a commit."""
+        if not self._stored and not self._closed:
+            self._take(self._chan.read(timeout))
+            if self._chan.eof:
+                raise self._died()
+        return self.take_stored()
+
+    def sync(self) -> list[str]:
+        """Wait until every result sent is committed; their statuses (and earlier ones
+        not yet taken)."""
+        self.commit()
+        return self.take_stored()
+
+    # ------------------------------------------------------------------ closing
+    def close(self, outcome: str = "complete") -> None:
+        """Have the writer commit what it was given, record the run's outcome and close
+        the store; wait for it to end. A writer that already ended is only reaped."""
+        if not self._closed:
+            try:
+                self._send(CLOSE, dumps(outcome))
+                self.writer_cpu = float(self._reply() or 0.0)
+            except StoreError as exc:
+                print(f"sweep: {exc}", file=sys.stderr, flush=True)
+            except Exception as exc:  # noqa: BLE001 - the writer's error at the close
+                print(f"sweep: {self.label}: closing the store: {exc}", file=sys.stderr,
+                      flush=True)
+            self._closed = True
+        self._reap()
+
+    def _reap(self) -> None:
+        self._closed = True
+        self._chan.close()
+        try:
+            self.proc.wait(CLOSE_WAIT)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+
+    def __enter__(self) -> StoreProcess:
+        return self
+
+    def __exit__(self, exc_type: Any, exc: Any, tb: Any) -> None:
+        self.close("complete" if exc_type is None else f"error: {exc_type.__name__}")
+
