@@ -113,42 +113,51 @@ def latency(store: Path) -> dict[str, float]:
 def scale_mode(args, mpiexec: str) -> None:
     mean = json.loads(COSTS.read_text())["mean"]
     rows = []
-    print("| ranks | cost scale | mean point [s] | points | stored points/s | master CPU"
-          " | master CPU per point [ms] | hand-out latency mean / p95 [ms] | workers idle |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("| ranks | cost scale | writer | mean point [s] | points | stored points/s"
+          " | master CPU | master CPU per point [ms] | writer CPU"
+          " | hand-out latency mean / p95 [ms] | workers idle |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as tmp:
-        for scale in args.cost_scale:
-            for ranks in args.scale:
-                workers = ranks - 1
-                want = workers * args.seconds / (mean * scale)
-                shards = max(1, min(GRID_POINTS, int(GRID_POINTS / max(want, 1))))
-                store = Path(tmp) / f"scale-{ranks}-{scale}.h5"
-                env = {**os.environ, "FLOEWAVE_REPLAY_SCALE": repr(scale)}
-                cmd = [mpiexec, "-n", str(ranks), sys.executable, "-m", "sweep", "run",
-                       str(GRID), "--store", str(store), "--shard", f"0/{shards}",
-                       "--no-bar", "--compute", "sweep.testing:replay_point"]
-                proc = subprocess.run(cmd, capture_output=True, text=True, env=env)
-                if proc.returncode != 0:
-                    sys.exit(f"failed: {' '.join(cmd)}\n{proc.stderr[-2000:]}")
-                m = re.search(r"(\d+) stored now .* in ([\d.]+) s; master CPU ([\d.]+)%",
-                              proc.stdout)
-                assert m, proc.stdout
-                n, elapsed, cpu = int(m.group(1)), float(m.group(2)), float(m.group(3))
-                lat = latency(store)
-                # the loop's rate and the master's CPU per point over the store's span
-                # (first start to last end: the scheduling loop less its first hand-out
-                # and last commit); the summary's time also counts the start-up
-                span = lat["span_s"]
-                row = {"ranks": ranks, "scale": scale, "points": n, "elapsed_s": elapsed,
-                       "rate": n / span, "master_cpu_share": cpu / 100,
-                       "cpu_per_point_ms": 1e3 * cpu / 100 * span / n, **lat}
-                rows.append(row)
-                print(f"| {ranks} | {scale:g} | {lat['point_mean']:.3f} | {n} |"
-                      f" {row['rate']:.1f} | {cpu:.1f} % | {row['cpu_per_point_ms']:.2f} |"
-                      f" {1e3 * lat['latency_mean']:.1f} / {1e3 * lat['latency_p95']:.1f} |"
-                      f" {100 * lat['idle']:.1f} % |", flush=True)
-                store.unlink(missing_ok=True)
-                Path(str(store) + ".journal").unlink(missing_ok=True)
+        grids = {}
+        for writer in args.writer:  # the grid with its [run] writer set (not an identity)
+            grids[writer] = Path(tmp) / f"grid-{writer}.toml"
+            grids[writer].write_text(GRID.read_text().replace(
+                "[run]\n", f'[run]\nwriter = "{writer}"\n', 1))
+        for scale, ranks, writer in ((s, r, w) for s in args.cost_scale for r in args.scale
+                                     for w in args.writer):
+            workers = ranks - 1
+            want = workers * args.seconds / (mean * scale)
+            shards = max(1, min(GRID_POINTS, int(GRID_POINTS / max(want, 1))))
+            store = Path(tmp) / f"scale-{ranks}-{scale}-{writer}.h5"
+            env = {**os.environ, "FLOEWAVE_REPLAY_SCALE": repr(scale)}
+            cmd = [mpiexec, "-n", str(ranks), sys.executable, "-m", "sweep", "run",
+                   str(grids[writer]), "--store", str(store), "--shard", f"0/{shards}",
+                   "--no-bar", "--compute", "sweep.testing:replay_point"]
+            proc = subprocess.run(cmd, capture_output=True, text=True, env=env)
+            if proc.returncode != 0:
+                sys.exit(f"failed: {' '.join(cmd)}\n{proc.stderr[-2000:]}")
+            m = re.search(r"(\d+) stored now .* in ([\d.]+) s; master CPU ([\d.]+)%"
+                          r"(?: of a core, its store writer ([\d.]+)%)?", proc.stdout)
+            assert m, proc.stdout
+            n, elapsed, cpu = int(m.group(1)), float(m.group(2)), float(m.group(3))
+            wcpu = float(m.group(4) or 0.0)
+            lat = latency(store)
+            # the loop's rate and the master's CPU per point over the store's span
+            # (first start to last end: the scheduling loop less its first hand-out
+            # and last commit); the summary's time also counts the start-up
+            span = lat["span_s"]
+            row = {"ranks": ranks, "scale": scale, "writer": writer, "points": n,
+                   "elapsed_s": elapsed, "rate": n / span, "master_cpu_share": cpu / 100,
+                   "writer_cpu_share": wcpu / 100,
+                   "cpu_per_point_ms": 1e3 * cpu / 100 * span / n, **lat}
+            rows.append(row)
+            print(f"| {ranks} | {scale:g} | {writer} | {lat['point_mean']:.3f} | {n} |"
+                  f" {row['rate']:.1f} | {cpu:.1f} % | {row['cpu_per_point_ms']:.2f} |"
+                  f" {f'{wcpu:.1f} %' if wcpu else '-'} |"
+                  f" {1e3 * lat['latency_mean']:.1f} / {1e3 * lat['latency_p95']:.1f} |"
+                  f" {100 * lat['idle']:.1f} % |", flush=True)
+            store.unlink(missing_ok=True)
+            Path(str(store) + ".journal").unlink(missing_ok=True)
     if args.record:
         args.record.write_text(json.dumps({"rows": rows}, indent=1) + "\n")
         print(f"recorded in {args.record}")
@@ -162,6 +171,8 @@ def main() -> None:
                     help="scaling mode: factors on the replayed point costs")
     ap.add_argument("--seconds", type=float, default=20.0,
                     help="scaling mode: about this long a run (sets its number of points)")
+    ap.add_argument("--writer", nargs="+", default=["process"], choices=["process", "inline"],
+                    help="scaling mode: who writes the store ([run] writer)")
     ap.add_argument("--record", type=Path, help="scaling mode: write the rows as JSON")
     ap.add_argument("--costs-from", metavar="TABLE_OR_STORE",
                     help="write benchmarks/data/point_costs.json from a real campaign")

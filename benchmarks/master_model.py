@@ -56,7 +56,8 @@ class SimTransport:
     """W simulated workers: a task sent at time t to a worker free at f completes at
     max(t, f) + cost; ``poll`` returns completed results in completion order."""
 
-    def __init__(self, workers: int, scale: float, forward: bool = False) -> None:
+    def __init__(self, workers: int, scale: float, forward: bool = False,
+                 packed: bool = False) -> None:
         from sweep.protocol import Kind
         from sweep.provenance import environment
         from sweep.run.compute import compute_point, resolve_compute
@@ -73,6 +74,8 @@ class SimTransport:
         #: ``--write-path forward``: a result travels as a small header (hash, status,
         #: wall time) plus its record's pickled bytes, which the master passes on unread
         self.forward = forward
+        #: a result as sweep's workers send it: :class:`sweep.protocol.Packed`
+        self.packed = packed
         self._sink = os.open(os.devnull, os.O_WRONLY) if forward else -1
         self.free_at = {w: 0.0 for w in self.workers}
         self.events: list[tuple[float, int, int, bytes]] = []
@@ -107,6 +110,9 @@ class SimTransport:
             blob = pickle.dumps((self.Kind.RESULT, header, body),
                                 protocol=pickle.HIGHEST_PROTOCOL)
         else:
+            if self.packed:
+                from sweep.protocol import Packed
+                out = Packed.of(out)
             blob = pickle.dumps((self.Kind.RESULT, out), protocol=pickle.HIGHEST_PROTOCOL)
         self.worker_cpu += time.process_time() - c0
         free = self.free_at[worker]
@@ -168,8 +174,11 @@ def scheduling_only():
 def simulate(workers: int, scale: float, seconds: float, tmp: Path,
              write_path: str = "inline") -> dict[str, float]:
     """One master with ``workers`` simulated workers for about ``seconds`` of real time
-    (``write_path`` "none": :func:`scheduling_only`; "forward": that, each result's record
-    passed on unread, as bytes, to ``/dev/null`` for a writer's pipe)."""
+    (``write_path`` "inline": sweep's master writing the store itself; "process": the store
+    written by sweep's writer process, :class:`sweep.run.store_process.StoreProcess`, the
+    master forwarding each result; "none": :func:`scheduling_only`; "forward": that, each
+    result's record passed on unread, as bytes, to ``/dev/null`` for a writer's pipe).
+    Returns the figures of the run; ``writer_cpu_share``: the writer process's CPU."""
     import sweep.run.launch as launch
     from sweep.config import parse_campaign
     mean = json.loads(COSTS.read_text())["mean"] * scale
@@ -178,9 +187,14 @@ def simulate(workers: int, scale: float, seconds: float, tmp: Path,
     campaign = parse_campaign(GRID.read_text(), str(GRID))
     shards = max(1, campaign.size // want)
     store = tmp / f"model-{workers}-{scale}.h5"
-    sim = SimTransport(workers, scale, forward=write_path == "forward")
-    real_open = launch._open_transport
+    sim = SimTransport(workers, scale, forward=write_path == "forward",
+                       packed=write_path in ("inline", "process"))
+    real_open, real_store = launch._open_transport, launch.Store
     launch._open_transport = lambda comm, compute, mpi: sim
+    if write_path == "process":  # as an MPI run opens its store ([run] writer = "process")
+        from sweep.run.store_process import StoreProcess
+        launch.Store = lambda path, campaign, **kw: StoreProcess(
+            path, campaign, worker_env=sim.worker_env, opener=real_store, **kw)
     campaign = campaign.shard(0, shards)
     import io
     try:
@@ -191,7 +205,7 @@ def simulate(workers: int, scale: float, seconds: float, tmp: Path,
                                           compute="sweep.testing:replay_point",
                                           progress_bar=False)
     finally:
-        launch._open_transport = real_open
+        launch._open_transport, launch.Store = real_open, real_store
     n = summary.computed
     loop = summary.loop_elapsed
     cpu = summary.master_cpu - sim.worker_cpu
@@ -208,9 +222,14 @@ def simulate(workers: int, scale: float, seconds: float, tmp: Path,
     busy = sum(max(0.0, min(done, full) - st) for v in per for st, done in v)
     span = max(v[-1][1] for v in per) - t0
     return {"workers": workers, "scale": scale, "points": n, "loop_s": loop,
-            "rate": n / loop, "span_s": span, "master_cpu_share": cpu / loop, "cpu_per_point_ms": 1e3 * cpu / n,
+            "rate": n / loop, "span_s": span, "master_cpu_share": cpu / loop,
+            "cpu_per_point_ms": 1e3 * cpu / n, "writer_cpu_share": summary.writer_cpu / loop,
             "latency_mean": float(gaps.mean()), "latency_p95": float(np.quantile(gaps, 0.95)),
             "idle": 1.0 - busy / (len(per) * (full - t0)), "point_mean": mean}
+
+
+def _share(x: float) -> str:
+    return f"{100 * x:.1f} %" if x else "-"
 
 
 def main() -> int:
@@ -219,21 +238,23 @@ def main() -> int:
     ap.add_argument("--cost-scale", type=float, nargs="+", default=[1.0, 0.25])
     ap.add_argument("--shards", type=int, nargs="+", default=[1])
     ap.add_argument("--seconds", type=float, default=15.0)
-    ap.add_argument("--write-path", nargs="+", default=["inline"], choices=["inline", "none", "forward"],
-                    help="inline: the master stores every point itself (sweep run today);"
-                    " none: the scheduling path alone (a writer in another process); forward: that,"
-                    " each result's record passed on unread")
+    ap.add_argument("--write-path", nargs="+", default=["inline"],
+                    choices=["inline", "process", "none", "forward"],
+                    help="inline: the master stores every point itself ([run] writer ="
+                    " \"inline\"); process: sweep's writer process stores them, the master"
+                    " forwards results (the MPI default); none: the scheduling path alone;"
+                    " forward: that, each result's record passed on unread")
     ap.add_argument("--check", type=Path, help="bench_master.py --scale --record JSON:"
                     " print the model beside each measured row")
     args = ap.parse_args()
     measured = {}
     if args.check:
         for r in json.loads(args.check.read_text())["rows"]:
-            measured[(r["ranks"] - 1, r["scale"])] = r
+            measured[(r["ranks"] - 1, r["scale"], r.get("writer", "inline"))] = r
     print("| workers | shards | cost scale | write path | points/s per master | points/s in all"
-          " | master CPU | master CPU per point [ms] | hand-out latency mean / p95 [ms]"
-          " | workers idle | from |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+          " | master CPU | master CPU per point [ms] | writer CPU"
+          " | hand-out latency mean / p95 [ms] | workers idle | from |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as tmp:
         for scale in args.cost_scale:
             for shards in args.shards:
@@ -242,15 +263,19 @@ def main() -> int:
                     r = simulate(per, scale, args.seconds, Path(tmp), path)
                     print(f"| {w} | {shards} | {scale:g} | {path} | {r['rate']:.1f} |"
                           f" {r['rate'] * shards:.0f} | {100 * r['master_cpu_share']:.1f} % |"
-                          f" {r['cpu_per_point_ms']:.2f} | {1e3 * r['latency_mean']:.1f} /"
+                          f" {r['cpu_per_point_ms']:.2f} |"
+                          f" {_share(r['writer_cpu_share'])} |"
+                          f" {1e3 * r['latency_mean']:.1f} /"
                           f" {1e3 * r['latency_p95']:.1f} | {100 * r['idle']:.1f} % | model",
                           flush=True)
-                    m = measured.get((w, scale)) if shards == 1 and path == "inline" else None
+                    m = measured.get((w, scale, path)) if shards == 1 else None
                     if m:
-                        print(f"| {w} | 1 | {scale:g} | inline | {m['rate']:.1f} |"
+                        print(f"| {w} | 1 | {scale:g} | {path} | {m['rate']:.1f} |"
                               f" {m['rate']:.0f} |"
                               f" {100 * m['master_cpu_share']:.1f} % |"
-                              f" {m['cpu_per_point_ms']:.2f} | {1e3 * m['latency_mean']:.1f} /"
+                              f" {m['cpu_per_point_ms']:.2f} |"
+                              f" {_share(m.get('writer_cpu_share', 0.0))} |"
+                              f" {1e3 * m['latency_mean']:.1f} /"
                               f" {1e3 * m['latency_p95']:.1f} | {100 * m['idle']:.1f} % |"
                               " measured (MPI)", flush=True)
     return 0

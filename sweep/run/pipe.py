@@ -21,8 +21,8 @@ from typing import Any
 
 from sweep.errors import StoreError
 
-__all__ = ["Channel", "Child", "dumps", "error_bytes", "ADD", "RESULT", "HANDOUT", "COMMIT",
-           "RELEASE", "CLOSE", "OK", "STORED", "FAIL"]
+__all__ = ["Channel", "Child", "become_writer", "dumps", "error_bytes", "ADD", "RESULT",
+           "HANDOUT", "COMMIT", "RELEASE", "CLOSE", "OK", "STORED", "FAIL"]
 
 _HEAD = struct.Struct("<IB")
 # master -> writer
@@ -140,18 +140,22 @@ def error_bytes(exc: BaseException) -> bytes:
 
 
 class Child:
-    """A forked child's pid, with :class:`subprocess.Popen`'s ``poll``/``wait``/``kill``."""
+    """A forked child's pid, with :class:`subprocess.Popen`'s ``poll``/``wait``/``kill``
+    and its CPU time (:attr:`cpu`, from the kernel's accounting when it is reaped)."""
 
     def __init__(self, pid: int) -> None:
         self.pid = pid
         self.returncode: int | None = None
+        #: [s] the child's CPU time, user and system, from its whole life (once reaped)
+        self.cpu = 0.0
 
     def poll(self) -> int | None:
         if self.returncode is None:
             with contextlib.suppress(ChildProcessError):
-                pid, status = os.waitpid(self.pid, os.WNOHANG)
+                pid, status, usage = os.wait4(self.pid, os.WNOHANG)
                 if pid == self.pid:
                     self.returncode = os.waitstatus_to_exitcode(status)
+                    self.cpu = usage.ru_utime + usage.ru_stime
         return self.returncode
 
     def wait(self, timeout: float | None = None) -> int:
@@ -167,3 +171,24 @@ class Child:
     def kill(self) -> None:
         with contextlib.suppress(ProcessLookupError):
             os.kill(self.pid, signal.SIGKILL)
+
+
+def become_writer(keep: tuple[int, int]) -> None:
+    """In the forked child: stop signals ignored (the master decides when to stop), no
+    signal wake-up descriptor, and no descriptor of the master's kept open (MPI's among
+    them) but stdin/stdout/stderr and the two pipe ends ``keep``."""
+    from sweep.system import STOP_SIGNALS
+
+    for sig in STOP_SIGNALS:
+        with contextlib.suppress(ValueError, OSError):
+            signal.signal(sig, signal.SIG_IGN)
+    with contextlib.suppress(ValueError, OSError):
+        signal.set_wakeup_fd(-1)
+    try:
+        fds = [int(name) for name in os.listdir("/proc/self/fd")]
+    except OSError:
+        fds = list(range(3, 1024))
+    for fd in fds:
+        if fd > 2 and fd not in keep:
+            with contextlib.suppress(OSError):
+                os.close(fd)
