@@ -130,9 +130,14 @@ def scale_mode(args, mpiexec: str) -> None:
             shards = max(1, min(GRID_POINTS, int(GRID_POINTS / max(want, 1))))
             store = Path(tmp) / f"scale-{ranks}-{scale}-{writer}.h5"
             env = {**os.environ, "FLOEWAVE_REPLAY_SCALE": repr(scale)}
-            cmd = [mpiexec, "-n", str(ranks), sys.executable, "-m", "sweep", "run",
-                   str(grids[writer]), "--store", str(store), "--shard", f"0/{shards}",
-                   "--no-bar", "--compute", "sweep.testing:replay_point"]
+            sweep_cmd = [sys.executable, "-m", "sweep", "run", str(grids[writer]),
+                         "--store", str(store), "--shard", f"0/{shards}", "--no-bar",
+                         "--compute", "sweep.testing:replay_point"]
+            if args.nice_workers:  # MPMD: rank 0 as it is, the workers niced
+                cmd = [mpiexec, "-n", "1", *sweep_cmd, ":", "-n", str(workers),
+                       "nice", "-n", str(args.nice_workers), *sweep_cmd]
+            else:
+                cmd = [mpiexec, "-n", str(ranks), *sweep_cmd]
             proc = subprocess.run(cmd, capture_output=True, text=True, env=env)
             if proc.returncode != 0:
                 sys.exit(f"failed: {' '.join(cmd)}\n{proc.stderr[-2000:]}")
@@ -174,6 +179,11 @@ def main() -> None:
     ap.add_argument("--writer", nargs="+", default=["process"], choices=["process", "inline"],
                     help="scaling mode: who writes the store ([run] writer)")
     ap.add_argument("--record", type=Path, help="scaling mode: write the rows as JSON")
+    ap.add_argument("--nice-workers", type=int, default=0, metavar="N",
+                    help="scaling mode: run the worker ranks under nice -n N (rank 0 and its"
+                    " writer process as they are), so that oversubscribed workers waiting"
+                    " for a task take CPU from the master only when it has none to use, as"
+                    " when each has a core of its own")
     ap.add_argument("--costs-from", metavar="TABLE_OR_STORE",
                     help="write benchmarks/data/point_costs.json from a real campaign")
     ap.add_argument("--points", type=int, default=2000)

@@ -200,7 +200,8 @@ def simulate(workers: int, scale: float, seconds: float, tmp: Path,
     try:
         with contextlib.redirect_stdout(io.StringIO()), \
                 contextlib.redirect_stderr(io.StringIO()), \
-                (scheduling_only() if write_path != "inline" else contextlib.nullcontext()):
+                (scheduling_only() if write_path in ("none", "forward")
+                 else contextlib.nullcontext()):
             summary = launch.run_campaign(campaign, str(store),
                                           compute="sweep.testing:replay_point",
                                           progress_bar=False)

@@ -117,9 +117,10 @@ class Record:
     def journal_line(self) -> bytes:
         """The record's journal line (:func:`sweep.store.journal.encode`)."""
         return encode({"row": self.row,
-                       "profiles": {k: np.asarray(v).tolist()
+                       "profiles": {k: np.asarray(v, dtype=np.float64)
                                     for k, v in self.profiles.items()},
-                       "residual_history": np.asarray(self.residual_history).tolist()})
+                       "residual_history": np.asarray(self.residual_history,
+                                                      dtype=np.float64)})
 
     @property
     def hash(self) -> str:

@@ -50,6 +50,7 @@ from sweep.store.files import H5_ERRORS, MAX_NAME, InodeLock, check_space, inspe
 from sweep.store.journal import (
     Journal,
     JournalScan,
+    check_version,
     encode,
     journal_path,
     rejected_path,
@@ -170,6 +171,7 @@ class Store(JournalRepair):
                               else floewave.MODEL_VERSION)
         self._grid = grid_hashes(campaign)
         scan = journal.scan(self.model_version, STATUSES, self._grid)
+        check_version(scan, journal.path)  # before any line is set aside
         state, info = inspect_file(self.path, bool(scan.records or scan.identity))
         self._file_schema = info.get("schema_version", "?")
         if campaign is None and state != "ok":

@@ -8,7 +8,14 @@ import pytest
 
 from floewave import MODEL_VERSION
 from sweep.errors import BadJournalLineError
-from sweep.store.journal import Journal, check_record, decode, encode, journal_path
+from sweep.store.journal import (
+    Journal,
+    check_record,
+    decode,
+    encode,
+    journal_path,
+    rejected_path,
+)
 from sweep.store.schema import STATUSES
 
 TOML = "[base]\nL_sheet = 6.0\n[sweep]\neps = [0.2, 0.4]\n"
@@ -79,3 +86,111 @@ def test_check_record_names_what_is_wrong(campaign):
     assert check_record(record(p, 0), MODEL_VERSION, STATUSES) == ""
     bad = record(p, 0, "exploded")
     assert "exploded" in check_record(bad, MODEL_VERSION, STATUSES)
+
+
+# ---------------------------------------------------------------- packed arrays (version 3)
+def test_packed_arrays_round_trip_to_the_bit():
+    """NaN payloads, signed zeros, infinities, subnormals, 2-D and empty arrays: the same
+    bytes after encode and decode; lists (records of before version 3) stay lists."""
+    import numpy as np
+
+    from sweep.store.packed import pack_array, unpack_array
+
+    odd = np.array([0.0, -0.0, np.inf, -np.inf, 5e-324, 1 / 3, -1.7976931348623157e308])
+    payload = np.frombuffer(np.uint64(0x7FF8_0000_DEAD_BEEF).tobytes(), dtype=np.float64)
+    arrays = {"a": np.concatenate([odd, payload]),
+              "b": np.arange(12.0).reshape(3, 4) / 7, "c": np.zeros(0)}
+    line = encode({"row": {"hash": "x"}, "profiles": arrays,
+                   "residual_history": np.array([1e-3, np.nan])})
+    obj, checked = decode(line)
+    assert checked
+    for name, arr in arrays.items():
+        got = obj["profiles"][name]
+        assert got.dtype == np.float64 and got.shape == arr.shape and got.flags.writeable
+        assert got.tobytes() == arr.tobytes(), name
+    assert obj["residual_history"].tobytes() == np.array([1e-3, np.nan]).tobytes()
+    assert decode(encode(obj))[0]["profiles"]["b"].tobytes() == arrays["b"].tobytes()
+    old = decode(encode({"row": {"hash": "x"}, "profiles": {"a": [1.0, 2.5]},
+                         "residual_history": []}))[0]
+    assert old["profiles"]["a"] == [1.0, 2.5] and old["residual_history"] == []
+    assert unpack_array([1.0]) == [1.0]
+    packed = pack_array(np.array([1.5, -2.0]))
+    assert set(packed) == {"f8", "shape"} and packed["shape"] == [2]
+    # big-endian or integer input is stored as float64, little-endian
+    assert unpack_array(pack_array(np.array([3, 4], dtype=">i4"))).tolist() == [3.0, 4.0]
+
+
+@pytest.mark.parametrize("bad, why", [({"f8": "***", "shape": [1]}, "base64"),
+                                      ({"f8": "AAAAAAAAAAA=", "shape": [2]}, "reshape"),
+                                      ({"f8": "AAAAAAAAAAA=", "shape": "x"}, "invalid")])
+def test_an_unreadable_packed_array_is_a_bad_line(bad, why):
+    """A packed array that is not base64 or does not fill its shape: the line is bad (set
+    aside on open, as any line that does not parse), whatever its checksum says."""
+    line = encode({"row": {"hash": "x"}, "profiles": {"a": bad}, "residual_history": []})
+    with pytest.raises(BadJournalLineError, match="unreadable packed array"):
+        decode(line)
+
+
+def test_a_store_is_rebuilt_whole_from_a_journal_of_lists(tmp_path):
+    """A journal whose records hold their arrays as JSON lists (version 2, as stores of
+    before version 3 have them) rebuilds the store to the same table and the same profile
+    bytes as the journal of packed arrays that the run wrote."""
+    import h5py
+    import numpy as np
+
+    from sweep import parse_campaign, run_campaign
+    from sweep.store import reader
+    from tests.sweep.helpers import table
+
+    campaign = parse_campaign(TOML)
+    path = tmp_path / "s.h5"
+    run_campaign(campaign, str(path), compute="sweep.testing:fake_point")
+    ref = table(path)
+    with h5py.File(path, "r") as f:
+        before = {h: reader.profile_group(f, h) for h in ref.index}
+    jp = journal_path(path)
+    lines = jp.read_bytes().splitlines(keepends=True)
+    assert sum(b'"f8":"' in line for line in lines) >= 2  # written packed
+    as_lists = [encode(json.loads(json.dumps(decode(line)[0],
+                                             default=lambda a: a.tolist())))
+                for line in lines]
+    assert not any(b'"f8":"' in line for line in as_lists)
+    jp.write_bytes(b"".join(as_lists))
+    path.unlink()
+    assert run_campaign(campaign, str(path), compute="sweep.testing:fake_point").computed == 0
+    assert table(path).equals(ref)
+    with h5py.File(path, "r") as f:
+        for h, (profiles, history) in before.items():
+            got, got_history = reader.profile_group(f, h)
+            assert got.keys() == profiles.keys()
+            assert all(np.asarray(got[k]).tobytes() == np.asarray(v).tobytes()
+                       for k, v in profiles.items())
+            assert np.asarray(got_history).tobytes() == np.asarray(history).tobytes()
+
+
+def test_a_journal_of_a_newer_version_is_refused_and_left_alone(tmp_path):
+    """A campaign line of a journal version beyond this sweep's: the store is not opened,
+    no line is set aside, the files are unchanged, and ``sweep run`` exits 3."""
+    from sweep import parse_campaign, run_campaign
+    from sweep.cli import main
+    from sweep.errors import StoreError
+    from sweep.store.journal import JOURNAL_VERSION
+
+    campaign = parse_campaign(TOML)
+    path = tmp_path / "s.h5"
+    run_campaign(campaign, str(path), compute="sweep.testing:fake_point")
+    jp = journal_path(path)
+    lines = jp.read_bytes().splitlines(keepends=True)
+    head = decode(lines[0])[0]
+    assert head["version"] == JOURNAL_VERSION
+    head["version"] = JOURNAL_VERSION + 1
+    jp.write_bytes(encode(head) + b"".join(lines[1:]))
+    before = (path.read_bytes(), jp.read_bytes())
+    with pytest.raises(StoreError, match=f"journal version {JOURNAL_VERSION + 1}"):
+        run_campaign(campaign, str(path), compute="sweep.testing:fake_point")
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(TOML)
+    assert main(["run", str(cfg), "--store", str(path), "--no-bar",
+                 "--compute", "sweep.testing:fake_point"]) == 3
+    assert (path.read_bytes(), jp.read_bytes()) == before
+    assert not rejected_path(path).exists()
