@@ -104,7 +104,10 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
                     with contextlib.suppress(Exception):
                         master.release_abandoned()
                 store.close(outcome)
-                summary.writer_cpu = getattr(store, "writer_cpu", 0.0)
+                # the writer's CPU once its store was open (opening it, which expands
+                # the grid, is start-up, as for an inline master); else its whole life's
+                summary.writer_cpu = (getattr(store, "loop_cpu", 0.0)
+                                      or getattr(store, "writer_cpu", 0.0))
     except BaseException as exc:
         if mpi and transport is not None:
             _end_mpi_job(exc, transport, master)

@@ -62,7 +62,8 @@ class RunSummary:
     in_process: bool = False
     #: [s] compiling or loading the kernels before the first point (:mod:`sweep.run.warmup`)
     warm_up: float = 0.0
-    #: CPU seconds of the store's writer process (0: the master wrote the store itself)
+    #: CPU seconds of the store's writer process from its store's open to its close (0: the
+    #: master wrote the store itself)
     writer_cpu: float = 0.0
 
     @property
