@@ -196,6 +196,8 @@ def main() -> None:
         return
     mpiexec = find_mpiexec()
     if args.scale:
+        if min(args.scale) < 2:
+            sys.exit("--scale: at least 2 ranks (a master and a worker)")
         if not mpiexec:
             sys.exit("the scaling mode needs mpiexec (pip install mpi4py mpich)")
         scale_mode(args, mpiexec)

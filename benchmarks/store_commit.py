@@ -4,7 +4,9 @@
 
 Builds the records of 1/24 of the paper's grid (``sweep.testing:replay_point`` results,
 the shapes of real points: 16 profile datasets each), then stores them into a fresh store
-in group commits of 1, 8, 64 and 512 points, and prints the wall and CPU time per point.
+in group commits of 1, 8, 64 and 512 points, and prints the wall and CPU time per point;
+first, the CPU and size of a point's journal line, its arrays packed (journal version 3)
+and as the JSON lists of version 2.
 ``--profile``: where the time goes at batches of 64 (cProfile, by internal time). Run from
 the repository root. docs/cluster.md "Past one master" quotes it.
 """
@@ -29,6 +31,17 @@ for p in pts:
     out = compute_point(Task(p.hash, p.config.to_dict(), 0.0), fn, 1)
     recs.append(Record.from_outcome(p, out, p.config.to_dict(), lambda r, k: prov))
 print(len(recs), "records")
+# a journal line: arrays packed (journal version 3) against JSON lists (version 2)
+from sweep.store.journal import encode
+def as_lists(r):
+    return encode({"row": r.row, "profiles": {k: v.tolist() for k, v in r.profiles.items()},
+                   "residual_history": r.residual_history.tolist()})
+for label, fn_line in (("packed arrays (version 3)", lambda r: r.journal_line()),
+                       ("JSON lists (version 2)", as_lists)):
+    c0 = time.process_time()
+    size = sum(len(fn_line(r)) for r in recs)
+    print(f"journal line, {label}: {1e3 * (time.process_time() - c0) / len(recs):.3f} ms CPU,"
+          f" {size / len(recs) / 1e3:.1f} kB per point")
 prof = "--profile" in sys.argv
 for k in (1, 8, 64, 512):
     with tempfile.TemporaryDirectory() as tmp:

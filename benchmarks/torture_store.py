@@ -209,7 +209,7 @@ def corruptions() -> dict[str, object]:
 
     def no_crc(lines, r):
         obj = decode(lines[r[5]])[0]
-        lines[r[5]] = json.dumps(obj, separators=(",", ":")).encode() + b"\n"
+        lines[r[5]] = encode(obj)[:-1].rsplit(b',"crc32":', 1)[0] + b"}\n"
 
     def cut_middle(lines, r):
         lines[r[6]] = lines[r[6]][: len(lines[r[6]]) // 2] + b"\n"
@@ -219,8 +219,8 @@ def corruptions() -> dict[str, object]:
 
     def profile_byte(lines, r):
         line = lines[r[8]]
-        i = line.index(b'"a":[') + 6
-        lines[r[8]] = line[:i] + (b"9" if line[i:i + 1] != b"9" else b"8") + line[i + 1:]
+        i = line.index(b'"a":{"f8":"') + 12  # a character of profile a's base64 bytes
+        lines[r[8]] = line[:i] + (b"B" if line[i:i + 1] != b"B" else b"C") + line[i + 1:]
 
     def nul_line(lines, r):
         lines.insert(r[9], b"\0" * 100 + b"\n")

@@ -26,7 +26,7 @@ from sweep.run.compute import DEFAULT_COMPUTE, compute_in_child, compute_point, 
 from sweep.run.warmup import warm_up
 
 __all__ = ["Transport", "InProcessTransport", "MPITransport", "Backoff", "wait_message",
-           "POLL_MIN", "POLL_MAX"]
+           "send_message", "POLL_MIN", "POLL_MAX"]
 
 POLL_MIN, POLL_MAX = 0.0005, 0.005  # [s] backoff of the waiting loops
 #: MPICH's Iprobe makes progress on one call and sees the message on the next, so each
@@ -66,6 +66,15 @@ def _probe(comm: Any, source: int, tag: int, status: Any = None) -> bool:
 def wait_message(comm: Any, source: int, tag: int, status: Any = None) -> None:
     """Block until a message is available (:class:`Backoff` between probes)."""
     Backoff().wait(lambda: _probe(comm, source, tag, status))
+
+
+def send_message(comm: Any, obj: Any, dest: int, tag: int) -> None:
+    """Send ``obj`` and return once it is sent, sleeping (:class:`Backoff`) between tests:
+    a result too large for MPI's eager protocol waits until the master receives it, and a
+    blocking ``send`` would spin at 100 % of a core meanwhile (oversubscribed, on the
+    master's)."""
+    req = comm.isend(obj, dest=dest, tag=tag)
+    Backoff().wait(req.Test)
 
 
 class Transport(Protocol):

@@ -18,7 +18,7 @@ from sweep.errors import SweepError
 from sweep.protocol import TAG_RESULT, TAG_TASK, Kind, Packed, WarmUp, WorkerFailure
 from sweep.provenance import environment, host
 from sweep.run.compute import DEFAULT_COMPUTE, compute_point, resolve_compute
-from sweep.run.transport import wait_message
+from sweep.run.transport import send_message, wait_message
 from sweep.run.warmup import warm_up
 from sweep.system import STOP_SIGNALS
 
@@ -53,8 +53,8 @@ def worker_loop(comm: Any, compute: str = DEFAULT_COMPUTE) -> None:
         if fn is None:
             continue
         if isinstance(task, WarmUp):  # before the campaign's clock starts (sweep.run.warmup)
-            comm.send((Kind.WARM, warm_up(list(task.configs), compute)), dest=0,
-                      tag=TAG_RESULT)
+            send_message(comm, (Kind.WARM, warm_up(list(task.configs), compute)), 0,
+                         TAG_RESULT)
             continue
-        comm.send((Kind.RESULT, Packed.of(compute_point(task, fn, rank))), dest=0,
-                  tag=TAG_RESULT)
+        send_message(comm, (Kind.RESULT, Packed.of(compute_point(task, fn, rank))), 0,
+                     TAG_RESULT)

@@ -12,7 +12,7 @@ is touched:
   array is ``{"f8": "<base64>", "shape": [...]}``: the base64 of its float64 values,
   little-endian, in C order (:func:`sweep.store.packed.pack_array`), exact to the bit, NaN payloads
   included; before, a JSON list of numbers, which is still read. Decoding one is a copy;
-  writing one a tenth of the cost of the list (``benchmarks/store_commit.py``);
+  writing one about an eighth of the list's (``benchmarks/store_commit.py``);
 - a **hand-out** ``{"handout": hash, "run": n, "worker": rank, "alone": bool}`` per point
   given to a worker, and a **release** ``{"release": hash}`` per point abandoned by a
   clean stop (written, not fsynced: they only count the attempts of points that kill
@@ -156,8 +156,8 @@ def check_version(scan: JournalScan, path: Path) -> None:
              and not isinstance(v, bool) and v > JOURNAL_VERSION]
     if newer:
         raise StoreError(f"{path}: written by a newer sweep (journal version {max(newer)};"
-                         f" this one reads versions up to {JOURNAL_VERSION}); the store was"
-                         " left as it is: use that sweep")
+                         f" this one reads versions up to {JOURNAL_VERSION}); nothing was"
+                         " set aside, rebuilt or written: use that sweep")
 
 
 @dataclass

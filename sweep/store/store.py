@@ -48,6 +48,7 @@ from sweep.store.campaign_check import check_campaign, check_legacy_journal, gri
 from sweep.store.cells import text
 from sweep.store.files import H5_ERRORS, MAX_NAME, InodeLock, check_space, inspect_file, oserror
 from sweep.store.journal import (
+    JOURNAL_VERSION,
     Journal,
     JournalScan,
     check_version,
@@ -212,7 +213,8 @@ class Store(JournalRepair):
         scan = self.scan
         if campaign is not None and (not journal.exists() or scan.identity is None or
                                      scan.identity["campaign_hash"]
-                                     != campaign.definition_hash()):
+                                     != campaign.definition_hash() or  # or an older format:
+                                     scan.identity.get("version") != JOURNAL_VERSION):
             journal.open_for_append()
             try:
                 journal.write_header(campaign.definition_hash(), self._campaign_json(campaign))

@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from sweep.store.journal import Journal, decode, journal_path, rejected_path
+from sweep.store.journal import Journal, check_version, decode, journal_path, rejected_path
 from sweep.store.schema import (
     COLUMNS,
     HISTORY_VAR,
@@ -92,6 +92,7 @@ def differences(path: Path, journal: Journal,
     problems: list[str] = []
     problem = problems.append
     scan = journal.scan(reader.model_version(f), STATUSES)
+    check_version(scan, journal.path)  # not lines "to set aside": a newer sweep reads them
     for _, _, reason in scan.bad:
         problem(f"{journal.path}: a line that would be set aside on the next run"
                 f" ({reason})")

@@ -116,14 +116,26 @@ def test_packed_arrays_round_trip_to_the_bit():
     assert unpack_array([1.0]) == [1.0]
     packed = pack_array(np.array([1.5, -2.0]))
     assert set(packed) == {"f8", "shape"} and packed["shape"] == [2]
+    zero_d = unpack_array(pack_array(np.array(-0.0)))
+    assert zero_d.shape == () and zero_d.tobytes() == np.array(-0.0).tobytes()
+    fortran = np.asfortranarray(np.arange(6.0).reshape(2, 3))
+    assert unpack_array(pack_array(fortran[:, ::2])).tolist() == [[0.0, 2.0], [3.0, 5.0]]
     # big-endian or integer input is stored as float64, little-endian
     assert unpack_array(pack_array(np.array([3, 4], dtype=">i4"))).tolist() == [3.0, 4.0]
 
 
-@pytest.mark.parametrize("bad, why", [({"f8": "***", "shape": [1]}, "base64"),
-                                      ({"f8": "AAAAAAAAAAA=", "shape": [2]}, "reshape"),
-                                      ({"f8": "AAAAAAAAAAA=", "shape": "x"}, "invalid")])
-def test_an_unreadable_packed_array_is_a_bad_line(bad, why):
+@pytest.mark.parametrize("bad", [{"f8": "***", "shape": [1]}, {"f8": None, "shape": [1]},
+                                 {"f8": "AAAAAAAAAAA=", "shape": [2]},
+                                 {"f8": "AAAAAAAAAAA=", "shape": "x"},
+                                 {"f8": "AAAAAAAAAAA=", "shape": "1"},
+                                 {"f8": "AAAAAAAAAAA=", "shape": [-1]},
+                                 {"f8": "AAAAAAAAAAA=", "shape": [True]},
+                                 {"f8": "AAAAAAAAAAA=", "shape": [1.0]},
+                                 {"f8": "AAAAAAAAAAA=", "shape": [float("inf")]},
+                                 {"f8": "AAAAAAAAAAA=", "shape": [1e999]},
+                                 {"f8": "AAAAAAAAAAA="},
+                                 {"f8": "", "shape": [0] * 40}])
+def test_an_unreadable_packed_array_is_a_bad_line(bad):
     """A packed array that is not base64 or does not fill its shape: the line is bad (set
     aside on open, as any line that does not parse), whatever its checksum says."""
     line = encode({"row": {"hash": "x"}, "profiles": {"a": bad}, "residual_history": []})
@@ -194,3 +206,32 @@ def test_a_journal_of_a_newer_version_is_refused_and_left_alone(tmp_path):
                  "--compute", "sweep.testing:fake_point"]) == 3
     assert (path.read_bytes(), jp.read_bytes()) == before
     assert not rejected_path(path).exists()
+
+
+def test_resuming_a_journal_of_an_older_version_marks_it_with_this_version(tmp_path):
+    """A journal whose last campaign line is of version 2 gets a campaign line of this
+    version (same campaign) before this sweep's records, so that a sweep that reads only
+    version 2 would see a newer journal, not records to set aside."""
+    from sweep import parse_campaign, run_campaign
+    from sweep.store.journal import JOURNAL_VERSION
+
+    campaign = parse_campaign(TOML)
+    path = tmp_path / "s.h5"
+    run_campaign(campaign, str(path), compute="sweep.testing:fake_point")
+    jp = journal_path(path)
+    lines = jp.read_bytes().splitlines(keepends=True)
+    head = decode(lines[0])[0]
+    head["version"] = 2
+    records = [i for i, line in enumerate(lines) if b'"row"' in line]
+    old = [encode(json.loads(json.dumps(decode(line)[0], default=lambda a: a.tolist())))
+           for line in lines[1:records[-1]]]  # the last point's record dropped
+    jp.write_bytes(encode(head) + b"".join(old))
+    path.unlink()
+    assert run_campaign(campaign, str(path), compute="sweep.testing:fake_point").computed == 1
+    scan = Journal(jp).scan(MODEL_VERSION, STATUSES)
+    assert [h["version"] for h in scan.headers] == [2, JOURNAL_VERSION]
+    assert scan.headers[0]["campaign_hash"] == scan.headers[1]["campaign_hash"]
+    after = jp.read_bytes().splitlines()
+    second = after.index(encode(scan.headers[1])[:-1])
+    assert all(b'"f8":"' not in line for line in after[:second])  # the lists before it
+    assert any(b'"f8":"' in line for line in after[second:])      # this sweep's after it

@@ -21,6 +21,7 @@ class FakeComm:
     def __init__(self, tasks):
         self.tasks = list(tasks)
         self.sent = []
+        self.requests = []
 
     def Get_rank(self):
         return 1
@@ -30,11 +31,30 @@ class FakeComm:
 
     def recv(self, source, tag):
         assert (source, tag) == (0, TAG_TASK)
+        # a task is read only once the worker's last reply has gone (its send completed)
+        assert all(r.done for r in self.requests), "a task read while a reply was in flight"
         return self.tasks.pop(0)
 
     def send(self, obj, dest, tag):
         assert (dest, tag) == (0, TAG_RESULT)
         self.sent.append(obj)
+
+    def isend(self, obj, dest, tag):
+        """A reply that completes on its third test, as a large one waits for the master."""
+        self.send(obj, dest, tag)
+        self.requests.append(FakeRequest(tests_to_complete=3))
+        return self.requests[-1]
+
+
+class FakeRequest:
+    def __init__(self, tests_to_complete):
+        self.left, self.done, self.tests = tests_to_complete, False, 0
+
+    def Test(self):
+        self.tests += 1
+        self.left -= 1
+        self.done = self.left <= 0
+        return self.done
 
 
 def test_worker_says_ready_answers_tasks_in_order_and_stops_on_none(campaign):
@@ -47,6 +67,8 @@ def test_worker_says_ready_answers_tasks_in_order_and_stops_on_none(campaign):
     assert all(isinstance(o, Packed) for _, o in comm.sent[1:])  # header + pickled bytes
     assert all((o.hash, o.status) == (o.outcome().hash, o.outcome().status)
                for _, o in comm.sent[1:])
+    # results and warm-ups go by a tested (sleeping) send: each tested until it completed
+    assert [r.tests for r in comm.requests] == [3, 3]
     results = [o.outcome() for _, o in comm.sent[1:]]
     assert all(isinstance(o, Outcome) for o in results)
     assert [o.hash for o in results] == [q.hash for q in p[:2]]
