@@ -12,7 +12,7 @@ is touched:
   array is ``{"f8": "<base64>", "shape": [...]}``: the base64 of its float64 values,
   little-endian, in C order (:func:`sweep.store.packed.pack_array`), exact to the bit, NaN payloads
   included; before, a JSON list of numbers, which is still read. Decoding one is a copy;
-  writing one about an eighth of the list's (``benchmarks/store_commit.py``);
+  writing one about a sixth of the list's (``benchmarks/store_commit.py``);
 - a **hand-out** ``{"handout": hash, "run": n, "worker": rank, "alone": bool}`` per point
   given to a worker, and a **release** ``{"release": hash}`` per point abandoned by a
   clean stop (written, not fsynced: they only count the attempts of points that kill

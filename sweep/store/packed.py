@@ -1,7 +1,7 @@
 """A journal record's arrays, packed (journal version 3): ``{"f8": "<base64>", "shape":
 [...]}``, the base64 of the array's float64 values, little-endian, in C order: exact to
 the bit (NaN payloads included), about 11 bytes a value against about 20 as JSON
-numbers, and written about eight times faster (docs/cluster.md). Records of journal
+numbers, and written about six times faster (docs/cluster.md). Records of journal
 version 2 and before hold JSON lists, which :func:`unpack_array` passes through.
 """
 from __future__ import annotations
