@@ -10,7 +10,7 @@ is touched:
 - a **point record** ``{"row": {column: value}, "profiles": {name: array},
   "residual_history": array}`` per stored point (the whole record). Since version 3 an
   array is ``{"f8": "<base64>", "shape": [...]}``: the base64 of its float64 values,
-  little-endian, in C order (:func:`sweep.store.packed.pack_array`), exact to the bit, NaN payloads
+  little-endian, in C order (:mod:`sweep.store.packed`), exact to the bit, NaN payloads
   included; before, a JSON list of numbers, which is still read. Decoding one is a copy;
   writing one about a sixth of the list's (``benchmarks/store_commit.py``);
 - a **hand-out** ``{"handout": hash, "run": n, "worker": rank, "alone": bool}`` per point
@@ -52,8 +52,8 @@ __all__ = ["Journal", "JournalScan", "journal_path", "rejected_path",
            "JOURNAL_VERSION"]
 
 HEADER_KIND = "sweep-journal"
-#: 3: a record's arrays as base64 float64 (:func:`sweep.store.packed.pack_array`); 2: checksummed lines and
-#: campaign lines, arrays as JSON lists (still read); 1: neither
+#: 3: a record's arrays as base64 float64 (:mod:`sweep.store.packed`); 2: checksummed
+#: lines and campaign lines, arrays as JSON lists (still read); 1: neither
 JOURNAL_VERSION = 3
 _CRC = b',"crc32":"'
 _HEX = set("0123456789abcdef")
@@ -71,7 +71,8 @@ def rejected_path(path: str | Path) -> Path:
 
 def encode(obj: dict[str, Any]) -> bytes:
     """One journal line: compact JSON ending in its CRC-32 member, and a newline. Arrays
-    (``numpy.ndarray``) are packed (:func:`sweep.store.packed.pack_array`), so a decoded line encodes again."""
+    (``numpy.ndarray``) are packed (:mod:`sweep.store.packed`): a decoded line encodes
+    again."""
     body = json.dumps(obj, separators=(",", ":"), default=packed).encode()
     return body[:-1] + b'%s%08x"}\n' % (_CRC, zlib.crc32(body))
 

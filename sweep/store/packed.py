@@ -26,8 +26,7 @@ def pack_array(value: Any) -> dict[str, Any]:
     """A float64 array as a journal record holds it since version 3: ``{"f8": base64 of
     its little-endian bytes in C order, "shape": [...]}``."""
     arr = np.asarray(value, dtype="<f8")
-    raw = np.ascontiguousarray(arr).tobytes()
-    return {_F8: base64.b64encode(raw).decode("ascii"), "shape": list(arr.shape)}
+    return {_F8: base64.b64encode(arr.tobytes()).decode("ascii"), "shape": list(arr.shape)}
 
 
 def unpack_array(value: Any) -> Any:

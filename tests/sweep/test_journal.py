@@ -89,6 +89,23 @@ def test_check_record_names_what_is_wrong(campaign):
 
 
 # ---------------------------------------------------------------- packed arrays (version 3)
+FAKE = "sweep.testing:fake_point"
+
+
+def _stored(tmp_path):
+    """A campaign of TOML run into a store: (campaign, store path, journal path, lines)."""
+    from sweep import parse_campaign, run_campaign
+
+    campaign = parse_campaign(TOML)
+    path = tmp_path / "s.h5"
+    run_campaign(campaign, str(path), compute=FAKE)
+    jp = journal_path(path)
+    return campaign, path, jp, jp.read_bytes().splitlines(keepends=True)
+
+
+def _as_version_2(line):
+    """A journal line again with its arrays as JSON lists, as journal version 2 wrote it."""
+    return encode(json.loads(json.dumps(decode(line)[0], default=lambda a: a.tolist())))
 def test_packed_arrays_round_trip_to_the_bit():
     """NaN payloads, signed zeros, infinities, subnormals, 2-D and empty arrays: the same
     bytes after encode and decode; lists (records of before version 3) stay lists."""
@@ -150,26 +167,20 @@ def test_a_store_is_rebuilt_whole_from_a_journal_of_lists(tmp_path):
     import h5py
     import numpy as np
 
-    from sweep import parse_campaign, run_campaign
+    from sweep import run_campaign
     from sweep.store import reader
     from tests.sweep.helpers import table
 
-    campaign = parse_campaign(TOML)
-    path = tmp_path / "s.h5"
-    run_campaign(campaign, str(path), compute="sweep.testing:fake_point")
+    campaign, path, jp, lines = _stored(tmp_path)
     ref = table(path)
     with h5py.File(path, "r") as f:
         before = {h: reader.profile_group(f, h) for h in ref.index}
-    jp = journal_path(path)
-    lines = jp.read_bytes().splitlines(keepends=True)
     assert sum(b'"f8":"' in line for line in lines) >= 2  # written packed
-    as_lists = [encode(json.loads(json.dumps(decode(line)[0],
-                                             default=lambda a: a.tolist())))
-                for line in lines]
+    as_lists = [_as_version_2(line) for line in lines]
     assert not any(b'"f8":"' in line for line in as_lists)
     jp.write_bytes(b"".join(as_lists))
     path.unlink()
-    assert run_campaign(campaign, str(path), compute="sweep.testing:fake_point").computed == 0
+    assert run_campaign(campaign, str(path), compute=FAKE).computed == 0
     assert table(path).equals(ref)
     with h5py.File(path, "r") as f:
         for h, (profiles, history) in before.items():
@@ -183,27 +194,22 @@ def test_a_store_is_rebuilt_whole_from_a_journal_of_lists(tmp_path):
 def test_a_journal_of_a_newer_version_is_refused_and_left_alone(tmp_path):
     """A campaign line of a journal version beyond this sweep's: the store is not opened,
     no line is set aside, the files are unchanged, and ``sweep run`` exits 3."""
-    from sweep import parse_campaign, run_campaign
+    from sweep import run_campaign
     from sweep.cli import main
     from sweep.errors import StoreError
     from sweep.store.journal import JOURNAL_VERSION
 
-    campaign = parse_campaign(TOML)
-    path = tmp_path / "s.h5"
-    run_campaign(campaign, str(path), compute="sweep.testing:fake_point")
-    jp = journal_path(path)
-    lines = jp.read_bytes().splitlines(keepends=True)
+    campaign, path, jp, lines = _stored(tmp_path)
     head = decode(lines[0])[0]
     assert head["version"] == JOURNAL_VERSION
     head["version"] = JOURNAL_VERSION + 1
     jp.write_bytes(encode(head) + b"".join(lines[1:]))
     before = (path.read_bytes(), jp.read_bytes())
     with pytest.raises(StoreError, match=f"journal version {JOURNAL_VERSION + 1}"):
-        run_campaign(campaign, str(path), compute="sweep.testing:fake_point")
+        run_campaign(campaign, str(path), compute=FAKE)
     cfg = tmp_path / "c.toml"
     cfg.write_text(TOML)
-    assert main(["run", str(cfg), "--store", str(path), "--no-bar",
-                 "--compute", "sweep.testing:fake_point"]) == 3
+    assert main(["run", str(cfg), "--store", str(path), "--no-bar", "--compute", FAKE]) == 3
     assert (path.read_bytes(), jp.read_bytes()) == before
     assert not rejected_path(path).exists()
 
@@ -212,22 +218,17 @@ def test_resuming_a_journal_of_an_older_version_marks_it_with_this_version(tmp_p
     """A journal whose last campaign line is of version 2 gets a campaign line of this
     version (same campaign) before this sweep's records, so that a sweep that reads only
     version 2 would see a newer journal, not records to set aside."""
-    from sweep import parse_campaign, run_campaign
+    from sweep import run_campaign
     from sweep.store.journal import JOURNAL_VERSION
 
-    campaign = parse_campaign(TOML)
-    path = tmp_path / "s.h5"
-    run_campaign(campaign, str(path), compute="sweep.testing:fake_point")
-    jp = journal_path(path)
-    lines = jp.read_bytes().splitlines(keepends=True)
+    campaign, path, jp, lines = _stored(tmp_path)
     head = decode(lines[0])[0]
     head["version"] = 2
     records = [i for i, line in enumerate(lines) if b'"row"' in line]
-    old = [encode(json.loads(json.dumps(decode(line)[0], default=lambda a: a.tolist())))
-           for line in lines[1:records[-1]]]  # the last point's record dropped
+    old = [_as_version_2(line) for line in lines[1:records[-1]]]  # the last record dropped
     jp.write_bytes(encode(head) + b"".join(old))
     path.unlink()
-    assert run_campaign(campaign, str(path), compute="sweep.testing:fake_point").computed == 1
+    assert run_campaign(campaign, str(path), compute=FAKE).computed == 1
     scan = Journal(jp).scan(MODEL_VERSION, STATUSES)
     assert [h["version"] for h in scan.headers] == [2, JOURNAL_VERSION]
     assert scan.headers[0]["campaign_hash"] == scan.headers[1]["campaign_hash"]
