@@ -119,7 +119,8 @@ def _guard(child: int, r: int, mask: set[int]) -> int:
     os.close(r)
     if os.WIFSIGNALED(status):
         sig = os.WTERMSIG(status)
-        signal.signal(sig, signal.SIG_DFL)
+        if sig != signal.SIGKILL:  # SIGKILL has no handler to reset (EINVAL): it is default
+            signal.signal(sig, signal.SIG_DFL)
         sys.stdout.flush()
         sys.stderr.flush()
         os.kill(os.getpid(), sig)
