@@ -179,6 +179,8 @@ class JournalScan:
     #: continues from it)
     max_run: int = -1
     legacy: int = 0  # records read without a checksum (journals of before version 2)
+    #: a line with a checksum member was seen (the journal is of version 2 or later)
+    checksummed: bool = False
 
     @property
     def identity(self) -> dict[str, Any] | None:
@@ -332,15 +334,28 @@ class Journal:
         The last good record of a point is the one with the highest ``seq`` (not the
         last in the file: a block of old lines appended again must not revert a point).
         With ``grid`` (the hashes of the campaign's grid points), a record of any other
-        point after a campaign line is set aside too: a checksummed line of another
-        campaign (a journal of before version 2, without campaign lines, is checked
-        whole by :func:`sweep.store.campaign_check.check_legacy_journal`)."""
+        point is set aside too, wherever it stands and whatever became of the campaign
+        lines (one that fails its checksum is set aside itself, and must not make the
+        records after it legacy ones): a line of another campaign. Only the records of
+        a journal of before version 2 (no line of it checksummed) are read without a
+        checksum and without the grid check; such a journal is checked whole by
+        :func:`sweep.store.campaign_check.check_legacy_journal`. A journal with any
+        checksummed line is read strictly: every line needs its checksum."""
+        out = self._scan(model_version, statuses, grid, strict=False)
+        if out.legacy and out.checksummed:  # not a legacy journal: read it strictly
+            out = self._scan(model_version, statuses, grid, strict=True)
+        return out
+
+    def _scan(self, model_version: str, statuses: tuple[str, ...],
+              grid: Container[str] | None, strict: bool) -> JournalScan:
         out = JournalScan()
         for offset, line in self.lines():
             if not line.strip():
                 continue
+            if not out.checksummed and line.rstrip(b"\n").rfind(_CRC) >= 0:
+                out.checksummed = True  # a line of version 2 or later (good or not)
             try:
-                obj, checked = decode(line, require_checksum=bool(out.headers))
+                obj, checked = decode(line, require_checksum=strict or bool(out.headers))
             except BadJournalLineError as exc:
                 out.bad.append((offset, len(line), str(exc)))
                 continue
@@ -369,7 +384,7 @@ class Journal:
                 continue
             row = obj["row"]
             h, seq = row["hash"], int(row["seq"])
-            if grid is not None and out.headers and h not in grid:
+            if grid is not None and checked and h not in grid:
                 out.bad.append((offset, len(line), f"point {h[:12]} is not in this"
                                 " campaign's grid (a line of another campaign?)"))
                 continue

@@ -25,6 +25,9 @@ from typing import Any
 
 import numpy as np
 
+from sweep.config import parse_campaign
+from sweep.store.campaign_check import grid_hashes
+from sweep.store.cells import text as cell_text
 from sweep.store.journal import Journal, check_version, decode, journal_path, rejected_path
 from sweep.store.schema import (
     COLUMNS,
@@ -78,6 +81,21 @@ def compare_with_journal(path: str | Path, limit: int = 50) -> list[str]:
     return problems
 
 
+def _grid_of(f: Any) -> tuple[frozenset[str] | None, str]:
+    """The hashes of the grid of the campaign the file ``f`` was last run with (its
+    ``campaign_toml``: an ``--extend``-ed grid holds its history's), so that a journal
+    record of another campaign is reported as the next run would set it aside; and why
+    not, if the text does not parse."""
+    text = f.attrs.get("campaign_toml")
+    if text is None:
+        return None, ""
+    try:
+        return grid_hashes(parse_campaign(cell_text(text), "campaign_toml")), ""
+    except Exception as exc:  # noqa: BLE001 - reported, the rest of the check goes on
+        return None, (f"/: its campaign_toml does not parse ({type(exc).__name__}): the"
+                      " journal's points were not checked against the grid")
+
+
 def differences(path: Path, journal: Journal,
                 f: Any = None) -> tuple[list[str], int, list[str]]:
     """``(differences, ahead, missing)``: one line per table value or profile of the
@@ -91,7 +109,10 @@ def differences(path: Path, journal: Journal,
             return differences(path, journal, f)
     problems: list[str] = []
     problem = problems.append
-    scan = journal.scan(reader.model_version(f), STATUSES)
+    grid, why = _grid_of(f)
+    if why:
+        problem(why)
+    scan = journal.scan(reader.model_version(f), STATUSES, grid)
     check_version(scan, journal.path)  # not lines "to set aside": a newer sweep reads them
     for _, _, reason in scan.bad:
         problem(f"{journal.path}: a line that would be set aside on the next run"
