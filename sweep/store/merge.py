@@ -94,6 +94,12 @@ def merge(output: str | Path, inputs: list[str | Path]) -> str:
                     raise StoreError(f"{path}: schema version {shown}: this sweep"
                                      f" (schema version {SCHEMA_VERSION}) cannot merge it"
                                      ) from None
+                if bool(f.attrs.get("writer_open", False)):
+                    raise StoreError(
+                        f"{path}: is open: a run is writing it, or its writer died (kill -9,"
+                        " a lost node) and its journal may hold points its file lacks;"
+                        " finish or resume that run first (`sweep run CAMPAIGN --store"
+                        f" {path}` replays its journal), then merge; nothing was merged")
                 hashes.append(text(f.attrs["campaign_hash"]))
                 texts.append(text(f.attrs["campaign_toml"]))
                 # every row still hashes to its hash: a merge never spreads a bad row
@@ -144,6 +150,9 @@ def merge(output: str | Path, inputs: list[str | Path]) -> str:
             store.commit()
             stop.check(added + replaced)
         total = len(store)
+    grid = len(campaign.points())
+    rest = (f" ({grid - total} still to compute: finish the shards, then merge again)"
+            if total < grid else "")
     return (f"merged {len(inputs)} store(s) into {output}: {added} points added,"
             f" {replaced} failed points replaced, {duplicates} duplicates skipped;"
-            f" {total} points stored")
+            f" {total} of the campaign's {grid} grid points stored{rest}")

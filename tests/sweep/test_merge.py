@@ -83,3 +83,36 @@ def test_status_counts_a_shard_against_its_shard_and_the_merge_against_the_grid(
     merge(tmp_path / "all.h5", paths)
     rep = status_report(tmp_path / "all.h5")
     assert (rep["grid_points"], rep["remaining"], rep["shard"]) == (6, 0, None)
+
+
+def test_an_open_shard_is_refused_and_the_merge_says_what_is_missing(tmp_path, campaign,
+                                                                     run_main):
+    """A shard whose writer died (its file still marked open: its journal may hold points
+    the file lacks) is refused, naming it and how to finish it; nothing is written. A
+    merge of unfinished shards says how many grid points are still to compute."""
+    from sweep.cli import main
+    from tests.sweep.helpers import make_unclean
+
+    paths = shards(tmp_path, campaign)
+    make_unclean(paths[0])
+    out = tmp_path / "all.h5"
+    got = run_main(main, ["merge", out, *paths])
+    assert got.returncode == 3, got.stderr
+    assert f"{paths[0]}: is open" in got.stderr and "sweep run CAMPAIGN" in got.stderr
+    assert not out.exists()
+    sweep.run_campaign(campaign.shard(*_shard_of(campaign, paths[0])), str(paths[0]),
+                       compute="sweep.testing:fake_point", progress_bar=False)
+    message = merge(out, paths[:1])
+    n = len(sweep.load(paths[0]))
+    assert f"{n} of the campaign's 6 grid points stored ({6 - n} still to compute" in message
+    assert "still to compute" not in merge(out, paths)
+
+
+def _shard_of(campaign, path):
+    """The (K, N) of the shard stored at ``path``: the split whose points it holds."""
+    held = set(sweep.load(path)["hash"])
+    for n in range(2, 7):
+        for k in range(n):
+            if {p.hash for p in campaign.shard(k, n).points()} == held:
+                return k, n
+    raise AssertionError("no shard holds these points")
