@@ -93,11 +93,12 @@ def colour_cycle(n: int) -> list:
 
 
 MARKERS = ("o", "s", "^", "D", "v", "P", "*", "X", "<", ">")
-#: The legend entry of the crosses on a not-converged curve.
-NOT_CONVERGED = "× not converged (max_iterations reached; the estimate so far)"
+#: The legend entry of the crosses on a not-converged curve (its handle shows the cross:
+#: the text does not repeat it).
+NOT_CONVERGED = "not converged (max_iterations reached; the estimate so far)"
 #: The legend entry of the open square around a not-converged point (or a pooled group
 #: holding one).
-NOT_CONVERGED_RING = "□ not converged (max_iterations reached), or a group holding one"
+NOT_CONVERGED_RING = "not converged (max_iterations reached), or a group holding one"
 
 
 def not_converged_mask(df: pd.DataFrame) -> pd.Series:

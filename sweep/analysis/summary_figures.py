@@ -153,10 +153,14 @@ def collision_stats_figure(df: pd.DataFrame, out: Path) -> list[Path]:
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11.5, 4.0), constrained_layout=True)
     curves = sorted({(r.L_x, r.dispersion) for r in st.itertuples()},
                     key=lambda c: (c[0], DISP_ORDER.index(c[1]) if c[1] in DISP_ORDER else 9))
+    empty = []  # series without a compact zone at any eps: named, not drawn
     for (L_x, disp), (colour, marker) in zip(curves, curve_styles(("L_x", "dispersion"), curves),
                                              strict=True):
         sub = st[(st["L_x"] == L_x) & (st["dispersion"] == disp)].sort_values("eps")
         label = f"L_x = {L_x:g} m, {str(disp).upper()}"
+        if not (sub["W_c_rel_mean"].notna().any() or sub["inner_over_c_median"].notna().any()):
+            empty.append(label)
+            continue
         ax1.errorbar(sub["eps"], sub["W_c_rel_mean"], yerr=sub["W_c_rel_std"].fillna(0.0),
                      marker=marker, ls=DISP_STYLE.get(disp, "-"), color=colour, ms=5,
                      lw=1.2, capsize=2, label=label)
@@ -176,7 +180,11 @@ def collision_stats_figure(df: pd.DataFrame, out: Path) -> list[Path]:
     for ax in (ax1, ax2):
         ax.set_xlabel("restitution coefficient ε [–]")
         ax.grid(alpha=0.3)
-    handles, labels = legend_of([ax1], status_handles(df, ring=True))
+    from matplotlib.lines import Line2D
+
+    absent = [Line2D([], [], ls="none", label=f"{label}: no compact zone (not drawn)")
+              for label in empty]
+    handles, labels = legend_of([ax1], [*status_handles(df, ring=True), *absent])
     fig.legend(handles, labels, fontsize=7, loc="outside right upper")
     written: list[Path] = []
     save_figure(fig, out / "collision_stats.png", written)
