@@ -123,6 +123,11 @@ def demo_store(tree: Path, out: Path) -> None:
     with tempfile.TemporaryDirectory() as cache:
         env = dict(os.environ, PYTHONPATH=str(tree), NUMBA_CACHE_DIR=cache)
         env.pop("SLURM_NTASKS", None)
+        ran = subprocess.run([sys.executable, "-c", "import floewave, sweep; print(floewave"
+                              ".__file__); print(sweep.__file__)"], env=env, cwd=cache,
+                             capture_output=True, text=True, check=True).stdout.split("\n")
+        for name, path in zip(("floewave", "sweep"), ran, strict=False):  # the code it should
+            assert Path(path).resolve().parent == (tree / name).resolve(), path
         cmd = [sys.executable, "-m", "sweep", "run", str(tree / "configs" / "demo.toml"),
                "--store", str(out), "--no-bar"]
         done = subprocess.run(cmd, env=env, cwd=cache, capture_output=True, text=True)
