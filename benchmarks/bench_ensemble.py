@@ -6,9 +6,10 @@
 For 84, 28 and 14 floes (L_x = 0.5, 1.5, 3.0 m at T = 1.2 s, the paper's lab setup) and both
 drag modes it times, after compilation and a spin-up of two periods (contacts active):
 
-- ``v4``: the single-chain kernel of model version 4 (``benchmarks/baseline/kernel_v4.py``,
-  a frozen copy of floewave/_kernels.py at commit 218421e: one chain per call, drag of the
-  floes with a root by the cell loop);
+- ``v4``: the single-chain kernel of model version 4: floewave/_kernels.py of commit
+  :data:`V4` (one chain per call, drag of the floes with a root by the cell loop), exported
+  from git at run time (``git archive``) with the two modules it imports, as the package
+  ``floewave_v4``;
 - ``R = ...``: today's kernel advancing R replicas in one call (floewave/_kernels.py).
 
 The unit is floe-steps per second per core, and for an ensemble *replica*-floe-steps (R N_f
@@ -25,6 +26,7 @@ worker runs with an empty numba cache (compilation) and with a filled one (loadi
 from __future__ import annotations
 
 import argparse
+import importlib
 import os
 import resource
 import subprocess
@@ -37,15 +39,24 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-
-from baseline import kernel_v4 as K4  # noqa: E402
-
 from floewave import ModelConfig, solve_dispersion  # noqa: E402
 from floewave import _kernels as K  # noqa: E402
 from floewave.ensemble import initial_positions  # noqa: E402
 from floewave.model import FloeChain  # noqa: E402
+from sweep.revisions import export_revision  # noqa: E402
+
+#: the commit whose kernel is model version 4's (the last single-chain kernel)
+V4 = "218421e"
+
+
+def kernel_v4(dest: Path):
+    """:data:`V4`'s floewave/_kernels.py and the modules it imports (``_exact``, ``_jit``),
+    exported into ``dest`` as the package ``floewave_v4``, imported."""
+    export_revision(V4, dest, [f"floewave/{name}.py" for name in ("_kernels", "_exact", "_jit")])
+    (dest / "floewave").rename(dest / "floewave_v4")
+    (dest / "floewave_v4" / "__init__.py").write_text('"""Model version 4\'s kernel."""\n')
+    sys.path.insert(0, str(dest))
+    return importlib.import_module("floewave_v4._kernels")
 
 
 def _window(fn, steps0: int, seconds: float) -> int:
@@ -70,9 +81,9 @@ def _interleaved(fns: list, seconds: float, repeat: int) -> list[float]:
     return best
 
 
-def runners_v4(cfg: ModelConfig) -> tuple:
+def runners_v4(K4, cfg: ModelConfig) -> tuple:
     """(spin-up, averaging) step runners ``fn(steps)`` of the model-version-4 single-chain
-    kernel (compiled, spun up); each advances ``n`` floes per step."""
+    kernel ``K4`` (:func:`kernel_v4`; compiled, spun up); each advances ``n`` floes per step."""
     k, _ = solve_dispersion(cfg)
     ch = FloeChain(cfg, k)
     o = ch.opts
@@ -150,10 +161,11 @@ def main() -> None:
     else:
         print(f"{'drag':<11}{'N_f':>4} {'step':<6}" + "".join(f"{c:>9}" for c in cols)
               + f"{f'R={Rs[ref]}/v4':>9}   [M (replica-)floe-steps/s, one core]")
+    K4 = kernel_v4(Path(tempfile.mkdtemp(prefix="bench_ensemble-")))
     for mode in ("quadrature", "exact"):
         for L_x in (0.5, 1.5, 3.0):
             cfg = ModelConfig(L_x=L_x, T=1.2, drag_integration=mode)
-            kernels = [runners_v4(cfg)] + [runners_ensemble(cfg, R) for R in Rs]
+            kernels = [runners_v4(K4, cfg)] + [runners_ensemble(cfg, R) for R in Rs]
             fns = [ker[j] for ker in kernels for j in (0, 1)]
             best = _interleaved(fns, args.seconds, args.repeat)
             rates = [kernels[i // 2][2] / b for i, b in enumerate(best)]

@@ -14,11 +14,9 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import io
 import os
 import subprocess
 import sys
-import tarfile
 import tempfile
 import time
 from pathlib import Path
@@ -27,16 +25,15 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
+from sweep.revisions import export_revision  # noqa: E402
+
 ROOT = Path(__file__).resolve().parent.parent
 
 
 def export(rev: str, dest: Path) -> None:
     """``floewave/`` of ``rev`` into ``dest/floewave_base`` (the package imports itself
     relatively, so the copy imports under the new name)."""
-    data = subprocess.run(["git", "-C", str(ROOT), "archive", "--format=tar", rev, "floewave"],
-                          check=True, capture_output=True).stdout
-    with tarfile.open(fileobj=io.BytesIO(data)) as tar:
-        tar.extractall(dest, filter="data")
+    export_revision(rev, dest, ("floewave",))
     (dest / "floewave").rename(dest / "floewave_base")
 
 

@@ -11,26 +11,17 @@ point from both runs and whether every stored result column and profile is equal
 from __future__ import annotations
 
 import argparse
-import io
 import os
 import subprocess
 import sys
-import tarfile
 import tempfile
 from pathlib import Path
 
+import floewave
+import sweep
+from sweep.revisions import compare_stores, export_revision
+
 ROOT = Path(__file__).resolve().parent.parent
-
-
-def export_revision(rev: str, dest: Path, paths=("floewave", "sweep", "configs")) -> Path:
-    """Export ``paths`` of git revision ``rev`` of this repository into ``dest`` (``git
-    archive``: no worktree, nothing written to the repository); returns ``dest``, to put on
-    ``PYTHONPATH``."""
-    data = subprocess.run(["git", "-C", str(ROOT), "archive", "--format=tar", rev, *paths],
-                          check=True, capture_output=True).stdout
-    with tarfile.open(fileobj=io.BytesIO(data)) as tar:
-        tar.extractall(dest, filter="data")
-    return dest
 
 
 def main() -> int:
@@ -52,17 +43,6 @@ def main() -> int:
                         str(store), "--no-bar"], env=env, check=True, capture_output=True,
                        cwd=tmp)    # not this checkout's directory: it would shadow --rev
         stores.append(store)
-    import importlib.util
-    spec = importlib.util.spec_from_file_location(
-        "torture_driver", ROOT / "tests" / "sweep" / "test_torture.py")
-    torture = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = torture
-    spec.loader.exec_module(torture)
-    compare = torture.compare
-
-    import floewave
-    import sweep
-
     a, b = (sweep.load(s).set_index("hash").sort_index() for s in stores)
     version = subprocess.run([sys.executable, "-c", "import floewave; print(floewave.__file__,"
                               " floewave.MODEL_VERSION)"], env=env, cwd=tmp,
@@ -77,9 +57,8 @@ def main() -> int:
         print("  " + " ".join(f"{k}={a.loc[h, k]}" for k in keys)
               + f": W_c {a.loc[h, 'W_c']:.2f} / {b.loc[h, 'W_c']:.2f} m, iterations"
               f" {a.loc[h, 'iterations']} / {b.loc[h, 'iterations']}")
-    problems = compare(stores[0], stores[1])["problems"]
-    print("bit for bit equal" if not problems else
-          f"{len(problems)} differences, e.g. {problems[:3]}")
+    problems, summary = compare_stores(stores[0], stores[1])
+    print(summary + ("" if not problems else f", e.g. {problems[:3]}"))
     return 0
 
 

@@ -14,12 +14,9 @@ import multiprocessing as mp
 import sys
 import time
 from collections import Counter
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from honesty import points  # noqa: E402
-
-from floewave import ModelConfig, run_point  # noqa: E402
+from floewave import ModelConfig, run_point
+from floewave.honesty import points
 
 
 def one(task):

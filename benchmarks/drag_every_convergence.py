@@ -5,7 +5,7 @@ behind the default.
 steps and holds them in between (multiple time stepping: the contacts, which set dt, still run
 every step; the floe-bottom sums cost most of a step). Like ``benchmarks/dt_convergence.py``
 for the time step, this runs the Fig. 2 points and ``--random`` random grid points with
-*matched run length* (:data:`dt_convergence.MATCHED`: a fixed transient and a fixed number of
+*matched run length* (:data:`floewave.honesty.MATCHED`: a fixed transient and a fixed number of
 averaged windows, no early stop) at K = 1 and at each candidate, two seeds each, and per
 quantity
 
@@ -39,11 +39,8 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from dt_convergence import MATCHED, compute_missing  # noqa: E402
-from honesty import SCALARS, floored, key_of, points, z_scores  # noqa: E402
-
-from floewave import ModelConfig  # noqa: E402
+from floewave import ModelConfig
+from floewave.honesty import MATCHED, SCALARS, compute_missing, floored, key_of, points, z_scores
 
 
 def rms(z: np.ndarray) -> float:

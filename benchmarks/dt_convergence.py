@@ -26,27 +26,16 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import multiprocessing as mp
 import os
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from honesty import SCALARS, floored, key_of, points, run_one, z_scores  # noqa: E402
+from floewave import ModelConfig
+from floewave.honesty import MATCHED, SCALARS, compute_missing, floored, key_of, points, z_scores
+from floewave.model import FloeChain
 
-from floewave import ModelConfig  # noqa: E402
-from floewave.model import FloeChain  # noqa: E402
-
-#: matched run length: 5 periods of spin-up (the default n0), 6 windows (30 periods) of
-#: transient, 14 windows (70 periods) averaged, at every dt. A like-for-like comparison of
-#: the two time steps: at C_sd 0.005 both are still inside the drag transient (0.4 drag
-#: times), which is no matter for it
-MATCHED = {"protocol": "stationary", "stationarity": "fixed", "transient_min": 6,
-           "n_average": 14, "max_iterations": 20, "target_stderr": 0.0,
-           "target_W_c_stderr": 0.0}
 LAWS = (("hertz_disk", "liggghts", False), ("linear", "liggghts", False),
         ("linear", "exact", False), ("hertz_disk", "liggghts", True))
 
@@ -84,23 +73,6 @@ def restitution_table(dts: list[float]) -> bool:
             print(f"  {'+'.join(str(x) for x in law):28s} eps {eps}: {cells}"
                   f"   max |e - e(1e-4)| = {worst:.4f}")
     return ok
-
-
-def compute_missing(tasks: list[tuple[dict, str]], cache: dict, cache_path: Path, jobs: int,
-                    n_points: int) -> None:
-    """Run the (config, key) ``tasks`` not in ``cache`` at matched run length, costliest
-    first, ``jobs`` at a time, saving ``cache`` to ``cache_path`` after each."""
-    todo = list({k: (d, k) for d, k in tasks if k not in cache}.values())
-    todo.sort(key=lambda t: -ModelConfig(**t[0]).floe_steps_per_iteration())
-    print(f"{n_points} points, {len(todo)} runs to compute, matched run length {MATCHED}",
-          flush=True)
-    t0 = time.perf_counter()
-    with mp.get_context("fork").Pool(jobs) as pool:
-        for i, (key, rec) in enumerate(pool.imap_unordered(run_one, todo), 1):
-            cache[key] = rec
-            cache_path.write_text(json.dumps(cache))
-            if i % 10 == 0 or i == len(todo):
-                print(f"  {i}/{len(todo)} done ({time.perf_counter() - t0:.0f} s)", flush=True)
 
 
 def main(argv: list[str] | None = None) -> int:

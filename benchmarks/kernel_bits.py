@@ -3,6 +3,7 @@
     python benchmarks/kernel_bits.py [--against REV] [--periods 0.5]
     python benchmarks/kernel_bits.py --against 8cbf2b1 --every-step   # drag_every = 1 is v6
     python benchmarks/kernel_bits.py --against 9fc2add --midpoint     # v7's hold is v7's
+    python benchmarks/kernel_bits.py --against c7d29bc --store [--speed]
 
 A kernel change that only restructures loops (vectorisation, fission, branch-free selects)
 must not change a single bit of any trajectory: otherwise it is a new model version (every
@@ -18,7 +19,18 @@ The trajectories: R = 8 replicas from random arrangements, every option the loop
 for (contact law, damping, clipping, integrator, drag mode) and the three floe sizes of the
 paper (kL from 1.4 to 8.4 rad: one or two roots per floe), spin-up and averaging steps,
 each replica with its own amplitude profile, then a change of the amplitudes (the
-re-evaluated first half-kick). Exit status 0 when every array is equal, 1 otherwise.
+re-evaluated first half-kick).
+
+``--store`` also runs the demo campaign (each revision's configs/demo.toml, ``sweep run``
+in-process) with this checkout and with ``REV`` (floewave, sweep and configs exported), each
+in a fresh process with its own empty numba cache, and compares the two stores row for row
+(rows matched by hash; every column but the run-specific ones of
+:data:`sweep.revisions.RUN_SPECIFIC`) and profile for profile, byte for byte
+(:func:`sweep.revisions.compare_stores`, h5py only: whatever the store code of either
+revision). ``--speed`` then measures the kernel speed of both revisions in the same run
+(``benchmarks/bench_vs.py --base REV``: floe-steps per second per core, alternating
+windows in one process; a timing: run it on an idle machine).
+Exit status 0 when every array (and with ``--store`` the stores) is equal, 1 otherwise.
 """
 from __future__ import annotations
 
@@ -30,10 +42,9 @@ import sys
 import tempfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT / "benchmarks"))
+from sweep.revisions import compare_stores, export_revision
 
-from cache_paths import export_revision  # noqa: E402
+ROOT = Path(__file__).resolve().parent.parent
 
 #: option sets (ModelConfig fields) checked; L_x gives 84, 28 and 14 floes
 CASES = [
@@ -106,6 +117,37 @@ def run(checkout: Path, periods: float, out: Path, every_step: bool | str = Fals
                        check=True)
 
 
+def demo_store(tree: Path, out: Path) -> None:
+    """The demo campaign of the checkout ``tree`` (its configs/demo.toml), run in-process by
+    its own sweep in a fresh process with an empty numba cache, into ``out``."""
+    with tempfile.TemporaryDirectory() as cache:
+        env = dict(os.environ, PYTHONPATH=str(tree), NUMBA_CACHE_DIR=cache)
+        env.pop("SLURM_NTASKS", None)
+        ran = subprocess.run([sys.executable, "-c", "import floewave, sweep; print(floewave"
+                              ".__file__); print(sweep.__file__)"], env=env, cwd=cache,
+                             capture_output=True, text=True, check=True).stdout.split("\n")
+        for name, path in zip(("floewave", "sweep"), ran, strict=False):  # the code it should
+            assert Path(path).resolve().parent == (tree / name).resolve(), path
+        cmd = [sys.executable, "-m", "sweep", "run", str(tree / "configs" / "demo.toml"),
+               "--store", str(out), "--no-bar"]
+        done = subprocess.run(cmd, env=env, cwd=cache, capture_output=True, text=True)
+        if done.returncode != 0:
+            raise SystemExit(f"{' '.join(cmd)} (PYTHONPATH={tree}) exited"
+                             f" {done.returncode}:\n{done.stderr[-3000:]}")
+
+
+def stores_equal(rev: str, tmp: Path) -> bool:
+    """The demo campaign's store of this checkout against that of ``rev``, compared."""
+    tree = export_revision(rev, tmp / "tree", ("floewave", "sweep", "configs"))
+    demo_store(tree, tmp / "ref.h5")
+    demo_store(ROOT, tmp / "new.h5")
+    problems, summary = compare_stores(tmp / "ref.h5", tmp / "new.h5")
+    for problem in problems[:20]:
+        print("  " + problem)
+    print(f"demo store against {rev}'s: {summary}")
+    return not problems
+
+
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--against", default="HEAD", help="the commit to compare with")
@@ -119,6 +161,13 @@ def main() -> int:
                    help="drag_every = 1 where the field exists and arrangements that do not"
                         " depend on the configuration's fields: model version 7's every-step"
                         " drag against an older commit (e.g. --against 8cbf2b1)")
+    p.add_argument("--store", action="store_true",
+                   help="also the demo campaign's store of both revisions, compared")
+    p.add_argument("--speed", action="store_true",
+                   help="also the kernel speed of both revisions, measured in this run"
+                        " (benchmarks/bench_vs.py --base REV)")
+    p.add_argument("--speed-args", default="", metavar="ARGS",
+                   help="with --speed: arguments for bench_vs.py, e.g. '--repeat 9'")
     args = p.parse_args()
     import numpy as np
 
@@ -140,8 +189,16 @@ def main() -> int:
         diff = [key.split("_", 1)[1] for key in keys if key in bad]
         print(f"{json.dumps(case):<100} {'DIFFERENT: ' + ', '.join(diff) if diff else 'same bits'}")
     print(f"{len(a) - len(bad)} of {len(a)} arrays bit for bit equal to"
-          f" {args.against}")
-    return 1 if bad else 0
+          f" {args.against}", flush=True)
+    equal = not bad
+    if args.store:
+        with tempfile.TemporaryDirectory() as tmp:
+            equal = stores_equal(args.against, Path(tmp)) and equal
+    if args.speed:
+        sys.stdout.flush()
+        subprocess.run([sys.executable, str(ROOT / "benchmarks" / "bench_vs.py"), "--base",
+                        args.against, *args.speed_args.split()], check=True)
+    return 0 if equal else 1
 
 
 if __name__ == "__main__":

@@ -7,16 +7,23 @@ runs to completion. The end must equal an uninterrupted run of the same campaign
 point: the same hashes, each once in the table and once in the journal, every result
 column and every profile array exactly equal, ``sweep validate`` clean.
 
-:func:`torture` is also used by ``benchmarks/torture.py`` (larger runs by hand).
-Run with ``pytest -s`` to see the summary line.
+Run with ``pytest -s`` to see the summary line. Larger runs by hand, from the repository's
+root (``configs/demo.toml``, ``mpiexec -n 2``, 25 kills by default; exit status 0 when the
+end equals the uninterrupted run)::
+
+    python -m tests.sweep.test_torture
+    python -m tests.sweep.test_torture --kills 40 --ranks 3 --config configs/demo.toml --seed 3
 """
 from __future__ import annotations
 
+import argparse
 import os
 import random
+import shutil
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 from collections import Counter
 from pathlib import Path
@@ -52,7 +59,7 @@ progress_interval = 1.0
 grace_period = 5.0
 # kill -9 from outside while a point runs alone cannot be told apart from the point
 # killing its worker: with many kills an innocent point could reach max_attempts and be
-# stored as crashed (benchmarks/torture_store.py counts how often with the default)
+# stored as crashed (tests/sweep/torture_store.py counts how often with the default)
 max_attempts = 0
 """
 
@@ -367,3 +374,36 @@ def test_torn_journal_tail_does_not_swallow_the_next_point(tmp_path):
         assert store.repaired_from_journal
         assert set(store.rows) == set(acked), "an acknowledged point was lost"
     assert sweep.validate(path) == []
+
+
+def main(argv: list[str] | None = None) -> int:
+    """:func:`torture` of a campaign by hand (the module docstring)."""
+    root = Path(__file__).resolve().parents[2]
+    ap = argparse.ArgumentParser(description="kill -9 torture of a real MPI campaign")
+    ap.add_argument("--config", type=Path, default=root / "configs" / "demo.toml")
+    ap.add_argument("--kills", type=int, default=25)
+    ap.add_argument("--ranks", type=int, default=2)
+    ap.add_argument("--seed", type=int, default=25)
+    ap.add_argument("--workdir", type=Path, help="keep stores and logs here (default: a"
+                    " temporary directory, removed unless the torture fails)")
+    args = ap.parse_args(argv)
+    if args.ranks > 1 and MPIEXEC is None:
+        print("no mpiexec (pip install mpich)", file=sys.stderr)
+        return 2
+    workdir = args.workdir or Path(tempfile.mkdtemp(prefix="sweep-torture-"))
+    t0 = time.monotonic()
+    fig = torture(args.config.resolve(), workdir, kills=args.kills, n_ranks=args.ranks,
+                  seed=args.seed, log=lambda s: print(s, flush=True))
+    print(fig["summary"])
+    print(f"elapsed {time.monotonic() - t0:.0f} s; work directory {workdir}")
+    for p in fig["problems"]:
+        print("PROBLEM:", p)
+    if fig["problems"]:
+        return 1
+    if args.workdir is None:
+        shutil.rmtree(workdir, ignore_errors=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

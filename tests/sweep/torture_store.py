@@ -2,8 +2,11 @@
 retry, extend and merge; journal corruptions; compute faults; stops during start-up;
 reads during writes; hostile inputs. Prints one table.
 
-    python benchmarks/torture_store.py                    # ~200 kills, a few minutes
-    python benchmarks/torture_store.py --kills 40 --seed 3 --workdir /tmp/t
+    python -m tests.sweep.torture_store                  # ~200 kills, a few minutes
+    python -m tests.sweep.torture_store --kills 40 --seed 3 --workdir /tmp/t
+
+(from the repository's root). ``test_store_torture`` runs it
+small in the slow tier (``tests/sweep/test_torture_store.py``).
 
 Every phase ends by running the same command to completion and comparing the store,
 point by point, with an uninterrupted reference (hashes, every result column, every
@@ -28,21 +31,14 @@ import time
 from collections import Counter
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+import h5py
+import numpy as np
 
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from torture import _torture  # noqa: E402  (tests/sweep/test_torture.py, loaded by path)
-
-MPIEXEC, compare = _torture.MPIEXEC, _torture.compare
-
-import h5py  # noqa: E402
-import numpy as np  # noqa: E402
-
-import sweep  # noqa: E402
-from sweep.analysis.load import journal_points  # noqa: E402
-from sweep.store.journal import decode, encode, journal_path  # noqa: E402
-from sweep.testing import catches_signal  # noqa: E402
+import sweep
+from sweep.analysis.load import journal_points
+from sweep.store.journal import decode, encode, journal_path
+from sweep.testing import catches_signal
+from tests.sweep.test_torture import MPIEXEC, compare
 
 PY = sys.executable
 EPS = ", ".join(repr(round(0.05 + 0.05 * i, 2)) for i in range(18))
@@ -247,7 +243,7 @@ def corruptions() -> dict[str, object]:
             "config re-signed": resigned_config, "campaign line": header}
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--kills", type=int, default=200, help="total kills over the kill phases")
     ap.add_argument("--seed", type=int, default=15)
@@ -257,7 +253,7 @@ def main() -> int:
                     help="tries per case of issue 26's holes (0: skip them)")
     ap.add_argument("--only-holes", action="store_true",
                     help="only issue 26's holes (not the kill phases of issue 15)")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     work = args.workdir or Path(tempfile.mkdtemp(prefix="sweep-torture-store-"))
     work.mkdir(parents=True, exist_ok=True)
     rng = random.Random(args.seed)

@@ -1,6 +1,9 @@
 """Do shipped results reproduce? Points of an exported table recomputed from their config.
 
-    python benchmarks/campaign_reproduce.py [TABLE_OR_DIR] [--n 4] [--seed 0]
+    python -m tests.campaign_reproduce [TABLE_OR_DIR] [--n 4] [--seed 0]
+
+(from the repository's root; a check by hand, not in the suite: on another CPU the points
+agree only within their error bars).
 
 Draws ``--n`` points with a result from the table (default ``results/herman2019``, read by
 ``sweep.load``), rebuilds each one's :class:`floewave.ModelConfig` from its ``config_json``,

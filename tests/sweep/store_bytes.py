@@ -3,9 +3,12 @@
 Used to show that a refactor of ``sweep`` leaves the stored bytes and the journals
 unchanged: run it before and after, and ``diff`` the two dumps::
 
-    python benchmarks/store_bytes.py > before.txt   # on the old code
-    python benchmarks/store_bytes.py > after.txt    # on the new code
+    python -m tests.sweep.store_bytes > before.txt   # on the old code
+    python -m tests.sweep.store_bytes > after.txt    # on the new code
     diff before.txt after.txt && echo identical
+
+(from the repository's root; in older checkouts
+``python benchmarks/store_bytes.py``).
 
 The campaigns (stand-in compute functions of :mod:`sweep.testing`, no DEM kernel):
 
@@ -35,7 +38,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 MASKED = re.compile(r"^(time|created|started|ended|start_time|end_time|wall_time|"
                     r"model_wall_time|pid|host|rank|worker|command|git_commit|git_dirty|"
                     r"crc32|elapsed|rebuilt_from_journal)$")
