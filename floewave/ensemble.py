@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._march import march_coefficients
-from .collision_stats import collision_statistics, gap_zone_width, zone_of
+from .collision_stats import collision_statistics, gap_rule_widths, zone_of
 from .config import G, ModelConfig
 from .results import (
     LAYOUTS,
@@ -218,7 +218,8 @@ def estimate_point(cfg: ModelConfig, rec: Records, c_g: float, k: float) -> dict
     Returns a dict with the profiles (``a``, ``a_stderr`` and every Window field as the
     replica mean), ``W_c``, ``W_c_stderr``, ``W_c_n``, ``compact_zone``, ``compact_end``,
     ``ice_extent``, the per-replica ``W_c_replicas`` / ``compact_end_replicas``,
-    ``W_c_gap`` (the rule on each replica's time-mean gaps) and the collision statistics
+    the other W_c rules (:func:`floewave.collision_stats.gap_rule_widths`: the rule on
+    each replica's time-mean gaps) and the collision statistics
     (:func:`floewave.collision_stats.collision_statistics`) with their ``*_stderr``, the
     fits ``alpha_*`` with ``alpha_*_resid`` and ``alpha_*_stderr`` and ``a_end`` with
     ``a_end_stderr``. ``W_c_n`` is the number of replicas whose W_c entered the mean (0
@@ -290,8 +291,7 @@ def estimate_point(cfg: ModelConfig, rec: Records, c_g: float, k: float) -> dict
         out["W_c_stderr"] = math.nan
     # the same rule on each replica's gaps time-averaged over the whole averaging, and the
     # ice-wide collision statistics (floewave.collision_stats); no effect on the above
-    out["W_c_gap"], out["W_c_gap_stderr"], _ = gap_zone_width(cfg, prof["x_mean"],
-                                                              prof["gap_mean"])
+    out.update(gap_rule_widths(cfg, prof))
     out.update(collision_statistics(cfg, prof))
     if R < 2:
         out["a_stderr"] = np.full(len(full["a"]), np.nan)

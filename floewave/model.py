@@ -1,6 +1,7 @@
 """The coupled DEM-wave attenuation iteration (docs/model.md §4, paper §2.4) and ``run_point``."""
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Callable
@@ -8,7 +9,6 @@ from collections.abc import Callable
 import numpy as np
 
 from . import _kernels as K
-from .collision_stats import GAP_AND_COLLISION_FIELDS
 from .config import ModelConfig
 from .dispersion import alpha_confined
 from .ensemble import (
@@ -214,29 +214,14 @@ def run_point(cfg: ModelConfig,
     iterations = len(history)
     n = cfg.n_floes
     wall = time.perf_counter() - t_start
+    declared = {f.name for f in dataclasses.fields(PointResult)}
     return PointResult(
-        x_mean=est["x_mean"], a=est["a"], a_stderr=est["a_stderr"], S_sd=est["S_sd"],
-        gap_mean=est["gap_mean"], contact_fraction=est["contact_fraction"],
-        collisions=est["collisions"], F_w_mean=est["F_w_mean"], F_c_mean=est["F_c_mean"],
-        F_d_mean=est["F_d_mean"], n_floes=n, W_c=est["W_c"], compact_zone=est["compact_zone"],
-        compact_end=est["compact_end"], ice_extent=est["ice_extent"],
-        alpha_all=est["alpha_all"], alpha_all_resid=est["alpha_all_resid"],
-        alpha_edge=est["alpha_edge"], alpha_edge_resid=est["alpha_edge_resid"],
-        alpha_inner=est["alpha_inner"], alpha_inner_resid=est["alpha_inner_resid"],
-        alpha_exp=est["alpha_exp"], alpha_exp_resid=est["alpha_exp_resid"], alpha_c=alpha_c,
-        k=k, c_g=c_g, status=status, noise=noise, iterations=iterations,
-        residual=float(history[-1]), floe_steps=cfg.floe_steps_of(iterations),
-        wall_time=wall, kernel_mode=kernel_mode(cfg), a_end=est["a_end"], a0=cfg.a0,
-        residual_history=np.array(history), replicas=R, W_c_stderr=est["W_c_stderr"],
-        W_c_n=est["W_c_n"], alpha_all_stderr=est["alpha_all_stderr"],
-        alpha_edge_stderr=est["alpha_edge_stderr"],
-        alpha_inner_stderr=est["alpha_inner_stderr"],
-        alpha_exp_stderr=est["alpha_exp_stderr"], a_end_stderr=est["a_end_stderr"],
-        W_c_replicas=est["W_c_replicas"], compact_end_replicas=est["compact_end_replicas"],
-        x_mean_replicas=est["x_mean_replicas"], gap_mean_replicas=est["gap_mean_replicas"],
-        S_sd_replicas=est["S_sd_replicas"],
-        **{name: est[name] for name in GAP_AND_COLLISION_FIELDS},
-    )
+        **{name: value for name, value in est.items() if name in declared},
+        n_floes=n, alpha_c=alpha_c, k=k, c_g=c_g, status=status, noise=noise,
+        iterations=iterations, residual=float(history[-1]),
+        floe_steps=cfg.floe_steps_of(iterations), wall_time=wall,
+        kernel_mode=kernel_mode(cfg), a0=cfg.a0, residual_history=np.array(history),
+        replicas=R)
 
 
 def _iterate_noise_floor(cfg: ModelConfig, chain: FloeChain, x0s: np.ndarray, k: float,
