@@ -12,8 +12,8 @@ import numpy as np
 from . import outputs
 
 __all__ = ["PointResult", "PROFILE_FIELDS", "SCALAR_FIELDS", "REPLICA_FIELDS", "LAYOUTS", "Zones",
-           "point_result_type", "compact_zones", "zone_fits", "fit_inverse", "fit_exponential", "power_law",
-           "power_law_weighted", "jackknife_se"]
+           "point_result_type", "compact_zones", "zone_fits", "fit_inverse", "fit_exponential",
+           "power_law", "power_law_weighted", "jackknife_se"]
 
 #: Per-floe (length N_f) or per-pair (length N_f - 1, padded to N_f with NaN) profiles.
 PROFILE_FIELDS = tuple(o.name for o in outputs.profiles())
