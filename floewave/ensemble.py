@@ -26,6 +26,7 @@ import math
 import warnings
 from collections import Counter
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -41,7 +42,7 @@ from .results import (
     zone_fits,
 )
 
-__all__ = ["initial_positions", "replica_seed_sequence", "march_rows", "Records",
+__all__ = ["initial_positions", "replica_seed_sequence", "march_rows", "Records", "Iteration",
            "estimate_point", "jackknife_se", "zone_of", "fit_zone", "coefficients",
            "mean_coefficients", "effective_sample_size", "stderr", "residual"]
 
@@ -165,6 +166,26 @@ def stderr(samples: list[np.ndarray]) -> np.ndarray:
     """Per-floe standard error of the mean of iteration samples (autocorrelation-corrected)."""
     S = np.asarray(samples)
     return S.std(axis=0, ddof=1) / math.sqrt(effective_sample_size(S))
+
+
+@dataclass
+class Iteration:
+    """What an attenuation protocol hands :func:`floewave.run_point`.
+
+    status : ``converged``, ``converged_noisy`` or ``not_converged``
+        (:data:`floewave.results.STATUSES`).
+    estimate : the point's estimates by output name (:func:`estimate_point`, with the
+        protocol's ``a_stderr``): the :data:`floewave.outputs.OUTPUTS` it computes.
+    history : the update's residual max_i |a_new - a| / a per iteration (or window).
+    noise : the residual's noise floor (0 when ``converged``).
+    truncation : windows discarded as transient (the stationary protocol; else None).
+    """
+
+    status: str
+    estimate: dict[str, Any]
+    history: list[float]
+    noise: float
+    truncation: int | None = None
 
 
 @dataclass

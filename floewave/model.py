@@ -12,6 +12,7 @@ from . import _kernels as K
 from .config import ModelConfig
 from .dispersion import alpha_confined
 from .ensemble import (
+    Iteration,
     Records,
     estimate_point,
     initial_positions,
@@ -210,7 +211,7 @@ def run_point(cfg: ModelConfig,
         out = iterate_stationary(cfg, chain, x0s, k, c_g, alpha_c, progress)
     else:
         out = _iterate_noise_floor(cfg, chain, x0s, k, c_g, progress)
-    status, est, history, noise = out["status"], out["est"], out["history"], out["noise"]
+    status, est, history, noise = out.status, out.estimate, out.history, out.noise
     iterations = len(history)
     n = cfg.n_floes
     wall = time.perf_counter() - t_start
@@ -225,9 +226,8 @@ def run_point(cfg: ModelConfig,
 
 
 def _iterate_noise_floor(cfg: ModelConfig, chain: FloeChain, x0s: np.ndarray, k: float,
-                         c_g: float, progress) -> dict:
-    """The ``noise_floor`` protocol (:func:`run_point`'s docstring): ``status``, ``est``,
-    ``history``, ``noise``."""
+                         c_g: float, progress) -> Iteration:
+    """The ``noise_floor`` protocol (:func:`run_point`'s docstring) on ``chain``."""
     R = cfg.n_chains
     n = cfg.n_floes
     a = np.full((R, n), cfg.a0)          # per replica (rows equal under coupling "mean")
@@ -300,7 +300,7 @@ def _iterate_noise_floor(cfg: ModelConfig, chain: FloeChain, x0s: np.ndarray, k:
         noise = float(np.median(history[-len(samples):]))
     else:
         noise = 0.0 if status == "converged" else float(history[-1])
-    return {"status": status, "est": est, "history": history, "noise": noise}
+    return Iteration(status, est, history, noise)
 
 
 def _records(kept: list[tuple]) -> Records:
