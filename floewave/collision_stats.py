@@ -41,7 +41,7 @@ from .config import ModelConfig
 from .results import Zones, compact_zones, jackknife_se
 
 __all__ = ["COLLISION_COLUMNS", "GAP_AND_COLLISION_FIELDS", "collision_statistics",
-           "replica_collision_records", "gap_zone_width", "zone_of"]
+           "replica_collision_records", "gap_zone_width", "gap_rule_widths", "zone_of"]
 
 #: The point's collision statistics (each with a ``*_stderr``).
 COLLISION_COLUMNS = ("contact_fraction_mean", "collision_rate", "dissipation_per_collision")
@@ -110,3 +110,11 @@ def gap_zone_width(cfg: ModelConfig, x_r: np.ndarray,
     mean = float(W[has].mean()) if m else math.nan
     se = float(W[has].std(ddof=1) / math.sqrt(m)) if m >= 2 else math.nan
     return mean, se, W
+
+
+def gap_rule_widths(cfg: ModelConfig, prof: dict[str, np.ndarray]) -> dict[str, float]:
+    """``W_c_gap`` and ``W_c_gap_stderr`` (:func:`gap_zone_width`) from the replicas'
+    time-mean profiles ``prof`` (name -> (R, N_f)): the W_c rules of
+    :data:`floewave.outputs.W_C_RULES` that this module computes."""
+    W, se, _ = gap_zone_width(cfg, prof["x_mean"], prof["gap_mean"])
+    return {"W_c_gap": W, "W_c_gap_stderr": se}

@@ -26,11 +26,12 @@ import math
 import warnings
 from collections import Counter
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from ._march import march_coefficients
-from .collision_stats import collision_statistics, gap_zone_width, zone_of
+from .collision_stats import collision_statistics, gap_rule_widths, zone_of
 from .config import G, ModelConfig
 from .results import (
     LAYOUTS,
@@ -41,7 +42,7 @@ from .results import (
     zone_fits,
 )
 
-__all__ = ["initial_positions", "replica_seed_sequence", "march_rows", "Records",
+__all__ = ["initial_positions", "replica_seed_sequence", "march_rows", "Records", "Iteration",
            "estimate_point", "jackknife_se", "zone_of", "fit_zone", "coefficients",
            "mean_coefficients", "effective_sample_size", "stderr", "residual"]
 
@@ -168,6 +169,26 @@ def stderr(samples: list[np.ndarray]) -> np.ndarray:
 
 
 @dataclass
+class Iteration:
+    """What an attenuation protocol hands :func:`floewave.run_point`.
+
+    status : ``converged``, ``converged_noisy`` or ``not_converged``
+        (:data:`floewave.results.STATUSES`).
+    estimate : the point's estimates by output name (:func:`estimate_point`, with the
+        protocol's ``a_stderr``): the :data:`floewave.outputs.OUTPUTS` it computes.
+    history : the update's residual max_i |a_new - a| / a per iteration (or window).
+    noise : the residual's noise floor (0 when ``converged``).
+    truncation : windows discarded as transient (the stationary protocol; else None).
+    """
+
+    status: str
+    estimate: dict[str, Any]
+    history: list[float]
+    noise: float
+    truncation: int | None = None
+
+
+@dataclass
 class Records:
     """What the averaging window kept of every replica.
 
@@ -218,7 +239,8 @@ def estimate_point(cfg: ModelConfig, rec: Records, c_g: float, k: float) -> dict
     Returns a dict with the profiles (``a``, ``a_stderr`` and every Window field as the
     replica mean), ``W_c``, ``W_c_stderr``, ``W_c_n``, ``compact_zone``, ``compact_end``,
     ``ice_extent``, the per-replica ``W_c_replicas`` / ``compact_end_replicas``,
-    ``W_c_gap`` (the rule on each replica's time-mean gaps) and the collision statistics
+    the other W_c rules (:func:`floewave.collision_stats.gap_rule_widths`: the rule on
+    each replica's time-mean gaps) and the collision statistics
     (:func:`floewave.collision_stats.collision_statistics`) with their ``*_stderr``, the
     fits ``alpha_*`` with ``alpha_*_resid`` and ``alpha_*_stderr`` and ``a_end`` with
     ``a_end_stderr``. ``W_c_n`` is the number of replicas whose W_c entered the mean (0
@@ -290,8 +312,7 @@ def estimate_point(cfg: ModelConfig, rec: Records, c_g: float, k: float) -> dict
         out["W_c_stderr"] = math.nan
     # the same rule on each replica's gaps time-averaged over the whole averaging, and the
     # ice-wide collision statistics (floewave.collision_stats); no effect on the above
-    out["W_c_gap"], out["W_c_gap_stderr"], _ = gap_zone_width(cfg, prof["x_mean"],
-                                                              prof["gap_mean"])
+    out.update(gap_rule_widths(cfg, prof))
     out.update(collision_statistics(cfg, prof))
     if R < 2:
         out["a_stderr"] = np.full(len(full["a"]), np.nan)

@@ -1,6 +1,7 @@
 """The coupled DEM-wave attenuation iteration (docs/model.md §4, paper §2.4) and ``run_point``."""
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Callable
@@ -8,10 +9,10 @@ from collections.abc import Callable
 import numpy as np
 
 from . import _kernels as K
-from .collision_stats import GAP_AND_COLLISION_FIELDS
 from .config import ModelConfig
 from .dispersion import alpha_confined
 from .ensemble import (
+    Iteration,
     Records,
     estimate_point,
     initial_positions,
@@ -210,39 +211,23 @@ def run_point(cfg: ModelConfig,
         out = iterate_stationary(cfg, chain, x0s, k, c_g, alpha_c, progress)
     else:
         out = _iterate_noise_floor(cfg, chain, x0s, k, c_g, progress)
-    status, est, history, noise = out["status"], out["est"], out["history"], out["noise"]
+    status, est, history, noise = out.status, out.estimate, out.history, out.noise
     iterations = len(history)
     n = cfg.n_floes
     wall = time.perf_counter() - t_start
+    declared = {f.name for f in dataclasses.fields(PointResult)}
     return PointResult(
-        x_mean=est["x_mean"], a=est["a"], a_stderr=est["a_stderr"], S_sd=est["S_sd"],
-        gap_mean=est["gap_mean"], contact_fraction=est["contact_fraction"],
-        collisions=est["collisions"], F_w_mean=est["F_w_mean"], F_c_mean=est["F_c_mean"],
-        F_d_mean=est["F_d_mean"], n_floes=n, W_c=est["W_c"], compact_zone=est["compact_zone"],
-        compact_end=est["compact_end"], ice_extent=est["ice_extent"],
-        alpha_all=est["alpha_all"], alpha_all_resid=est["alpha_all_resid"],
-        alpha_edge=est["alpha_edge"], alpha_edge_resid=est["alpha_edge_resid"],
-        alpha_inner=est["alpha_inner"], alpha_inner_resid=est["alpha_inner_resid"],
-        alpha_exp=est["alpha_exp"], alpha_exp_resid=est["alpha_exp_resid"], alpha_c=alpha_c,
-        k=k, c_g=c_g, status=status, noise=noise, iterations=iterations,
-        residual=float(history[-1]), floe_steps=cfg.floe_steps_of(iterations),
-        wall_time=wall, kernel_mode=kernel_mode(cfg), a_end=est["a_end"], a0=cfg.a0,
-        residual_history=np.array(history), replicas=R, W_c_stderr=est["W_c_stderr"],
-        W_c_n=est["W_c_n"], alpha_all_stderr=est["alpha_all_stderr"],
-        alpha_edge_stderr=est["alpha_edge_stderr"],
-        alpha_inner_stderr=est["alpha_inner_stderr"],
-        alpha_exp_stderr=est["alpha_exp_stderr"], a_end_stderr=est["a_end_stderr"],
-        W_c_replicas=est["W_c_replicas"], compact_end_replicas=est["compact_end_replicas"],
-        x_mean_replicas=est["x_mean_replicas"], gap_mean_replicas=est["gap_mean_replicas"],
-        S_sd_replicas=est["S_sd_replicas"],
-        **{name: est[name] for name in GAP_AND_COLLISION_FIELDS},
-    )
+        **{name: value for name, value in est.items() if name in declared},
+        n_floes=n, alpha_c=alpha_c, k=k, c_g=c_g, status=status, noise=noise,
+        iterations=iterations, residual=float(history[-1]),
+        floe_steps=cfg.floe_steps_of(iterations), wall_time=wall,
+        kernel_mode=kernel_mode(cfg), a0=cfg.a0, residual_history=np.array(history),
+        replicas=R)
 
 
 def _iterate_noise_floor(cfg: ModelConfig, chain: FloeChain, x0s: np.ndarray, k: float,
-                         c_g: float, progress) -> dict:
-    """The ``noise_floor`` protocol (:func:`run_point`'s docstring): ``status``, ``est``,
-    ``history``, ``noise``."""
+                         c_g: float, progress) -> Iteration:
+    """The ``noise_floor`` protocol (:func:`run_point`'s docstring) on ``chain``."""
     R = cfg.n_chains
     n = cfg.n_floes
     a = np.full((R, n), cfg.a0)          # per replica (rows equal under coupling "mean")
@@ -315,7 +300,7 @@ def _iterate_noise_floor(cfg: ModelConfig, chain: FloeChain, x0s: np.ndarray, k:
         noise = float(np.median(history[-len(samples):]))
     else:
         noise = 0.0 if status == "converged" else float(history[-1])
-    return {"status": status, "est": est, "history": history, "noise": noise}
+    return Iteration(status, est, history, noise)
 
 
 def _records(kept: list[tuple]) -> Records:

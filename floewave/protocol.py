@@ -44,6 +44,7 @@ import numpy as np
 from ._march import march_coefficients
 from .config import ModelConfig
 from .ensemble import (
+    Iteration,
     Records,
     coefficients,
     estimate_point,
@@ -193,12 +194,14 @@ def _targets_met(cfg: ModelConfig, est: dict) -> bool:
 
 def iterate_stationary(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g: float,
                        alpha_c: float,
-                       progress: Callable[[int, float, str], None] | None = None) -> dict:
-    """Run the protocol (module docstring) on ``chain`` (R replicas). Returns ``status``,
-    ``est`` (:func:`floewave.ensemble.estimate_point` of the averaged windows, with R = 1
-    ``a_stderr`` the autocorrelation-corrected standard error over windows),
-    ``history`` (the update's residual per window), ``noise`` (median residual of the
-    averaged windows) and ``truncation`` (windows discarded as transient)."""
+                       progress: Callable[[int, float, str], None] | None = None
+                       ) -> Iteration:
+    """Run the protocol (module docstring) on ``chain`` (R replicas): the
+    :class:`~floewave.ensemble.Iteration` whose estimate is
+    :func:`floewave.ensemble.estimate_point` of the averaged windows (with R = 1
+    ``a_stderr`` the autocorrelation-corrected standard error over windows), its history
+    the update's residual per window, its noise the median residual of the averaged
+    windows and its truncation the windows discarded as transient."""
     R = cfg.n_chains
     a = np.tile(confined_profile(cfg, x0s[0] - x0s[0, 0] + 0.5 * cfg.L_x, alpha_c), (R, 1))
     wins = _Windows()
@@ -242,9 +245,8 @@ def iterate_stationary(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g: 
         est = _with_convergence(cfg, _estimate(cfg, wins, d, c_g, k), a, wins.A[-1])
     assert est is not None
     averaged = history[d:] if d < len(history) else history[-1:]
-    return {"status": status, "est": est, "history": history,
-            "noise": 0.0 if status == "converged" else float(np.median(averaged)),
-            "truncation": d}
+    return Iteration(status, est, history,
+                     0.0 if status == "converged" else float(np.median(averaged)), d)
 
 
 #: the smallest standard error of a reported, as a fraction of a0: below it two runs of a

@@ -3,143 +3,82 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from . import outputs
+
 __all__ = ["PointResult", "PROFILE_FIELDS", "SCALAR_FIELDS", "REPLICA_FIELDS", "LAYOUTS", "Zones",
-           "compact_zones", "zone_fits", "fit_inverse", "fit_exponential", "power_law",
-           "power_law_weighted", "jackknife_se"]
+           "point_result_type", "compact_zones", "zone_fits", "fit_inverse", "fit_exponential",
+           "power_law", "power_law_weighted", "jackknife_se"]
 
 #: Per-floe (length N_f) or per-pair (length N_f - 1, padded to N_f with NaN) profiles.
-PROFILE_FIELDS = ("x_mean", "a", "a_stderr", "S_sd", "gap_mean", "contact_fraction",
-                  "collisions", "F_w_mean", "F_c_mean", "F_d_mean")
-
+PROFILE_FIELDS = tuple(o.name for o in outputs.profiles())
 #: Scalar results and diagnostics.
-SCALAR_FIELDS = ("n_floes", "W_c", "compact_zone", "compact_end", "ice_extent", "alpha_all",
-                 "alpha_all_resid", "alpha_edge", "alpha_edge_resid", "alpha_inner",
-                 "alpha_inner_resid", "alpha_exp", "alpha_exp_resid", "alpha_c", "k", "c_g",
-                 "status", "noise", "iterations", "residual", "floe_steps", "wall_time",
-                 "kernel_mode", "a_end", "replicas", "W_c_stderr", "W_c_n",
-                 "alpha_all_stderr", "alpha_edge_stderr", "alpha_inner_stderr",
-                 "alpha_exp_stderr", "a_end_stderr", "W_c_gap", "W_c_gap_stderr",
-                 "contact_fraction_mean", "contact_fraction_mean_stderr", "collision_rate",
-                 "collision_rate_stderr", "dissipation_per_collision",
-                 "dissipation_per_collision_stderr")
-
+SCALAR_FIELDS = tuple(o.name for o in outputs.scalars())
 #: Per-replica results: (R,) scalars per replica and (R, N_f) profiles per replica.
-REPLICA_FIELDS = ("W_c_replicas", "compact_end_replicas", "x_mean_replicas",
-                  "gap_mean_replicas", "S_sd_replicas")
+REPLICA_FIELDS = tuple(o.name for o in outputs.replica_outputs())
 
 STATUSES = ("converged", "converged_noisy", "not_converged")
 
+_DOC = """Everything one model point reports: one field per :data:`floewave.outputs.OUTPUTS`
+entry (its meaning, unit and dims are declared there), and ``a0`` [m] the incident
+amplitude of the configuration (for :attr:`a_rel`).
 
-@dataclass
-class PointResult:
-    """Everything one model point reports.
+Profiles are numpy arrays of length N_f (per-pair quantities have N_f - 1 values and a
+trailing NaN so every profile has the same length); ``residual_history`` holds
+max_i |a_new-a|/a per iteration. The collision-zone scalars come from
+:func:`compact_zones` (layouts :data:`LAYOUTS`); the ensemble's estimates and standard
+errors are described in :mod:`floewave.outputs`.
 
-    Profiles (numpy arrays of length N_f; per-pair quantities have N_f - 1 values and a
-    trailing NaN so every profile has the same length):
+Fields:
 
-    x_mean [m] time-mean floe centre over the last nT window, from the ice edge;
-    a [m] converged (or iteration-averaged) amplitude; a_stderr [m] its standard error;
-    S_sd [W m^-2] skin-drag dissipation (eq. 19, negative); gap_mean [m] mean gap per pair;
-    contact_fraction [-] fraction of time steps in contact per pair; collisions [-] contact
-    onsets per pair in the last nT window; F_w_mean, F_c_mean, F_d_mean [N] time-mean
-    |F_w|, |F_c| (sum over contacts of the floe), |F_d| per floe.
+"""
 
-    Scalars: see :data:`SCALAR_FIELDS`; ``residual_history`` holds max_i |a_new-a|/a per
-    iteration. The collision-zone scalars come from :func:`compact_zones`: ``W_c`` [m]
-    start of the first compact zone (NaN without one), ``compact_zone`` its layout
-    (:data:`LAYOUTS`), ``compact_end`` [m] where that zone ends, ``ice_extent`` [m] the far
-    end of the ice (last floe's mean centre + L_x / 2; above L_sheet when gaps open).
 
-    Ensemble (``replicas`` = R chains, :mod:`floewave.ensemble`): profiles and scalars
-    are the ensemble's estimates; ``a_stderr`` and every ``*_stderr`` are jackknife
-    standard errors over the replicas (R = 1: ``a_stderr`` and ``a_end_stderr`` are the
-    iteration standard error and the other scalar ones are NaN: one trajectory has no
-    error bar for them).
-    ``W_c`` is the mean of the per-replica ``W_c_replicas`` over the ``W_c_n`` replicas
-    with a compact zone, a replica's W_c the mean over its averaging windows of the
-    window's W_c (the paper's W_c is that of one nT-period window; so is the layout),
-    ``compact_zone`` the most common layout over windows and replicas. Per replica:
-    ``W_c_replicas``, ``compact_end_replicas`` (R,), ``x_mean_replicas``,
-    ``gap_mean_replicas``, ``S_sd_replicas`` (R, N_f), time means over the averaging
-    window. ``W_c_gap`` [m] is the same rule applied to each replica's gaps time-averaged
-    over the whole averaging (``gap_mean_replicas``), the mean over the replicas with a
-    compact zone. The ice-wide collision statistics ``contact_fraction_mean`` [1],
-    ``collision_rate`` [per pair per wave period] and ``dissipation_per_collision`` [J],
-    each with a jackknife ``*_stderr``, are defined in :mod:`floewave.collision_stats`
-    (NaN for fixed floes).
-    """
+def _array_default(dims: tuple[str, ...]) -> Callable[[], np.ndarray]:
+    return lambda: np.zeros((0,) * len(dims))
 
-    x_mean: np.ndarray
-    a: np.ndarray
-    a_stderr: np.ndarray
-    S_sd: np.ndarray
-    gap_mean: np.ndarray
-    contact_fraction: np.ndarray
-    collisions: np.ndarray
-    F_w_mean: np.ndarray
-    F_c_mean: np.ndarray
-    F_d_mean: np.ndarray
-    n_floes: int
-    W_c: float
-    compact_zone: str
-    compact_end: float
-    ice_extent: float
-    alpha_all: float
-    alpha_all_resid: float
-    alpha_edge: float
-    alpha_edge_resid: float
-    alpha_inner: float
-    alpha_inner_resid: float
-    alpha_exp: float
-    alpha_exp_resid: float
-    alpha_c: float
-    k: float
-    c_g: float
-    status: str
-    noise: float
-    iterations: int
-    residual: float
-    floe_steps: int
-    wall_time: float
-    kernel_mode: str
-    a_end: float
-    a0: float
-    residual_history: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    replicas: int = 1
-    W_c_stderr: float = math.nan
-    W_c_n: int = 0
-    alpha_all_stderr: float = math.nan
-    alpha_edge_stderr: float = math.nan
-    alpha_inner_stderr: float = math.nan
-    alpha_exp_stderr: float = math.nan
-    a_end_stderr: float = math.nan
-    W_c_gap: float = math.nan
-    W_c_gap_stderr: float = math.nan
-    contact_fraction_mean: float = math.nan
-    contact_fraction_mean_stderr: float = math.nan
-    collision_rate: float = math.nan
-    collision_rate_stderr: float = math.nan
-    dissipation_per_collision: float = math.nan
-    dissipation_per_collision_stderr: float = math.nan
-    W_c_replicas: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    compact_end_replicas: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    x_mean_replicas: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
-    gap_mean_replicas: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
-    S_sd_replicas: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
 
-    @property
-    def a_rel(self) -> np.ndarray:
+def point_result_type(declared: tuple[outputs.Output, ...] = outputs.OUTPUTS,
+                      name: str = "PointResult") -> type:
+    """The result dataclass of ``declared`` outputs: their fields in their order (the
+    required ones, then ``a0``, then those with a default), :attr:`a_rel` and
+    :meth:`to_dict`."""
+    required: list[Any] = []
+    optional: list[Any] = []
+    for o in declared:
+        kind = "np.ndarray" if o.dims else o.kind
+        if o.default == outputs.REQUIRED:
+            required.append((o.name, kind))
+        elif o.dims:
+            optional.append((o.name, kind, field(default_factory=_array_default(o.dims))))
+        else:
+            optional.append((o.name, kind, field(default=o.default)))
+
+    def a_rel(self: Any) -> np.ndarray:
         """a / a0 per floe."""
         return self.a / self.a0
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self: Any) -> dict[str, Any]:
         """All fields; arrays stay numpy arrays."""
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+
+    lines = [f"{o.name} [{o.unit or 'text'}]{' (' + ', '.join(o.dims) + ')' if o.dims else ''}:"
+             f" {o.long_name}" for o in declared]
+    cls = dataclasses.make_dataclass(
+        name, [*required, ("a0", "float"), *optional],
+        namespace={"a_rel": property(a_rel), "to_dict": to_dict,
+                   "__doc__": _DOC + "\n".join(lines), "__module__": __name__})
+    cls.__qualname__ = name
+    return cls
+
+
+#: The result of :func:`floewave.run_point` (built from :data:`floewave.outputs.OUTPUTS`).
+PointResult = point_result_type()
 
 
 #: Layouts of the compact zone (``PointResult.compact_zone``), see :func:`compact_zones`.

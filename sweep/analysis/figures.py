@@ -8,8 +8,9 @@ everything else fixed, so a store of any campaign gives whatever figures its gri
           ``ow``), with the standard error of a(x) as a band, the confined-ice curve of
           eq. 25 (alpha_c from eq. 24, solid black), a dot where the phase-averaged gap drops
           below ``gap_threshold`` (x = W_c) and the compact-ice solution started from that dot
-          (dashed black: 1/a = 1/a(W_c) + alpha_c (x - W_c)); an open diamond where the same
-          rule on the gaps averaged over the whole averaging puts it (``W_c_gap``, schema 4).
+          (dashed black: 1/a = 1/a(W_c) + alpha_c (x - W_c)); an open marker where each other
+          rule of ``floewave.outputs.W_C_RULES`` puts it (a diamond: the same rule on the gaps
+          averaged over the whole averaging, schema 4).
           Groups: (L_x, T, a0, C_sd, d_f).
           Ensembles: the a(x) band is ±1 standard error, the bar on the dot ±1 SE(W_c).
 ``fig3``  mean gap (log axis; dashed: the initial d_f; dotted: ``gap_threshold``, 1e-4 m, below
@@ -47,6 +48,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from floewave.outputs import W_C_RULES
 from sweep.analysis.load import load
 from sweep.analysis.plotting import (
     DISP_ORDER,
@@ -59,6 +61,7 @@ from sweep.analysis.plotting import (
     format_value,
     group_title,
     legend_of,
+    other_rules,
     point_groups,
     save_figure,
     status_handles,
@@ -93,11 +96,13 @@ def fig2(df: pd.DataFrame, profiles: ProfileCache, out: Path, limit: int) -> lis
                            label=f"ε = {row['eps']:g}", zone=True)
             draw_confined(ax, rows.iloc[0], x_end)
             ax.plot([], [], "k--", lw=0.9, label="compact ice from x = W_c")
+            first = W_C_RULES[0]
             ax.plot([], [], "o", color="0.6", mec="k", mew=0.6,
-                    label="start of the compact zone (x = W_c, per averaging window)")
-            if "W_c_gap" in rows.columns and rows["W_c_gap"].notna().any():
-                ax.plot([], [], "D", mfc="none", mec="0.4", mew=1.2,
-                        label="W_c from the gaps averaged over all windows")
+                    label=f"start of the compact zone (x = {first.name}, {first.rule})")
+            for rule, marker in other_rules():
+                if rule.name in rows.columns and rows[rule.name].notna().any():
+                    ax.plot([], [], marker, mfc="none", mec="0.4", mew=1.2,
+                            label=f"W_c from {rule.rule}")
             ax.set_title(f"({chr(97 + panel)}) {disp.upper()}", loc="left")
             ax.set_xlabel("distance from the ice edge x [m]")
             ax.grid(alpha=0.3)

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from floewave.outputs import W_C_RULES
 from sweep.analysis.load import load_profile
 from sweep.store.schema import column
 
@@ -22,7 +23,7 @@ __all__ = ["PAPER_SETUP", "DISP_ORDER", "DISP_STYLE", "SYMBOL", "format_value", 
            "figure_file", "closeness_to_paper", "point_groups", "ProfileCache", "colour_cycle",
            "MARKERS", "NOT_CONVERGED", "NOT_CONVERGED_RING", "not_converged_mask",
            "status_handles", "draw_ring", "legend_of", "curve_styles", "draw_amplitude",
-           "draw_confined", "save_figure"]
+           "draw_confined", "save_figure", "RULE_MARKERS", "other_rules"]
 
 #: The paper's reference setup: groups closest to it are drawn first.
 PAPER_SETUP = {"L_x": 0.5, "T": 1.2, "a0": 0.0125, "C_sd": 0.05, "eps": 0.6, "d_f": 0.005,
@@ -93,6 +94,8 @@ def colour_cycle(n: int) -> list:
 
 
 MARKERS = ("o", "s", "^", "D", "v", "P", "*", "X", "<", ">")
+#: Open markers of the W_c rules after the first (:func:`other_rules`).
+RULE_MARKERS = ("D", "s", "^", "v", "P")
 #: The legend entry of the crosses on a not-converged curve (its handle shows the cross:
 #: the text does not repeat it).
 NOT_CONVERGED = "not converged (max_iterations reached; the estimate so far)"
@@ -195,12 +198,20 @@ def draw_amplitude(ax, row: pd.Series, prof: dict[str, np.ndarray], colour, styl
         if np.isfinite(alpha_c) and a_w > 0:
             xx = np.linspace(W_c, end, 100)
             ax.plot(xx, 1.0 / (1.0 / a_w + alpha_c * (xx - W_c)) / a0, "k--", lw=0.9)
-    # the same rule on the gaps averaged over the whole averaging (schema 4's W_c_gap): an
-    # open diamond, to show how much the definition moves the zone's start
-    W_g = float(row.get("W_c_gap", np.nan))
-    if np.isfinite(W_g) and W_g < x[-1]:
-        ax.plot([W_g], [float(np.interp(W_g, x, a)) / a0], "D", mfc="none", mec=colour,
-                ms=6, mew=1.2, zorder=5)
+    # every other W_c rule the model declares (floewave.outputs.W_C_RULES; schema 4: the
+    # rule on the gaps averaged over the whole averaging): an open marker each, to show how
+    # much the definition moves the zone's start
+    for rule, marker in other_rules():
+        W_g = float(row.get(rule.name, np.nan))
+        if np.isfinite(W_g) and W_g < x[-1]:
+            ax.plot([W_g], [float(np.interp(W_g, x, a)) / a0], marker, mfc="none",
+                    mec=colour, ms=6, mew=1.2, zorder=5)
+
+
+def other_rules() -> list[tuple[Any, str]]:
+    """(output, open marker) of each W_c rule after the first one (the dot's) that
+    :data:`floewave.outputs.W_C_RULES` declares."""
+    return list(zip(W_C_RULES[1:], RULE_MARKERS, strict=False))
 
 
 def draw_confined(ax, row: pd.Series, x_end: float, label: bool = True) -> None:

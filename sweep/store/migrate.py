@@ -13,7 +13,12 @@ from typing import Any
 from sweep.errors import SchemaVersionError
 from sweep.store.schema import ADDED_IN, COLUMNS, MIGRATION_FILL, SCHEMA_VERSION, column
 
-__all__ = ["MIGRATIONS", "migration_steps", "migrate", "add_columns"]
+__all__ = ["MIGRATIONS", "migration_steps", "migrate", "add_columns", "added_in"]
+
+
+def added_in(version: int) -> list[str]:
+    """The columns that schema ``version`` added, in the table's order."""
+    return [c.name for c in COLUMNS if ADDED_IN.get(c.name, 1) == version]
 
 
 def add_columns(f: Any, version: int) -> None:
@@ -21,7 +26,7 @@ def add_columns(f: Any, version: int) -> None:
     values (:data:`MIGRATION_FILL` where given)."""
     table = f["table"]
     size = table["hash"].shape[0]
-    for name in [c.name for c in COLUMNS if ADDED_IN.get(c.name, 1) == version]:
+    for name in added_in(version):
         if name in table:
             continue
         col = column(name)
@@ -52,8 +57,9 @@ def _v2_to_v3(f: Any) -> None:
 
 
 def _v3_to_v4(f: Any) -> None:
-    """Add W_c_gap and the collision statistics with their standard errors: NaN for old
-    points (not recomputed; their per-replica datasets hold the gaps, not the collisions)."""
+    """Add the columns of schema 4 (:func:`added_in`: the W_c rule on the time-mean gaps
+    and the collision statistics) with their standard errors: NaN for old points (not
+    recomputed; their per-replica datasets hold the gaps, not the collisions)."""
     add_columns(f, 4)
 
 
@@ -66,8 +72,8 @@ MIGRATIONS: dict[int, tuple[int, str, Any]] = {
     2: (3, "add the ensemble columns replicas (= 1 for old points), W_c_stderr, W_c_n "
            "(-1), alpha_*_stderr, a_end_stderr (NaN); old points have no per-replica "
            "datasets", _v2_to_v3),
-    3: (4, "add W_c_gap, contact_fraction_mean, collision_rate, dissipation_per_collision "
-           "and their *_stderr (NaN for old points)", _v3_to_v4),
+    3: (4, f"add {', '.join(n for n in added_in(4) if not n.endswith('_stderr'))} and"
+           " their *_stderr (NaN for old points)", _v3_to_v4),
 }
 
 

@@ -30,7 +30,7 @@ from sweep.identity import canonical_json
 from sweep.protocol import Outcome
 from sweep.store.cells import check_profiles, normalise_record
 from sweep.store.journal import encode
-from sweep.store.schema import column
+from sweep.store.schema import RESULT_COLUMNS, column
 
 __all__ = ["Record", "provenance_json"]
 
@@ -138,30 +138,17 @@ def _row_of(point: Any, out: Outcome, config: dict[str, Any] | None,
                            for name in floewave.SWEPT_FIELDS}
     scalars = out.scalars
     unusable = []
-    for name, value in scalars.items():
-        if name in ("status", "wall_time"):
-            continue
+    # the model's declared outputs (floewave.outputs) as the kind declared: those stored
+    # under their own name in the result's order, then those stored under another name
+    # (model_wall_time: the row's order of schema 1); anything else is not the model's
+    declared = [(name, name) for name in scalars if RESULT_COLUMNS.get(name) == name]
+    renamed = [(name, stored) for name, stored in RESULT_COLUMNS.items() if stored != name]
+    for name, stored in (*declared, *renamed):
+        value = scalars.get(name)
         try:
-            kind = column(name).kind
-        except KeyError:
-            continue
-        try:
-            if kind == "str":
-                row[name] = str(value)
-            elif kind == "int":  # None or NaN: missing (-1); +-inf is no count
-                row[name] = (-1 if value is None or (isinstance(value, float)
-                                                     and math.isnan(value))
-                             else int(value))
-            else:
-                row[name] = float(value) if value is not None else math.nan
-                if math.isinf(row[name]):  # NaN means "none"; infinity is no result
-                    raise ValueError("not finite")
+            row[stored] = _result_value(column(stored).kind, value)
         except (TypeError, ValueError, OverflowError):
             unusable.append(f"{name} = {str(value)[:40]!r}")
-    try:
-        row["model_wall_time"] = float(scalars.get("wall_time", math.nan))
-    except (TypeError, ValueError):
-        unusable.append(f"wall_time = {str(scalars.get('wall_time'))[:40]!r}")
     if unusable:  # the schema cannot hold the result: a failed point, with the reason
         out = dataclasses.replace(
             out, status="failed", profiles={}, residual_history=np.zeros(0),
@@ -175,6 +162,20 @@ def _row_of(point: Any, out: Outcome, config: dict[str, Any] | None,
     if provenance is not None:  # the same for every point of a rank and kernel mode
         row["provenance"] = provenance(int(out.rank), str(scalars.get("kernel_mode", "")))
     return {"row": row, "profiles": out.profiles, "residual_history": out.residual_history}
+
+
+def _result_value(kind: str, value: Any) -> Any:
+    """A model's scalar as its declared kind: None or NaN is missing (-1 for a count, NaN
+    for a float); +-inf is no result (ValueError)."""
+    if kind == "str":
+        return str(value)
+    if kind == "int":
+        return (-1 if value is None or (isinstance(value, float) and math.isnan(value))
+                else int(value))
+    number = float(value) if value is not None else math.nan
+    if math.isinf(number):
+        raise ValueError("not finite")
+    return number
 
 
 def provenance_json(env: Mapping[str, Any], git: Mapping[str, Any], kernel_mode: str) -> str:

@@ -28,7 +28,10 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["SCHEMA_VERSION", "FORMAT", "Column", "COLUMNS", "DERIVED", "DERIVED_FROM",
+from floewave import outputs
+
+__all__ = ["SCHEMA_VERSION", "FORMAT", "Column", "OWN_HEAD", "OWN_TAIL", "COLUMNS",
+           "RESULT_COLUMNS", "model_columns", "DERIVED", "DERIVED_FROM",
            "PROFILE_VARS", "REPLICA_VARS",
            "STATUSES", "ADDED_IN", "MIGRATION_FILL", "HISTORY_VAR", "ROOT_ATTRS", "RUN_ATTRS",
            "column", "profile_path"]
@@ -58,8 +61,8 @@ class Column:
 
 
 _C = Column
-#: The per-point table (``/table/<name>``), one row per point.
-COLUMNS: tuple[Column, ...] = (
+#: The store's own leading columns: the point's identity, its swept parameters, its status.
+OWN_HEAD: tuple[Column, ...] = (
     _C("hash", "str", "", "point identity: SHA-256 of canonical config JSON"),
     _C("L_x", "float", "m", "floe length"),
     _C("T", "float", "s", "wave period"),
@@ -71,58 +74,9 @@ COLUMNS: tuple[Column, ...] = (
     _C("status", "str", "", "converged, converged_noisy, not_converged, failed, invalid,"
        " crashed, timeout"),
     _C("message", "str", "", "reason for failed/invalid (traceback with rank and host)"),
-    _C("n_floes", "int", "1", "number of floes N_f"),
-    _C("W_c", "float", "m", "collision-zone width: start of the first compact zone (NaN: none)"),
-    _C("compact_zone", "str", "", "layout of the compact zone: edge, inverted, patchy, none"),
-    _C("compact_end", "float", "m", "end of the first compact zone"),
-    _C("ice_extent", "float", "m", "far end of the ice: last floe's mean centre + L_x/2"),
-    _C("alpha_all", "float", "m-2", "slope of 1/a over all floes"),
-    _C("alpha_all_resid", "float", "1", "RMS misfit of the 1/a fit over all floes / a0"),
-    _C("alpha_edge", "float", "m-2", "slope of 1/a in the collisional zone x < W_c (all"
-       " floes without a compact zone; NaN if too short)"),
-    _C("alpha_edge_resid", "float", "1", "RMS misfit of the edge fit / a0"),
-    _C("alpha_inner", "float", "m-2", "slope of 1/a in the first compact zone (NaN: none or"
-       " too short)"),
-    _C("alpha_inner_resid", "float", "1", "RMS misfit of the inner fit / a0"),
-    _C("alpha_exp", "float", "m-1", "exponential attenuation rate (slope of -ln a)"),
-    _C("alpha_exp_resid", "float", "1", "RMS misfit of the exponential fit / a0"),
-    _C("alpha_c", "float", "m-2", "confined-ice attenuation rate (eq. 24)"),
-    _C("k", "float", "rad m-1", "wavenumber (eq. 6)"),
-    _C("c_g", "float", "m s-1", "group velocity (eq. 7)"),
-    _C("noise", "float", "1", "residual noise floor (converged_noisy)"),
-    _C("iterations", "int", "1", "attenuation iterations done"),
-    _C("residual", "float", "1", "final residual max |a_new - a| / a"),
-    _C("floe_steps", "int", "1", "floe-steps computed (cost unit)"),
-    _C("kernel_mode", "str", "", "kernel variant that ran"),
-    _C("a_end", "float", "m", "amplitude at the far end of the sheet"),
-    _C("model_wall_time", "float", "s", "wall time reported by the model"),
-    _C("replicas", "int", "1", "floe chains R of the ensemble (1: a single trajectory)"),
-    _C("W_c_stderr", "float", "m", "standard error of W_c (mean over the W_c_n replicas with"
-       " a compact zone; NaN with fewer than 2)"),
-    _C("W_c_n", "int", "1", "replicas with a compact zone (-1: stored before schema 3)"),
-    _C("alpha_all_stderr", "float", "m-2", "jackknife standard error of alpha_all over"
-       " replicas (NaN: R = 1)"),
-    _C("alpha_edge_stderr", "float", "m-2", "jackknife standard error of alpha_edge"),
-    _C("alpha_inner_stderr", "float", "m-2", "jackknife standard error of alpha_inner"),
-    _C("alpha_exp_stderr", "float", "m-1", "jackknife standard error of alpha_exp"),
-    _C("a_end_stderr", "float", "m", "standard error of a_end"),
-    _C("W_c_gap", "float", "m", "W_c of the gaps time-averaged over the whole averaging:"
-       " the W_c rule on each replica's gap_mean_replicas, mean over the replicas with a"
-       " compact zone (NaN: none)"),
-    _C("W_c_gap_stderr", "float", "m", "standard error of W_c_gap (NaN with fewer than 2"
-       " replicas with a compact zone)"),
-    _C("contact_fraction_mean", "float", "1", "fraction of time steps in contact, mean over"
-       " the N_f - 1 pairs and the replicas (NaN: confined)"),
-    _C("contact_fraction_mean_stderr", "float", "1", "jackknife standard error of"
-       " contact_fraction_mean over replicas (NaN: R = 1)"),
-    _C("collision_rate", "float", "1", "contact onsets per pair per wave period: mean over"
-       " the pairs and the replicas of onsets in an averaging window / nT (NaN: confined)"),
-    _C("collision_rate_stderr", "float", "1", "jackknife standard error of collision_rate"),
-    _C("dissipation_per_collision", "float", "J", "skin-drag dissipation per collision:"
-       " sum over floes of -S_sd L_x L_y [W] / sum over pairs of onsets per second, replica"
-       " means (NaN: no collision, confined)"),
-    _C("dissipation_per_collision_stderr", "float", "J", "jackknife standard error of"
-       " dissipation_per_collision"),
+)
+#: The store's own trailing columns: where, when and by which run a point was computed.
+OWN_TAIL: tuple[Column, ...] = (
     _C("host", "str", "", "host that computed the point"),
     _C("rank", "int", "1", "MPI rank that computed the point (0: in-process)"),
     _C("pid", "int", "1", "process id that computed the point"),
@@ -134,6 +88,19 @@ COLUMNS: tuple[Column, ...] = (
     _C("config_json", "str", "", "canonical JSON of the resolved ModelConfig"),
     _C("provenance", "str", "", "JSON: versions of package, git, python, numpy, numba, MPI"),
 )
+
+
+def model_columns(declared: tuple[outputs.Output, ...] = outputs.OUTPUTS) -> tuple[Column, ...]:
+    """The table columns of the model's declared scalar outputs, in their order."""
+    return tuple(Column(str(o.column), o.kind, o.unit, o.long_name)
+                 for o in outputs.table_outputs(declared))
+
+
+#: The per-point table (``/table/<name>``), one row per point: the store's own columns
+#: around the model's (:data:`floewave.outputs.OUTPUTS`).
+COLUMNS: tuple[Column, ...] = (*OWN_HEAD, *model_columns(), *OWN_TAIL)
+#: The table column of each model output stored there (PointResult field -> column).
+RESULT_COLUMNS = {o.name: str(o.column) for o in outputs.table_outputs()}
 #: Columns that :func:`sweep.load` and :func:`sweep.load_xarray` derive from stored ones
 #: when they read a store (not stored: the store's layout and version do not change).
 DERIVED: tuple[Column, ...] = (
@@ -158,29 +125,14 @@ ADDED_IN = {"compact_zone": 2, "compact_end": 2, "ice_extent": 2,
 MIGRATION_FILL = {"replicas": 1}
 
 #: Per-point profiles (``/profiles/<hh>/<hash>/<name>``): name -> (units, long_name).
-PROFILE_VARS: dict[str, tuple[str, str]] = {
-    "x_mean": ("m", "time-mean floe centre from the ice edge"),
-    "a": ("m", "wave amplitude at the floe"),
-    "a_stderr": ("m", "standard error of the amplitude"),
-    "S_sd": ("W m-2", "skin-drag dissipation (eq. 19)"),
-    "gap_mean": ("m", "mean gap to the next floe (last value NaN)"),
-    "contact_fraction": ("1", "fraction of time in contact with the next floe"),
-    "collisions": ("1", "contact onsets with the next floe in the averaging window"),
-    "F_w_mean": ("N", "time-mean |wave force|"),
-    "F_c_mean": ("N", "time-mean |contact force|"),
-    "F_d_mean": ("N", "time-mean |drag force|"),
-}
-HISTORY_VAR = ("residual_history", "1", "residual max |a_new - a| / a per iteration")
+PROFILE_VARS: dict[str, tuple[str, str]] = {o.name: (o.unit, o.long_name)
+                                            for o in outputs.profiles()}
+HISTORY_VAR = (outputs.history().name, outputs.history().unit, outputs.history().long_name)
 #: Per-replica results of an ensemble (schema 3; absent for points stored before it):
 #: name -> (units, long_name, shape) with shape ``("R",)`` or ``("R", "N_f")``.
 REPLICA_VARS: dict[str, tuple[str, str, tuple[str, ...]]] = {
-    "W_c_replicas": ("m", "W_c of each replica (NaN: no compact zone)", ("R",)),
-    "compact_end_replicas": ("m", "end of each replica's first compact zone", ("R",)),
-    "x_mean_replicas": ("m", "time-mean floe centre per replica", ("R", "N_f")),
-    "gap_mean_replicas": ("m", "mean gap to the next floe per replica (last NaN)",
-                          ("R", "N_f")),
-    "S_sd_replicas": ("W m-2", "skin-drag dissipation per replica", ("R", "N_f")),
-}
+    o.name: (o.unit, o.long_name, o.dims) for o in outputs.replica_outputs()}
+
 
 def profile_path(h: str) -> str:
     """The HDF5 group of point ``h``'s profiles: ``profiles/<first two hash chars>/<h>``."""

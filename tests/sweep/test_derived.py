@@ -47,3 +47,22 @@ def test_derived_columns_are_not_stored(store):
         assert int(f.attrs["schema_version"]) == SCHEMA_VERSION
     assert not {c.name for c in DERIVED} & {c.name for c in COLUMNS}
     assert sweep.validate(store) == []
+
+
+def test_xarray_and_profile_attributes_are_the_declared_ones(store):
+    """Every model variable of load_xarray and load_profile carries the unit and long name
+    floewave.outputs declares for it."""
+    from floewave.outputs import OUTPUTS
+
+    ds = sweep.load_xarray(store)
+    h = sweep.load(store)["hash"].iloc[0]
+    prof = sweep.load_profile(store, h)
+    checked = 0
+    for o in OUTPUTS:
+        name = o.name if o.dims else o.column    # None: the store's own status column
+        for data in (ds, prof):
+            if name is not None and name in data:
+                assert data[name].attrs["units"] == o.unit, name
+                assert data[name].attrs["long_name"] == o.long_name, name
+                checked += 1
+    assert checked >= 40
