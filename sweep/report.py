@@ -291,7 +291,7 @@ def build_report(store: str | Path, *, sections: Sequence[Callable[[], Section]]
     ----------
     store : the HDF5 store of a campaign.
     sections : functions each returning an extra :data:`Section`, called in order after
-        the report's own sections are made (a study's table, e.g. ``herman2019 report``).
+        the report's own sections are made (e.g. a study's table of its own).
     max_figures : at most this many figures per kind (groups closest to the paper first).
     """
     from sweep.analysis.load import journal_points, load, store_attrs, store_runs
