@@ -225,7 +225,7 @@ def _run_seed(stores: Path, configs: Path, seed: int, names: Sequence[str],
 
 
 def _stderr(msg: str) -> None:
-    print(f"sweep: {msg}", file=sys.stderr, flush=True)
+    print(f"herman2019: {msg}", file=sys.stderr, flush=True)
 
 
 def _run_seeds(stores: Path, configs: Path, seeds: Sequence[int], names: Sequence[str],
