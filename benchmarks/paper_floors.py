@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 import sweep
-from sweep.paper.points import force_decades
+from herman2019.points import force_decades
 
 RATIOS = (("F_w/F_d compact", "compact", "F_w_mean", "F_d_mean"),
           ("F_w/F_d collisional", "collisional", "F_w_mean", "F_d_mean"),

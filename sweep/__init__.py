@@ -8,8 +8,6 @@
 - :func:`validate` — check a store against ``results_schema/``
 - :func:`collision_stats`, :func:`alpha_omega` — collision-zone statistics and alpha(omega)
   power laws across a campaign (:mod:`sweep.analysis.stats`)
-- :mod:`sweep.paper.check` — the paper's qualitative claims checked on the stores of the
-  shipped paper campaigns (``sweep paper-check``)
 
 The command line is ``sweep`` (:mod:`sweep.cli`); user docs are in ``sweep/README.md``.
 """
@@ -44,7 +42,7 @@ _LAZY = {
     "derived": "analysis.stats",
 }
 #: Subpackages and modules reachable as attributes of ``sweep`` (imported on first use).
-_MODULES = {"analysis", "arguments", "cli", "config", "errors", "identity", "paper",
+_MODULES = {"analysis", "arguments", "cli", "config", "errors", "identity",
             "protocol", "provenance", "report", "run", "store", "system", "testing"}
 
 

@@ -1,5 +1,4 @@
-"""The ``sweep`` command: plan, run, status, export, validate, merge, figures, paper-check,
-report.
+"""The ``sweep`` command: plan, run, status, export, validate, merge, figures, report.
 
 Exit statuses are those of :mod:`sweep.errors` (0 ok, 1 internal error, 2 bad input,
 3 store problem, 4 MPI launch problem, 5 worker failure, 6 interrupted but resumable).
@@ -94,42 +93,10 @@ def build_parser() -> argparse.ArgumentParser:
                     default=None, help="only these kinds, comma-separated or repeated:"
                     " fig2,fig3,fig5,fig6,summary (default all)")
 
-    pc = sub.add_parser("paper-check", help="check the paper's qualitative claims on the"
-                        " stores of the shipped paper campaigns (one table)")
-    pc.add_argument("--stores", type=Path, default=Path("paper"), metavar="DIR",
-                    help="directory of the stores <name>.h5 (default: paper)")
-    pc.add_argument("--run", action="store_true", help="first run (or resume) the campaigns"
-                    " into DIR, in-process")
-    pc.add_argument("--configs", type=Path, default=None, metavar="DIR",
-                    help="campaign files <name>.toml for --run (default: this checkout's"
-                    " configs/)")
-    pc.add_argument("--compute", default=None, metavar="MODULE:FUNC",
-                    help="compute function for --run (tests; default floewave:run_point)")
-    pc.add_argument("--json", action="store_true", help="machine-readable output")
-    pc.add_argument("--seeds", type=int, nargs="+", default=None, metavar="S",
-                    help="check independent ensembles: the campaigns with [base] seed = S"
-                    " in DIR/seed<S>/ (run with --run); a verdict stands only where every"
-                    " seed gives it")
-    pc.add_argument("--settle", action="store_true", help="settle every row: pool seeds"
-                    " 0, 1, ... in DIR/seed<S>/, added in looks of 4, 8, ... seeds (with"
-                    " --run: run as needed) read group-sequentially (docs/paper-check.md)")
-    pc.add_argument("--max-seeds", type=int, default=None, metavar="N",
-                    help="--settle: the last look's seeds (4 x a power of 2; default 64)")
-    pc.add_argument("--first-seed", type=int, default=None, metavar="S",
-                    help="--settle: pool seeds S, S+1, ... (default 0; a settling on fresh"
-                    " seeds is independent of one run before)")
-    pc.add_argument("--floor", type=float, default=None, metavar="M",
-                    help="--settle: stop adding seeds to a chain of a/a0 whose undecided"
-                    " steps all lie within +-M of a0 (off by default; docs/paper-check.md)")
-    pc.add_argument("--jobs", type=int, default=None, metavar="N",
-                    help="--settle --run: run a look's seeds in N processes (default 1)")
-
     rp = sub.add_parser("report", help="one self-contained HTML page of a campaign: what ran,"
                         " status, failures, figures, collision-zone statistics")
     rp.add_argument("store", type=Path)
     rp.add_argument("--out", type=Path, required=True, help="HTML file to write")
-    rp.add_argument("--paper-check", type=Path, default=None, metavar="DIR",
-                    help="add the paper-check table of the stores in DIR")
     rp.add_argument("--max", type=int, default=3, metavar="N", help="at most N figures per"
                     " kind (default 3)")
 
@@ -284,67 +251,6 @@ def cmd_figures(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def cmd_paper_check(args: argparse.Namespace) -> int:
-    """Exit status 0 whatever the verdicts; 3 if a store is missing or unreadable (the
-    table is printed all the same, those claims inconclusive)."""
-    from sweep.paper.check import check_stores, format_table
-
-    def log(msg: str) -> None:
-        print(f"sweep: {msg}", file=sys.stderr)
-
-    if args.settle:
-        if args.seeds:
-            raise ConfigError("--settle and --seeds: give one (--settle chooses its seeds)")
-        from sweep.paper.settle import settle
-        from sweep.paper.settled import format_settled, settled_json
-
-        most = 64 if args.max_seeds is None else args.max_seeds
-        first = 0 if args.first_seed is None else args.first_seed
-        jobs = 1 if args.jobs is None else args.jobs
-        if first < 0:
-            raise ConfigError(f"--first-seed {first}: a seed is >= 0")
-        if args.floor is not None and not 0.0 < args.floor < 1.0:
-            raise ConfigError(f"--floor {args.floor}: a fraction of a0 in (0, 1), e.g. 0.01")
-        if jobs < 1:
-            raise ConfigError(f"--jobs {jobs}: at least 1")
-        if args.jobs is not None and not args.run:
-            raise ConfigError("--jobs: only with --run (it says how many processes run seeds)")
-        settled = settle(args.stores, max_seeds=most, first_seed=first, run=args.run,
-                         configs=args.configs, compute=args.compute, log=log, jobs=jobs,
-                         floor=args.floor)
-        print(settled_json(settled) if args.json else format_settled(settled))
-        for name, problem in settled.problems.items():
-            _err(f"{name}: {problem}")
-        return EXIT_STORE if settled.problems else EXIT_OK
-    for flag, value in (("--max-seeds", args.max_seeds), ("--first-seed", args.first_seed),
-                        ("--jobs", args.jobs), ("--floor", args.floor)):
-        if value is not None:
-            raise ConfigError(f"{flag} {value}: only with --settle")
-    if args.seeds:
-        from sweep.paper.seeds import across_seeds, check_seeds, format_seed_table
-
-        reports = check_seeds(args.stores, args.seeds, run=args.run, configs=args.configs,
-                              compute=args.compute, log=log)
-        if args.json:
-            first = next(iter(reports.values())).checks
-            across = [across_seeds([r.checks[i].verdict for r in reports.values()])
-                      for i in range(len(first))]
-            print(json.dumps({"seeds": {str(s): r.to_dict() for s, r in reports.items()},
-                              "across_seeds": across}, indent=2))
-        else:
-            print(format_seed_table(reports))
-        problems = {f"seed {s}: {name}": p for s, r in reports.items()
-                    for name, p in r.problems.items()}
-    else:
-        report = check_stores(args.stores, run=args.run, configs=args.configs,
-                              compute=args.compute, log=log)
-        print(report.to_json() if args.json else format_table(report.checks))
-        problems = report.problems
-    for name, problem in problems.items():
-        _err(f"{name}: {problem}")
-    return EXIT_STORE if problems else EXIT_OK
-
-
 def cmd_report(args: argparse.Namespace) -> int:
     from sweep.report import command
 
@@ -353,7 +259,7 @@ def cmd_report(args: argparse.Namespace) -> int:
 
 _COMMANDS = {"run": cmd_run, "plan": cmd_plan, "status": cmd_status, "export": cmd_export,
              "validate": cmd_validate, "merge": cmd_merge, "figures": cmd_figures,
-             "paper-check": cmd_paper_check, "report": cmd_report}
+             "report": cmd_report}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -1,6 +1,6 @@
 """The campaign report: one self-contained HTML page of a store (``sweep report``).
 
-``sweep report STORE --out report.html [--paper-check DIR] [--max N]`` writes a single file
+``sweep report STORE --out report.html [--max N]`` writes a single file
 that opens offline in any browser (figures embedded as base64 PNG, no network, no
 JavaScript framework; a small inline script sorts the tables and checks that every figure
 decoded). In order it shows:
@@ -15,8 +15,11 @@ decoded). In order it shows:
 4. the collision-zone statistics per floe size, dispersion relation and eps
    (:func:`sweep.collision_stats`: mean ± standard deviation over the pooled points and,
    for ensembles, ± the propagated standard error);
-5. with ``--paper-check DIR``: the table of ``sweep paper-check --stores DIR``
-   (:func:`sweep.paper.check.check_stores`).
+5. any extra sections a caller passes (``sections``: functions returning an
+   :data:`Section`, e.g. a study's table; sweep knows nothing of them).
+
+:func:`table`, :func:`text_cell`, :func:`number_cell` and :func:`escape` make the HTML of
+such a section as the report's own.
 """
 from __future__ import annotations
 
@@ -25,7 +28,7 @@ import html
 import json
 import math
 import tempfile
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -33,7 +36,11 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-__all__ = ["build_report", "write_report", "command", "PROBLEM_STATUSES"]
+__all__ = ["build_report", "write_report", "command", "PROBLEM_STATUSES", "Section", "table",
+           "text_cell", "number_cell", "escape"]
+
+#: An extra section of a report: (anchor id, title in the contents line, its HTML).
+Section = tuple[str, str, str]
 
 #: Statuses listed point by point: every status that is not a converged result.
 PROBLEM_STATUSES = ("not_converged", "failed", "invalid", "crashed", "timeout")
@@ -126,6 +133,11 @@ def _table(header: Sequence[str], rows: Sequence[Sequence[str]], *, classes: Seq
 
 def _td(value: Any) -> str:
     return f"<td>{_e(value)}</td>"
+
+
+#: The report's own makers of HTML, for an extra section that looks like the rest: a
+#: sortable table of ready-made cells, a text cell, a number cell, text escaped.
+table, text_cell, number_cell, escape = _table, _td, _num, _e
 
 
 def _when(text: Any) -> str:
@@ -270,34 +282,16 @@ def _collision(df: pd.DataFrame) -> str:
                       "α_inner/α_c ± SE", "α_inner/α_c median"], rows, classes=classes))
 
 
-def _paper_check(stores: Path) -> str:
-    from sweep.paper.check import check_stores
-
-    report = check_stores(stores)
-    verdict_cls = {"holds": "ok", "fails": "bad"}
-    rows = [[_num(i), _td(f"{c.claim} ({c.source})"), _td(f"{c.campaign}: {c.points}"),
-             _td(c.quantity), _td("; ".join(e.text() for e in c.estimates) or "—"),
-             _td(f"{c.rule}: {c.evidence}" if c.rule else c.evidence), _td(c.verdict)]
-            for i, c in enumerate(report.checks, 1)]
-    classes = [verdict_cls.get(c.verdict, "warn") for c in report.checks]
-    counts = ", ".join(f"{n} {v}" for v, n in report.counts().items())
-    problems = "".join(f"<li>{_e(k)}: {_e(v)}</li>" for k, v in report.problems.items())
-    return ('<h2 id="paper-check">Paper check</h2>'
-            f"<p>Stores in <code>{_e(stores)}</code>: {_e(counts)}.</p>"
-            + (f"<ul>{problems}</ul>" if problems else "")
-            + _table(["#", "claim (paper)", "campaign: points", "quantity", "value ± SE",
-                      "rule: evidence", "verdict"], rows, classes=classes))
-
-
 # ---------------------------------------------------------------------- the page
-def build_report(store: str | Path, *, paper_stores: str | Path | None = None,
+def build_report(store: str | Path, *, sections: Sequence[Callable[[], Section]] = (),
                  max_figures: int = 3) -> str:
     """The HTML text of the report of ``store`` (see the module docstring).
 
     Parameters
     ----------
     store : the HDF5 store of a campaign.
-    paper_stores : directory of the paper campaigns' stores; adds the paper-check table.
+    sections : functions each returning an extra :data:`Section`, called in order after
+        the report's own sections are made (e.g. a study's table of its own).
     max_figures : at most this many figures per kind (groups closest to the paper first).
     """
     from sweep.analysis.load import journal_points, load, store_attrs, store_runs
@@ -314,12 +308,13 @@ def build_report(store: str | Path, *, paper_stores: str | Path | None = None,
     parts = [_what_ran(path, attrs, store_runs(path), df, campaign.get("sweep", {}), total),
              _status(df, dims, total, journal_points(path)), _figures(path, max_figures),
              _collision(df)]
-    sections = [("what-ran", "What ran"), ("status", "Status"), ("figures", "Figures"),
-                ("collision", "Collision-zone statistics")]
-    if paper_stores is not None:
-        parts.append(_paper_check(Path(paper_stores)))
-        sections.append(("paper-check", "Paper check"))
-    toc = " · ".join(f'<a href="#{i}">{t}</a>' for i, t in sections)
+    toc_items = [("what-ran", "What ran"), ("status", "Status"), ("figures", "Figures"),
+                 ("collision", "Collision-zone statistics")]
+    for make in sections:
+        anchor, title, text = make()
+        parts.append(text)
+        toc_items.append((anchor, title))
+    toc = " · ".join(f'<a href="#{i}">{t}</a>' for i, t in toc_items)
     return ("<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"
             f"<title>report {_e(path.name)}</title><style>{STYLE}</style></head><body>"
             f"<h1>Campaign report: {_e(path.name)}</h1><p>Written {_e(_when(now))} by "
@@ -327,22 +322,24 @@ def build_report(store: str | Path, *, paper_stores: str | Path | None = None,
             + f"<script>{SCRIPT}</script></body></html>\n")
 
 
-def write_report(store: str | Path, out: str | Path, *, paper_stores: str | Path | None
-                 = None, max_figures: int = 3) -> Path:
+def write_report(store: str | Path, out: str | Path, *,
+                 sections: Sequence[Callable[[], Section]] = (), max_figures: int = 3) -> Path:
     """Write :func:`build_report` of ``store`` to ``out`` (replaced atomically)."""
     import os
 
     out = Path(out)
-    text = build_report(store, paper_stores=paper_stores, max_figures=max_figures)
+    text = build_report(store, sections=sections, max_figures=max_figures)
     tmp = out.with_name(f".{out.name}.tmp")
     tmp.write_text(text, encoding="utf-8")
     os.replace(tmp, out)
     return out
 
 
-def command(args: Any) -> int:
-    """``sweep report STORE --out FILE [--paper-check DIR] [--max N]`` (status 0; 2 for a
-    bad argument, 3 for a missing or unreadable store)."""
+def command(args: Any, *, sections: Sequence[Callable[[], Section]] = (),
+            prog: str = "sweep") -> int:
+    """``sweep report STORE --out FILE [--max N]`` (status 0; 2 for a bad argument, 3 for a
+    missing or unreadable store); ``sections`` as :func:`build_report`'s, ``prog`` names
+    the command in its last line."""
     from sweep.errors import EXIT_OK, ConfigError
 
     if args.max < 1:
@@ -350,6 +347,6 @@ def command(args: Any) -> int:
     out = Path(args.out)
     if out.is_dir() or not out.parent.is_dir():
         raise ConfigError(f"--out {out}: expected a file name in an existing directory")
-    write_report(args.store, out, paper_stores=args.paper_check, max_figures=args.max)
-    print(f"sweep: wrote {out}")
+    write_report(args.store, out, sections=sections, max_figures=args.max)
+    print(f"{prog}: wrote {out}")
     return EXIT_OK

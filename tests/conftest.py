@@ -93,8 +93,8 @@ def refused_at_once(monkeypatch):
 #: Modules whose tests share a module- or session-scoped fixture worth computing once: under
 #: ``pytest -n 2`` each runs whole on one worker (see :func:`pytest_xdist_make_scheduler`).
 GROUPED = ("tests/test_slurm.py",  # one Slurm cluster and one reference job per session
-           "tests/paper/test_herman2019_qualitative.py", "tests/floewave/test_iteration.py",
-           "tests/sweep/test_papercheck.py", "tests/sweep/test_ensemble_store.py",
+           "tests/herman2019/test_qualitative.py", "tests/floewave/test_iteration.py",
+           "tests/herman2019/test_check.py", "tests/sweep/test_ensemble_store.py",
            "tests/sweep/test_config.py", "tests/sweep/test_stats.py",
            "tests/sweep/test_figures.py",
            "tests/sweep/test_report.py")  # its report page, built once
@@ -115,7 +115,7 @@ FIRST = ("tests/test_slurm.py",
          "tests/test_docs.py::test_every_code_block_runs[docs/guide.md-in-process]",
          "tests/test_docs.py::test_every_code_block_runs[README.md-in-process]",
          "tests/sweep/test_mpi.py::test_mpiexec_3_real_points_equal_one_rank",
-         "tests/paper/test_herman2019_qualitative.py")
+         "tests/herman2019/test_qualitative.py")
 
 
 def pytest_xdist_make_scheduler(config, log):

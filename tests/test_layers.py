@@ -1,5 +1,6 @@
-"""The packages' layering: no import circle in sweep/ or floewave/, no module of either over
-450 lines, no private name imported across modules, and a docstring on every module.
+"""The packages' layering: floewave <- sweep <- herman2019 (the study imports sweep and
+floewave; neither imports it), no import circle in any of them, no module of any over 450
+lines, no private name imported across modules, and a docstring on every module.
 
 The import graph is built with :mod:`ast` from every ``import`` statement of a module,
 including those inside functions (a function-level import that hides a circle is still a
@@ -16,7 +17,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("sweep", "floewave")
+PACKAGES = ("sweep", "floewave", "herman2019")
 MAX_LINES = 450
 LINE_RULE = PACKAGES
 
@@ -207,7 +208,7 @@ def package_graph(package: str = "sweep") -> dict[str, set[str]]:
 
 
 def test_the_parts_of_sweep_form_layers():
-    """No circle between sweep's subpackages either: store, run, analysis, paper, cli each
+    """No circle between sweep's subpackages either: store, run, analysis, report, cli each
     point down only."""
     assert not cycles(package_graph("sweep"))
 
@@ -218,7 +219,29 @@ def test_no_long_module(package):
 
 
 def test_no_private_name_imported_across_modules():
-    assert not private_imports(("sweep",))
+    assert not private_imports(("sweep", "herman2019"))
+
+
+def test_the_packages_form_layers():
+    """floewave <- sweep <- herman2019: no module of sweep/ or floewave/ imports the study,
+    and no circle runs through the three packages together."""
+    edges = graph(PACKAGES)
+    up = [f"{m} imports {t}" for m, targets in edges.items()
+          if m.split(".")[0] in ("sweep", "floewave")
+          for t in targets if t.split(".")[0] == "herman2019"]
+    assert not up, f"the library imports the study: {up}"
+    assert not cycles(edges)
+
+
+def test_the_layer_rule_sees_an_import_of_the_study(tmp_path, monkeypatch):
+    for package, text in (("sweep", "from herman2019.check import x\n"),
+                          ("herman2019", "import sweep\n")):
+        (tmp_path / package).mkdir()
+        (tmp_path / package / "__init__.py").write_text(f'"""{package}."""\n' + text)
+    (tmp_path / "herman2019" / "check.py").write_text('"""c."""\n')
+    monkeypatch.setattr(sys.modules[__name__], "ROOT", tmp_path)
+    edges = graph(("sweep", "herman2019"))
+    assert "herman2019.check" in edges["sweep"] and "sweep" in edges["herman2019"]
 
 
 @pytest.mark.parametrize("package", PACKAGES)
@@ -240,7 +263,7 @@ if __name__ == "__main__":
                                       for k, v in sorted(parts.items()) if v))
     for component in cycles(parts):
         print(f"  circle of parts: {' '.join(component)}")
-    for line in private_imports(("sweep",)):
+    for line in private_imports(("sweep", "herman2019")):
         print(f"  private: {line}")
     for name, n in long_modules(PACKAGES):
         print(f"  {n:5d} lines: {name}")

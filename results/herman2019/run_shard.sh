@@ -2,7 +2,7 @@
 # Run (or resume) shard K of 8 of the paper's grid into its own store, outside the
 # repository (STORES, default /work/campaign), as this table's shards were made:
 #     results/herman2019/run_shard.sh K > LOG 2>&1
-# then  python benchmarks/campaign_record.py STORES/herman2019-sKof8.h5 --shard K/8 --log LOG
+# then  herman2019 record STORES/herman2019-sKof8.h5 --shard K/8 --log LOG
 # A stop (SIGTERM or Ctrl-C to mpiexec) ends the run cleanly; the same command resumes it.
 # bash's time reports the CPU of every rank (mpiexec waits for them).
 K=$1

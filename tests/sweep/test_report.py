@@ -95,16 +95,26 @@ def test_the_page_needs_no_network(page):
     assert "<script src" not in html and "@import" not in html
 
 
-def test_paper_check_table_and_missing_store(tmp_path, store, capsys):
+def test_an_extra_section_from_outside_and_missing_store(tmp_path, store, capsys):
+    """A caller's section (a study's table: ``herman2019 report``) goes last, in the
+    contents line too; sweep knows nothing of it."""
+    from sweep.report import number_cell, table, text_cell, write_report
+
     out = tmp_path / "r.html"
-    empty = tmp_path / "paper"
-    empty.mkdir()
-    assert main(["report", str(store), "--out", str(out), "--paper-check", str(empty),
-                 "--max", "1"]) == 0  # every figure: the docs walks' `sweep report`
+    made = []
+
+    def extra():
+        made.append(1)
+        return ("extra", "Extra", '<h2 id="extra">Extra</h2>'
+                + table(["k", "n"], [[text_cell("a<b"), number_cell(2.0)]], classes=["ok"]))
+
+    write_report(store, out, sections=[extra], max_figures=1)
     html = out.read_text()
-    assert ">Paper check</h2>" in html and 'href="#paper-check"' in html
-    assert "inconclusive" in html
-    assert "no store" in html                       # each missing paper store is named
+    assert made == [1] and ">Extra</h2>" in html and 'href="#extra"' in html
+    assert html.index('id="collision"') < html.index('id="extra"')
+    assert '<tr class="ok"><td>a&lt;b</td><td class="n" data-v="2.0">2</td></tr>' in html
+    assert main(["report", str(store), "--out", str(out), "--max", "1"]) == 0
+    assert 'href="#extra"' not in out.read_text()
     assert main(["report", str(tmp_path / "nope.h5"), "--out", str(out)]) == 3
     assert "no such store" in capsys.readouterr().err
     assert main(["report", str(store), "--out", str(tmp_path / "no" / "r.html")]) == 2

@@ -1,0 +1,143 @@
+"""Ship a campaign's result without its store: one shard's table and its provenance.
+
+    herman2019 record STORE --shard K/N --log RUN.log [--log ...] [--out results/herman2019]
+
+Writes ``OUT/shard-K-of-N.csv.gz`` (``sweep export``: every scalar with its standard
+error, hash, status, parameters, config_json and provenance per point; floats as their
+shortest round-trip text, so ``sweep.load(OUT)`` reads the stored values bit for bit) and
+updates ``OUT/provenance.json`` with this shard's entry: model version, commit, machine,
+every ``sweep run`` on the store (start, end, outcome, ranks) with, from its log (a
+``sweep run`` under bash's ``time``, as ``results/herman2019/run_shard.sh`` starts it), the
+points stored, the master's CPU share and the CPU seconds of every rank; the points per
+status; the store's and journal's size on disk.
+
+A store of gigabytes never goes into git: the table of a 3,000-point shard is about a
+megabyte.
+"""
+from __future__ import annotations
+
+import json
+import os
+import re
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+import sweep
+from herman2019.numbers import machine
+from sweep.analysis.export import export_table
+from sweep.analysis.load import load_profile, store_attrs, store_runs
+from sweep.errors import ConfigError
+
+__all__ = ["RESULTS", "parse_log", "problems", "command"]
+
+#: Where the shipped campaign's tables and provenance go (``--out``'s default).
+RESULTS = Path(__file__).resolve().parents[1] / "results" / "herman2019"
+
+TIME = re.compile(r"\[time\] real ([0-9.]+) s, user ([0-9.]+) s, sys ([0-9.]+) s")
+SUMMARY = re.compile(r"sweep: (\d+) grid points: (\d+) already stored, (\d+) stored now"
+                     r".* in ([0-9.]+) s; master CPU ([0-9.]+)% of a core")
+STOPPED = re.compile(r"campaign stopped by (\S+): (\d+) points stored")
+
+
+def parse_log(path: Path) -> dict:
+    """What one ``sweep run`` log says: points stored, master CPU share, CPU of all ranks."""
+    text = path.read_text(errors="replace")
+    out: dict = {"log": path.name}
+    m = TIME.search(text)
+    if m:
+        out.update(wall_s=float(m.group(1)), cpu_s=float(m.group(2)) + float(m.group(3)))
+    m = SUMMARY.search(text)
+    if m:
+        out.update(already_stored=int(m.group(2)), stored=int(m.group(3)),
+                   loop_s=float(m.group(4)), master_cpu_share=float(m.group(5)) / 100)
+    m = STOPPED.search(text)
+    if m:
+        out.update(stopped_by=m.group(1), stored=int(m.group(2)))
+    return out
+
+
+def problems(store: Path, df, out: Path) -> dict:
+    """Every point that is not ``converged``/``converged_noisy``, with why, into ``out``
+    (CSV): a ``not_converged`` point reached ``max_iterations`` windows with an error bar
+    still above its target (max_i SE(a_i) / a0 against ``target_stderr``, SE(W_c) against
+    ``target_W_c_stderr``, from the store's profiles) or without a stationary stretch; a
+    ``failed``/``invalid``/``crashed``/``timeout`` point carries its message. Returns the
+    counts per reason."""
+    rows = []
+    for _, r in df[~df["status"].isin(["converged", "converged_noisy"])].iterrows():
+        cfg = json.loads(r["config_json"])
+        why = str(r["message"])
+        se_a = float("nan")
+        if str(r["status"]) == "not_converged":
+            prof = load_profile(store, r["hash"])
+            se_a = float(prof["a_stderr"].max()) / r["a0"]
+            parts = []
+            if se_a > cfg["target_stderr"]:
+                parts.append(f"SE(a) {100 * se_a:.2f} % of a0 > {100 * cfg['target_stderr']:g} %")
+            if r["W_c_n"] >= 2 and r["W_c_stderr"] > cfg["target_W_c_stderr"]:
+                parts.append(f"SE(W_c) {r['W_c_stderr']:.2f} m > {cfg['target_W_c_stderr']:g} m")
+            why = "; ".join(parts) or "no stationary stretch (MSER / halves test)"
+            why = f"{int(r['iterations'])} windows: " + why
+        rows.append({"hash": r["hash"], **{c: r[c] for c in ("L_x", "T", "a0", "C_sd", "eps",
+                                                             "d_f", "dispersion")},
+                     "status": str(r["status"]), "se_a_max_rel": se_a,
+                     "W_c_stderr": r["W_c_stderr"], "reason": why})
+    table = pd.DataFrame(rows, columns=["hash", "L_x", "T", "a0", "C_sd", "eps", "d_f",
+                                        "dispersion", "status", "se_a_max_rel", "W_c_stderr",
+                                        "reason"])
+    table.to_csv(out, index=False)
+    kinds = table["reason"].str.replace(r"[0-9.]+", "#", regex=True)
+    return {str(k): int(v) for k, v in kinds.value_counts().items()}
+
+
+def _plain(o):
+    """numpy scalars (a store's attributes) as Python values for JSON."""
+    return o.item() if hasattr(o, "item") else str(o)
+
+
+def command(args: Any) -> int:
+    """``herman2019 record``: the shard's table and its provenance entry (status 0; 2 for a
+    bad ``--shard``)."""
+    try:
+        k, n = (int(v) for v in args.shard.split("/"))
+    except ValueError:
+        raise ConfigError(f"--shard {args.shard}: expected K/N, e.g. 0/8") from None
+    args.out.mkdir(parents=True, exist_ok=True)
+    table = args.out / f"shard-{k}-of-{n}.csv.gz"
+    rows = export_table(args.store, table)
+    df = sweep.load(table)
+    attrs = store_attrs(args.store)
+    runs = store_runs(args.store)
+    logs = [parse_log(p) for p in args.log]
+    keep = ("started", "ended", "outcome", "git_commit", "git_dirty", "host", "mpi_size",
+            "model_version", "numba", "numpy", "python")
+    entry = {
+        "table": table.name, "points": rows,
+        "status": {str(s): int(c) for s, c in df["status"].value_counts().items() if c},
+        "model_version": sorted({r.get("model_version") for r in runs}),
+        "machine": machine(),
+        "runs": [{key: r.get(key) for key in keep} | (logs[i] if i < len(logs) else {})
+                 for i, r in enumerate(runs)],
+        "cpu_s_all_ranks": sum(lg.get("cpu_s", 0.0) for lg in logs) or None,
+        "model_wall_s_sum": float(df["model_wall_time"].sum()),
+        "store_bytes": os.path.getsize(args.store),
+        "journal_bytes": (os.path.getsize(str(args.store) + ".journal")
+                          if os.path.exists(str(args.store) + ".journal") else None),
+        "table_bytes": os.path.getsize(table),
+    }
+    (args.out / "problems").mkdir(exist_ok=True)     # not a table of points: beside them
+    entry["problems"] = problems(args.store, df,
+                                 args.out / "problems" / f"problems-{k}-of-{n}.csv")
+    prov_path = args.out / "provenance.json"
+    prov = json.loads(prov_path.read_text()) if prov_path.exists() else {}
+    prov.setdefault("campaign", "configs/herman2019.toml")
+    prov["campaign_hash"] = attrs.get("campaign_hash")
+    prov.setdefault("shards", {})[f"{k}/{n}"] = entry
+    prov_path.write_text(json.dumps(prov, indent=1, sort_keys=True, default=_plain) + "\n")
+    print(f"{table}: {rows} points, {entry['table_bytes'] / 1e6:.2f} MB; status"
+          f" {entry['status']}; runs {len(runs)}; CPU of all ranks {entry['cpu_s_all_ranks']}"
+          f" s; store {entry['store_bytes'] / 1e6:.0f} MB + journal"
+          f" {(entry['journal_bytes'] or 0) / 1e6:.0f} MB")
+    return 0

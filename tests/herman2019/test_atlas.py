@@ -1,0 +1,160 @@
+"""The atlas of the paper's grid (``herman2019 atlas``, :mod:`herman2019.atlas`).
+
+Fast: its paired test of a trend ("all else equal": every pair of points that differ in
+one parameter alone) on synthetic grids where the truth is known — a real trend is found
+in every pair, a null one is contradicted by no more pairs than chance (z <= -2: 2.3 %),
+a reversed one is called reversed, and the pairs a ``where`` mask keeps are those asked
+for. Slow: ``docs/atlas.md`` is what the command makes from the shipped table.
+"""
+from __future__ import annotations
+
+import itertools
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from herman2019 import atlas
+from herman2019.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+
+_NUM = re.compile(r"[-+]?\d+(?:\.\d+)?")
+VALUES = {"L_x": [0.5, 1.5], "T": [1.1, 1.2, 1.4], "a0": [0.0125, 0.025],
+          "C_sd": [0.05, 0.1], "eps": [0.2, 0.4, 0.6, 0.8], "d_f": [0.005, 0.01],
+          "dispersion": ["ep", "ml", "ow"]}
+
+
+def grid(seed: int, slope: float, se: float = 0.01) -> tuple[pd.DataFrame, pd.Series, pd.Series]:
+    """Every combination of VALUES (a 7-D grid), y = slope x eps + an offset set by the
+    other parameters + noise of SD ``se``, each point's SE ``se``."""
+    rng = np.random.default_rng(seed)
+    rows = list(itertools.product(*VALUES.values()))
+    df = pd.DataFrame(rows, columns=list(VALUES))
+    offset = 0.3 * df["L_x"] + 2.0 * df["a0"] + (df["dispersion"] == "ml") * 0.1
+    y = slope * df["eps"] + offset + rng.normal(0.0, se, len(df))
+    return df, pd.Series(y, index=df.index), pd.Series(se, index=df.index)
+
+
+def test_a_real_trend_is_found_in_every_pair():
+    df, y, se = grid(0, slope=-0.5)  # a step of 0.2 in eps: 0.1, 7 SE of a difference
+    t = atlas.paired(df, y, se, "eps", -1)
+    others = math.prod(len(v) for k, v in VALUES.items() if k != "eps")
+    assert t["n"] == others * (len(VALUES["eps"]) - 1)
+    assert t["contra"] == 0
+    assert t["agree"] >= 0.99 * t["n"]
+    assert atlas.verdict(t) == "holds over the grid"
+    # the median change is the relative difference in the stated direction
+    assert t["median_rel"] > 0
+
+
+def test_no_trend_is_contradicted_by_chance_alone():
+    """With no effect, z is N(0, 1) per pair (the SEs here are exact): over 40 grids the
+    share of pairs at z <= -2 is 2.28 %, within 4 binomial SEs; and no effect is not
+    called a trend that holds."""
+    contra = n = 0
+    for seed in range(40):
+        df, y, se = grid(seed, slope=0.0)
+        t = atlas.paired(df, y, se, "eps", -1)
+        contra += t["contra"]
+        n += t["n"]
+    p = 0.02275
+    assert abs(contra / n - p) < 4 * math.sqrt(p * (1 - p) / n)
+    # and no effect is never called a trend that holds: almost no pair agrees
+    assert atlas.verdict(t) in ("not resolved", "split")
+
+
+def test_a_reversed_trend_is_called_reversed():
+    df, y, se = grid(1, slope=+0.5)
+    t = atlas.paired(df, y, se, "eps", -1)
+    assert t["agree"] == 0 and t["contra"] >= 0.99 * t["n"]
+    assert atlas.verdict(t) == "mostly reversed"
+
+
+def test_where_a_trend_reverses_is_named():
+    """The trend holds at L_x 0.5 and reverses at 1.5: the contradictions are all at
+    L_x = 1.5, and the statement is split."""
+    df, y, se = grid(4, slope=-0.5)
+    y = y + (df["L_x"] == 1.5) * 1.0 * df["eps"]  # slope +0.5 at L_x 1.5
+    t = atlas.paired(df, y, se, "eps", -1)
+    assert abs(t["contra"] - t["n"] / 2) <= 0.01 * t["n"]
+    assert atlas.verdict(t) in ("split", "mostly reversed")  # half and half
+    assert atlas.where_contra(t).startswith("L_x = 1.5 (100 %)")
+
+
+def test_a_categorical_pair_and_a_mask():
+    """ep against ml (an explicit order), and ``where`` keeping only the pairs whose
+    earlier point is marked."""
+    df, y, se = grid(2, slope=0.0)
+    t = atlas.paired(df, y, se, "dispersion", -1, order=("ml", "ep"))  # ep below ml: 0.1
+    assert t["n"] == len(df) // 3
+    assert t["agree"] >= 0.99 * t["n"]
+    mark = pd.Series(df["L_x"] == 0.5, index=df.index)
+    tm = atlas.paired(df, y, se, "dispersion", -1, order=("ml", "ep"), where=mark)
+    assert tm["n"] == t["n"] // 2
+    assert set(tm["at"]["L_x"].astype(float)) == {0.5}
+    # the mask is the earlier point's (ml's), not the later one's
+    ml = pd.Series(df["dispersion"] == "ml", index=df.index)
+    assert atlas.paired(df, y, se, "dispersion", -1, order=("ml", "ep"), where=ml)["n"] == t["n"]
+    assert atlas.paired(df, y, se, "dispersion", -1, order=("ml", "ep"), where=~ml)["n"] == 0
+
+
+def test_a_pair_with_a_missing_value_is_left_out():
+    df, y, se = grid(3, slope=-0.5)
+    y = y.copy()
+    y[df["eps"] == 0.4] = np.nan  # two of the three steps touch eps 0.4
+    t = atlas.paired(df, y, se, "eps", -1)
+    others = math.prod(len(v) for k, v in VALUES.items() if k != "eps")
+    assert t["n"] == others  # only 0.6 -> 0.8 is left
+
+
+@pytest.mark.slow
+def test_the_atlas_is_what_its_command_makes(tmp_path, capsys):
+    """docs/atlas.md is regenerated by ``herman2019 atlas`` from the shipped table (rerun it
+    after a change of the table or of the code)."""
+    assert main(["atlas", "--out", str(tmp_path)]) == 0
+    assert capsys.readouterr().out.startswith("# Atlas of the paper's grid\n")
+    made = (tmp_path / "atlas.md").read_text(encoding="utf-8").splitlines()
+    shipped = (ROOT / "docs" / "atlas.md").read_text(encoding="utf-8").splitlines()
+    assert len(made) == len(shipped), "docs/atlas.md is stale: run herman2019 atlas"
+    for a, b in zip(made, shipped, strict=True):
+        if a != b:  # another CPU's BLAS may move a fit's last printed digit, no more
+            assert _NUM.sub("#", a) == _NUM.sub("#", b), f"docs/atlas.md is stale:\n{b}\n{a}"
+            for x, y in zip(_NUM.findall(a), _NUM.findall(b), strict=True):
+                places = len(y.split(".")[1]) if "." in y else 0
+                assert abs(float(x) - float(y)) <= 1.01 * 10.0**-places, (x, y, b)
+    for png in ("compact_share", "marginal", "wc_law", "dispersion"):
+        assert (tmp_path / "atlas" / f"{png}.png").stat().st_size > 10_000
+        assert (ROOT / "docs" / "atlas" / f"{png}.png").exists()
+
+
+def test_a_pair_without_an_error_bar_is_left_out():
+    """A point with a value but no SE cannot decide a pair: its pairs are not counted
+    (not as infinitely significant); nor is a pair whose two SEs are both 0."""
+    df, y, se = grid(5, slope=+0.5)  # reversed everywhere
+    se = se.copy()
+    se[df["eps"] == 0.2] = np.nan
+    se[df["eps"] == 0.4] = np.nan
+    t = atlas.paired(df, y, se, "eps", -1)
+    others = math.prod(len(v) for k, v in VALUES.items() if k != "eps")
+    assert t["n"] == others  # only 0.6 -> 0.8 has error bars on both points
+    assert np.isfinite(t["z"]).all()
+    se[df["eps"] >= 0.6] = 0.0
+    assert atlas.paired(df, y, se, "eps", -1)["n"] == 0
+
+
+def test_real_reversals_beyond_chance_are_not_a_trend_that_holds():
+    """A trend with a few real reversals (5 % of the pairs reversed by 10 SE): fewer than
+    the chance share of all pairs contradict, but far more of the pairs with z < 0 than
+    an effect >= 0 everywhere allows: "holds, with real reversals"."""
+    df, y, se = grid(6, slope=-0.5)
+    rng = np.random.default_rng(7)
+    flip = pd.Series(rng.random(len(df)) < 0.0125, index=df.index)
+    y = y + flip * 1.0 * df["eps"]  # those points' slope +0.5: their pairs reverse
+    t = atlas.paired(df, y, se, "eps", -1)
+    assert t["contra"] <= atlas.CHANCE * t["n"]
+    assert t["contra"] > atlas.REVERSAL * t["neg"]
+    assert atlas.verdict(t) == "holds, with real reversals"
