@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from ._paths import quiet_stdout
+from .paths import quiet_stdout
 from .config import FloewaveError, InvalidPointError, ModelConfig
 
 EXIT_OK = 0
@@ -39,7 +39,7 @@ EXIT_HELP = ("exit statuses: 0 success; 2 bad input (unknown field, bad value, p
 def _parse_value(name: str, text: str) -> Any:
     types = {f.name: f.type for f in fields(ModelConfig)}
     if name not in types:
-        from ._help import did_you_mean
+        from .help import did_you_mean
 
         raise FloewaveError(f"--set {name}={text}: unknown field {name!r}{did_you_mean(name)};"
                             f" the fields are {', '.join(types)} ('floewave run --help'"
@@ -173,7 +173,7 @@ def plot(cfg: ModelConfig, r, path: Path) -> None:
 
 def _check_outputs(args: argparse.Namespace) -> None:
     """Refuse an output that cannot be written before the point runs (and is lost)."""
-    from ._paths import output_file_problem
+    from .paths import output_file_problem
 
     for option, path in (("--json", args.json), ("--plot", args.plot),
                          ("--trace-plot", args.trace_plot)):
@@ -197,7 +197,7 @@ def _check_outputs(args: argparse.Namespace) -> None:
 def main_parser() -> argparse.ArgumentParser:
     """The ``floewave`` argument parser (``run`` and ``figures``)."""
     from . import MODEL_VERSION, __version__
-    from ._help import fields_help
+    from .help import fields_help
 
     parser = argparse.ArgumentParser(prog="floewave", description=__doc__.splitlines()[0],
                                      epilog=EXIT_HELP,

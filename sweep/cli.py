@@ -269,7 +269,7 @@ def cmd_figures(args: argparse.Namespace) -> int:
 
     if args.max < 1:
         raise ConfigError(f"--max {args.max}: must be at least 1")
-    from floewave._paths import output_dir_problem
+    from floewave.paths import output_dir_problem
 
     problem = output_dir_problem(args.out, "--out")
     if problem:
@@ -388,7 +388,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         sys.stdout.flush()
     except BrokenPipeError:
-        from floewave._paths import quiet_stdout
+        from floewave.paths import quiet_stdout
         quiet_stdout()
     except (OSError, ValueError):
         pass
@@ -424,7 +424,7 @@ def _main(argv: Sequence[str] | None) -> int:
         _err(str(exc))
         return EXIT_STORE
     except BrokenPipeError:  # `sweep status S.h5 | head -1`: the reader has what it wanted
-        from floewave._paths import quiet_stdout
+        from floewave.paths import quiet_stdout
         quiet_stdout()
         return EXIT_OK
     except Exception:  # noqa: BLE001 - a bug: show it

@@ -19,7 +19,7 @@ def export_table(store: str | Path, output: Path) -> int:
     if suffix is None:
         raise ConfigError(f"--output {output}: expected a .csv, .csv.gz or .parquet file"
                           " name")
-    from floewave._paths import output_file_problem
+    from floewave.paths import output_file_problem
 
     problem = output_file_problem(output, "--output")
     if problem:
