@@ -24,6 +24,7 @@ import base64
 import html
 import json
 import math
+import os
 import tempfile
 from collections.abc import Sequence
 from datetime import UTC, datetime
@@ -32,6 +33,11 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+
+from sweep.analysis.figures import make_figures
+from sweep.analysis.load import journal_points, load, store_attrs, store_runs
+from sweep.analysis.stats import collision_stats
+from sweep.errors import EXIT_OK, ConfigError
 
 __all__ = ["build_report", "write_report", "command", "PROBLEM_STATUSES"]
 
@@ -217,9 +223,6 @@ def _img(png: Path) -> str:
 
 
 def _figures(path: Path, max_figures: int) -> str:
-    from sweep.analysis.figures import make_figures
-    from sweep.errors import ConfigError
-
     notes: list[str] = []
     with tempfile.TemporaryDirectory(prefix="sweep-report-") as tmp:
         try:
@@ -243,8 +246,6 @@ def _pm(mean: Any, spread: Any) -> str:
 
 
 def _collision(df: pd.DataFrame) -> str:
-    from sweep.analysis.stats import collision_stats
-
     by = [k for k in ("L_x", "dispersion", "eps") if k in df.columns]
     st = collision_stats(df, by=by)
     if st.empty:
@@ -300,8 +301,6 @@ def build_report(store: str | Path, *, paper_stores: str | Path | None = None,
     paper_stores : directory of the paper campaigns' stores; adds the paper-check table.
     max_figures : at most this many figures per kind (groups closest to the paper first).
     """
-    from sweep.analysis.load import journal_points, load, store_attrs, store_runs
-
     path = Path(store)
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such store")
@@ -330,8 +329,6 @@ def build_report(store: str | Path, *, paper_stores: str | Path | None = None,
 def write_report(store: str | Path, out: str | Path, *, paper_stores: str | Path | None
                  = None, max_figures: int = 3) -> Path:
     """Write :func:`build_report` of ``store`` to ``out`` (replaced atomically)."""
-    import os
-
     out = Path(out)
     text = build_report(store, paper_stores=paper_stores, max_figures=max_figures)
     tmp = out.with_name(f".{out.name}.tmp")
@@ -343,8 +340,6 @@ def write_report(store: str | Path, out: str | Path, *, paper_stores: str | Path
 def command(args: Any) -> int:
     """``sweep report STORE --out FILE [--paper-check DIR] [--max N]`` (status 0; 2 for a
     bad argument, 3 for a missing or unreadable store)."""
-    from sweep.errors import EXIT_OK, ConfigError
-
     if args.max < 1:
         raise ConfigError(f"--max {args.max}: must be at least 1")
     out = Path(args.out)

@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from sweep.store import reader
 from sweep.store.journal import Journal, check_version, decode, journal_path, rejected_path
 from sweep.store.schema import (
     COLUMNS,
@@ -84,8 +85,6 @@ def differences(path: Path, journal: Journal,
     file at ``path`` that differs from the last good journal record of its point (and
     per journal line that would be set aside), the number of journal points the file
     lacks, and the stored hashes the journal lacks. ``f``: the file already open."""
-    from sweep.store import reader
-
     if f is None:
         with reader.open_file(path) as f:
             return differences(path, journal, f)
