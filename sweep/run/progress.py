@@ -11,11 +11,6 @@ import sys
 import time
 from typing import Any, TextIO
 
-try:  # optional (the progress extra): log lines without it
-    from tqdm import tqdm
-except ImportError:
-    tqdm = None
-
 __all__ = ["Progress", "format_duration", "log_line"]
 
 log = logging.getLogger("sweep")
@@ -62,9 +57,14 @@ class Progress:
         self._bar: Any = None
         if bar is None:
             bar = bool(getattr(self.stream, "isatty", lambda: False)())
-        if bar and tqdm is not None:
-            self._bar = tqdm(total=total, file=self.stream, unit="pt", dynamic_ncols=True,
-                             smoothing=0.1)
+        if bar:
+            try:
+                from tqdm import tqdm  # lazy: optional; 20 ms for every sweep command
+            except ImportError:
+                bar = False
+            else:
+                self._bar = tqdm(total=total, file=self.stream, unit="pt", dynamic_ncols=True,
+                                 smoothing=0.1)
         if not self._bar:
             noun = "point" if total == 1 else "points"
             self._line(f"{total} {noun} to compute ({skipped} already stored)")
