@@ -189,12 +189,11 @@ def simulate(workers: int, scale: float, seconds: float, tmp: Path,
     store = tmp / f"model-{workers}-{scale}.h5"
     sim = SimTransport(workers, scale, forward=write_path == "forward",
                        packed=write_path in ("inline", "process"))
-    real_open, real_store = launch._open_transport, launch.Store
+    real_open, real_sink = launch._open_transport, launch._open_sink
     launch._open_transport = lambda comm, compute, mpi: sim
     if write_path == "process":  # as an MPI run opens its store ([run] writer = "process")
-        from sweep.run.store_process import StoreProcess
-        launch.Store = lambda path, campaign, **kw: StoreProcess(
-            path, campaign, worker_env=sim.worker_env, opener=real_store, **kw)
+        launch._open_sink = lambda path, campaign, writer, **kw: real_sink(
+            path, campaign, "process", **kw)
     campaign = campaign.shard(0, shards)
     import io
     try:
@@ -206,7 +205,7 @@ def simulate(workers: int, scale: float, seconds: float, tmp: Path,
                                           compute="sweep.testing:replay_point",
                                           progress_bar=False)
     finally:
-        launch._open_transport, launch.Store = real_open, real_store
+        launch._open_transport, launch._open_sink = real_open, real_sink
     n = summary.computed
     loop = summary.loop_elapsed
     cpu = summary.master_cpu - sim.worker_cpu

@@ -19,14 +19,18 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import time
 from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ._paths import quiet_stdout
+from . import MODEL_VERSION, __version__
 from .config import FloewaveError, InvalidPointError, ModelConfig
+from .figures import FIG1_NAME, figure1, figure4
+from .help import did_you_mean, fields_help
+from .paths import output_file_problem, quiet_stdout
 
 EXIT_OK = 0
 EXIT_BAD_INPUT = 2
@@ -39,8 +43,6 @@ EXIT_HELP = ("exit statuses: 0 success; 2 bad input (unknown field, bad value, p
 def _parse_value(name: str, text: str) -> Any:
     types = {f.name: f.type for f in fields(ModelConfig)}
     if name not in types:
-        from ._help import did_you_mean
-
         raise FloewaveError(f"--set {name}={text}: unknown field {name!r}{did_you_mean(name)};"
                             f" the fields are {', '.join(types)} ('floewave run --help'"
                             " gives defaults and units)")
@@ -111,9 +113,7 @@ def warm_up(cfg: ModelConfig) -> float:
     :func:`warm_up_config`, so that the point's wall time and floe-steps/s exclude the
     compilation; return the seconds it took. A failure of the shrunken point is left to
     the point itself to report."""
-    import time
-
-    from .model import run_point
+    from .model import run_point  # lazy: numba and the kernels, 0.4 s; not for --help
 
     t0 = time.perf_counter()
     try:
@@ -150,10 +150,10 @@ def summary(cfg: ModelConfig, r, compile_time: float | None = None) -> str:
 
 def plot(cfg: ModelConfig, r, path: Path) -> None:
     """a/a0 (with standard error) versus x, and the eq. 25 curve with alpha_c (eq. 24)."""
-    import matplotlib
+    import matplotlib  # lazy: optional (plot extra): its absence is reported
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: optional (plot extra), 0.8 s
 
     fig, ax = plt.subplots(figsize=(6, 3.5))
     x = r.x_mean
@@ -173,8 +173,6 @@ def plot(cfg: ModelConfig, r, path: Path) -> None:
 
 def _check_outputs(args: argparse.Namespace) -> None:
     """Refuse an output that cannot be written before the point runs (and is lost)."""
-    from ._paths import output_file_problem
-
     for option, path in (("--json", args.json), ("--plot", args.plot),
                          ("--trace-plot", args.trace_plot)):
         problem = output_file_problem(path, option) if path is not None else None
@@ -188,7 +186,7 @@ def _check_outputs(args: argparse.Namespace) -> None:
         raise FloewaveError(f"--trace-periods {args.trace_periods}: must be at least 1")
     if args.plot is not None or args.trace_plot is not None:
         try:
-            import matplotlib  # noqa: F401
+            import matplotlib  # noqa: F401 - lazy: optional (plot extra): its absence is reported
         except ImportError:
             raise FloewaveError("--plot and --trace-plot need matplotlib:"
                                 " pip install 'floewave[plot]'") from None
@@ -196,9 +194,6 @@ def _check_outputs(args: argparse.Namespace) -> None:
 
 def main_parser() -> argparse.ArgumentParser:
     """The ``floewave`` argument parser (``run`` and ``figures``)."""
-    from . import MODEL_VERSION, __version__
-    from ._help import fields_help
-
     parser = argparse.ArgumentParser(prog="floewave", description=__doc__.splitlines()[0],
                                      epilog=EXIT_HELP,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -263,7 +258,7 @@ def _main(argv: list[str] | None) -> int:
     args = main_parser().parse_args(argv)
     if args.cmd == "figures":
         return figures_main(args.out)
-    from .model import run_point
+    from .model import run_point  # lazy: numba and the kernels, 0.4 s; not for --help
 
     try:
         cfg = config_from_sets(args.set)
@@ -293,7 +288,7 @@ def _main(argv: list[str] | None) -> int:
     _say(summary(cfg, r, compile_time))
     trace = None
     if args.trace is not None:
-        from .trace import trace_point
+        from .trace import trace_point  # lazy: as .model (numba), 0.5 s
 
         try:
             trace = trace_point(cfg, r, distances=args.trace, every=args.trace_every,
@@ -308,8 +303,6 @@ def _main(argv: list[str] | None) -> int:
               f" {', '.join(f'{v:.3g}' for v in np.abs(trace.S_sd).max(axis=0))} W m-2")
     _write_outputs(args, cfg, r, trace)
     if args.trace_plot:
-        from .figures import figure4
-
         figure4(trace, cfg, args.trace_plot)
     return EXIT_OK
 
@@ -329,13 +322,11 @@ def _write_outputs(args: argparse.Namespace, cfg: ModelConfig, r: Any, trace: An
 def figures_main(out: Path) -> int:
     """``floewave figures --out DIR``: write DIR/fig1_dispersion.png, print path and fits."""
     try:
-        import matplotlib  # noqa: F401
+        import matplotlib  # noqa: F401 - lazy: optional (plot extra): its absence is reported
     except ImportError:
         print("floewave: error: 'floewave figures' needs matplotlib (pip install matplotlib)",
               file=sys.stderr)
         return EXIT_BAD_INPUT
-    from .figures import FIG1_NAME, figure1
-
     if out.exists() and not out.is_dir():
         print(f"floewave: error: cannot create output directory {str(out)!r}: it exists and"
               " is not a directory", file=sys.stderr)

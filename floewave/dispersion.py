@@ -89,8 +89,7 @@ def _solve(omega: float, h: float, b1: float, b2: float, what: str) -> tuple[flo
         hi *= 2.0
         if hi > 1e12:
             raise DispersionError(f"{what}: no root of eq. 6 found below k = 1e12 m^-1")
-    from scipy.optimize import brentq  # here: scipy.optimize takes 0.3 s to import, and
-    # a process that solves no dispersion relation (sweep status, report) need not pay it
+    from scipy.optimize import brentq  # lazy: 0.3 s; `sweep status` solves no eq. 6
 
     k = brentq(f, lo, hi, xtol=1e-300, rtol=1e-15, maxiter=500)
     cg = group_velocity(k, omega, h, b1, b2)

@@ -199,10 +199,10 @@ def figure1(out_path: str | Path, n: int = 400) -> dict[tuple[str, str], tuple[f
     curve's fitted tail exponent m (fit rule: module docstring). Returns the fits as
     :func:`tail_exponents`. Needs matplotlib (Agg backend).
     """
-    import matplotlib
+    import matplotlib  # lazy: optional (plot extra): its absence is reported
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: optional (plot extra), 0.8 s
 
     f = np.geomspace(F_RANGE[0], F_RANGE[1], n)
     fits = tail_exponents(F_RANGE[1])
@@ -267,10 +267,10 @@ def figure4(trace: Any, cfg: ModelConfig, out_path: str | Path) -> Path:
     reader can check the paper's description: regular spikes after each collision near the
     edge, low periodic S_sd far from it, erratic in between. Needs matplotlib.
     """
-    import matplotlib
+    import matplotlib  # lazy: optional (plot extra): its absence is reported
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: optional (plot extra), 0.8 s
 
     n = len(trace.floes)
     fig, axes = plt.subplots(n, 1, figsize=(8.0, 1.9 * n + 0.9), sharex=True, squeeze=False)

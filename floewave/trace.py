@@ -37,6 +37,7 @@ from . import _kernels as K
 from ._reference import pair_contact
 from .config import ConfigError, ModelConfig
 from .forces import cell_offsets
+from .model import FloeChain, run_point
 
 __all__ = ["Trace", "trace_point", "floes_at", "instantaneous", "PAPER_DISTANCES"]
 
@@ -123,10 +124,7 @@ def trace_point(cfg: ModelConfig, result: Any = None, *,
     if every < 1:
         raise ConfigError(f"trace: every = {every}: must be at least 1 time step")
     if result is None:
-        from .model import run_point
-
         result = run_point(cfg)
-    from .model import FloeChain
 
     a = np.asarray(result.a, dtype=float)
     sel = (np.asarray(floes, dtype=np.int64) if floes is not None

@@ -9,7 +9,7 @@
 - :func:`break_estimate`: x_b with a delete-one jackknife SE over the replicas. The store
   keeps each replica's time-mean dissipation ``S_sd_replicas`` but not its amplitudes, so
   each leave-one-out a(x) is re-marched (eq. 20,
-  :func:`floewave._march.march_coefficients`) from the mean of the other replicas' coefficients
+  :func:`floewave.march_coefficients`) from the mean of the other replicas' coefficients
   S_sd,r / a^3. On the Fig. 2 points this re-march reproduces the stored a(x) within
   0.004-0.7 % of a0 and its jackknife SE of a_end is 0.50-1.68 times the stored one
   (``a_stderr``, made from the windows' own amplitudes): an approximation, stated in the
@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from floewave import march_coefficients
 from floewave.results import jackknife_se
 from herman2019.points import config_of
 
@@ -105,8 +106,6 @@ def loo_amplitudes(row: Mapping[str, Any], profile: Mapping[str, Any]) -> list[n
     """Each replica left out in turn: a(x) re-marched from the other replicas' stored
     dissipation coefficients (the module docstring); [] without S_sd_replicas. Computed
     once per point and passed to :func:`break_estimate` and :func:`reach_estimate`."""
-    from floewave._march import march_coefficients
-
     a = np.asarray(profile["a"], dtype=float)
     S = profile["S_sd_replicas"] if "S_sd_replicas" in profile else None
     if S is None:

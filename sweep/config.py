@@ -25,7 +25,7 @@ from typing import Any
 
 import floewave
 from floewave import ModelConfig, solve_dispersion
-from floewave._help import did_you_mean
+from floewave.help import did_you_mean
 from floewave.transient import transient_windows
 from sweep.errors import ConfigError
 from sweep.identity import canonical_json, point_hash, sha256_hex

@@ -10,6 +10,10 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import numpy
+
+import floewave
+
 __all__ = ["environment", "git_state", "host"]
 
 
@@ -25,8 +29,6 @@ def git_state() -> tuple[str, bool | None]:
     ``("unknown", None)`` outside a git checkout (an installed wheel). Dirty means tracked
     files differ from the commit.
     """
-    import floewave
-
     root = Path(floewave.__file__).resolve().parent.parent
     try:
         commit = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"],
@@ -56,10 +58,6 @@ def environment(*, with_git: bool = True, with_mpi: bool | None = None) -> dict[
     with_mpi : include the MPI library version; default: only if mpi4py is already
         imported (so asking does not initialise MPI).
     """
-    import numpy
-
-    import floewave
-
     env: dict[str, Any] = {
         "sweep_version": floewave.__version__,
         "floewave_version": floewave.__version__,
@@ -79,7 +77,7 @@ def environment(*, with_git: bool = True, with_mpi: bool | None = None) -> dict[
         with_mpi = "mpi4py.MPI" in sys.modules
     env["mpi4py"] = _version("mpi4py")
     if with_mpi:
-        from mpi4py import MPI
+        from mpi4py import MPI  # lazy: initialises MPI: asked only once imported
 
         env["mpi_library"] = MPI.Get_library_version().splitlines()[0].strip()
     else:

@@ -27,6 +27,7 @@ import base64
 import html
 import json
 import math
+import os
 import tempfile
 from collections.abc import Callable, Sequence
 from datetime import UTC, datetime
@@ -35,6 +36,11 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+
+from sweep.analysis.figures import make_figures
+from sweep.analysis.load import journal_points, load, store_attrs, store_runs
+from sweep.analysis.stats import collision_stats
+from sweep.errors import EXIT_OK, ConfigError
 
 __all__ = ["build_report", "write_report", "command", "PROBLEM_STATUSES", "Section", "table",
            "text_cell", "number_cell", "escape"]
@@ -229,9 +235,6 @@ def _img(png: Path) -> str:
 
 
 def _figures(path: Path, max_figures: int) -> str:
-    from sweep.analysis.figures import make_figures
-    from sweep.errors import ConfigError
-
     notes: list[str] = []
     with tempfile.TemporaryDirectory(prefix="sweep-report-") as tmp:
         try:
@@ -255,8 +258,6 @@ def _pm(mean: Any, spread: Any) -> str:
 
 
 def _collision(df: pd.DataFrame) -> str:
-    from sweep.analysis.stats import collision_stats
-
     by = [k for k in ("L_x", "dispersion", "eps") if k in df.columns]
     st = collision_stats(df, by=by)
     if st.empty:
@@ -294,8 +295,6 @@ def build_report(store: str | Path, *, sections: Sequence[Callable[[], Section]]
         the report's own sections are made (e.g. a study's table of its own).
     max_figures : at most this many figures per kind (groups closest to the paper first).
     """
-    from sweep.analysis.load import journal_points, load, store_attrs, store_runs
-
     path = Path(store)
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such store")
@@ -325,8 +324,6 @@ def build_report(store: str | Path, *, sections: Sequence[Callable[[], Section]]
 def write_report(store: str | Path, out: str | Path, *,
                  sections: Sequence[Callable[[], Section]] = (), max_figures: int = 3) -> Path:
     """Write :func:`build_report` of ``store`` to ``out`` (replaced atomically)."""
-    import os
-
     out = Path(out)
     text = build_report(store, sections=sections, max_figures=max_figures)
     tmp = out.with_name(f".{out.name}.tmp")
@@ -340,8 +337,6 @@ def command(args: Any, *, sections: Sequence[Callable[[], Section]] = (),
     """``sweep report STORE --out FILE [--max N]`` (status 0; 2 for a bad argument, 3 for a
     missing or unreadable store); ``sections`` as :func:`build_report`'s, ``prog`` names
     the command in its last line."""
-    from sweep.errors import EXIT_OK, ConfigError
-
     if args.max < 1:
         raise ConfigError(f"--max {args.max}: must be at least 1")
     out = Path(args.out)

@@ -10,9 +10,13 @@ amplitudes for d_f = 0.01), :func:`trivial_point` (no work: the master benchmark
 """
 from __future__ import annotations
 
+import ctypes
 import hashlib
 import json
 import os
+import shutil
+import signal
+import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -159,8 +163,6 @@ grace_period = 5.0
 def catches_signal(pid: int, sig: int) -> bool:
     """Whether process ``pid`` has a handler installed for signal ``sig`` (``SigCgt`` in
     /proc/<pid>/status; False once the process is gone)."""
-    from pathlib import Path
-
     try:
         status = Path(f"/proc/{pid}/status").read_text()
     except OSError:
@@ -171,10 +173,6 @@ def catches_signal(pid: int, sig: int) -> bool:
 
 def find_mpiexec() -> str | None:
     """The ``mpiexec`` on PATH or beside the Python interpreter (the mpich wheel's)."""
-    import shutil
-    import sys
-    from pathlib import Path
-
     beside = Path(sys.executable).parent / "mpiexec"
     if beside.exists():
         return str(beside)
@@ -185,9 +183,6 @@ def faulty_point(cfg: ModelConfig) -> dict[str, Any]:
     """:func:`fake_point`, but faulty by eps: 0.1 ``sys.exit(0)``, 0.2 raises
     ``KeyboardInterrupt``, 0.3 returns ``W_c = "wide"``, 0.4 ``iterations = 1e20``, 0.5
     raises with a lone surrogate in its message (``os.fsdecode`` of a non-UTF-8 name)."""
-    import os
-    import sys
-
     if cfg.eps == 0.1:
         sys.exit(0)
     if cfg.eps == 0.2:
@@ -206,8 +201,6 @@ def faulty_point(cfg: ModelConfig) -> dict[str, Any]:
 def crashing_point(cfg: ModelConfig) -> dict[str, Any]:
     """:func:`fake_point`, but the process dies (``os._exit(3)``) for eps = 0.4, as a
     segfault would."""
-    import os
-
     if cfg.eps == 0.4:
         os._exit(3)
     return fake_point(cfg)
@@ -228,8 +221,6 @@ def native_stuck_point(cfg: ModelConfig) -> dict[str, Any]:
     """:func:`fake_point`, but eps = 0.4 is stuck where no Python handler can run (as in
     native code): the timeout signal is blocked and the thread sleeps for an hour."""
     if cfg.eps == 0.4:
-        import signal
-
         signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGUSR2})
         time.sleep(3600)
     return fake_point(cfg)
@@ -244,8 +235,6 @@ def sleepy_trivial_point(cfg: ModelConfig) -> dict[str, Any]:
 def exiting_point(cfg: ModelConfig) -> dict[str, Any]:
     """:func:`fake_point`, but the process ends with status 0 (``os._exit(0)``) for
     eps = 0.4: no handler runs, as for a C ``_exit(0)``."""
-    import os
-
     if cfg.eps == 0.4:
         os._exit(0)
     return fake_point(cfg)
@@ -256,8 +245,6 @@ def c_exit_point(cfg: ModelConfig) -> dict[str, Any]:
     eps = 0.4 (a model library's ``exit(0)`` or Fortran ``STOP``: C atexit handlers run,
     Python's do not)."""
     if cfg.eps == 0.4:
-        import ctypes
-
         ctypes.CDLL(None).exit(0)
     return fake_point(cfg)
 
@@ -284,9 +271,6 @@ def stdout_closing_point(cfg: ModelConfig) -> dict[str, Any]:
     """:func:`fake_point`, but eps = 0.4 closes ``sys.stdout`` and descriptor 1 first (a
     model library that closes its output)."""
     if cfg.eps == 0.4:
-        import os
-        import sys
-
         sys.stdout.close()
         os.close(1)
     return fake_point(cfg)

@@ -162,6 +162,34 @@ def private_imports(packages=PACKAGES) -> list[str]:
     return bad
 
 
+def _private(dotted: str) -> bool:
+    return any(part.startswith("_") and not part.startswith("__")
+               for part in dotted.split("."))
+
+
+def private_floewave_imports(package: str = "sweep") -> list[str]:
+    """``module imports floewave._x`` for every import by ``package`` of a private
+    floewave module or name (floewave's public names are its own: :mod:`floewave`,
+    :mod:`floewave.paths`, :mod:`floewave.help`...)."""
+    bad = []
+    for name, path in modules(package).items():
+        for node in _walk(ast.parse(path.read_text(), filename=str(path))):
+            if isinstance(node, ast.Import):
+                targets = [alias.name for alias in node.names]
+            elif isinstance(node, ast.ImportFrom) and not node.level and node.module:
+                targets = [f"{node.module}.{alias.name}" for alias in node.names]
+            else:
+                continue
+            bad += [f"{name} imports {t}" for t in targets
+                    if t.split(".")[0] == "floewave" and _private(t)]
+    return bad
+
+
+#: Imports of a private floewave module left in code another change moves out of sweep
+#: (issue 44: sweep/paper/ becomes its own package; it is to use
+#: ``floewave.march_coefficients``). Each must still be there: drop it once it is gone.
+
+
 def long_modules(packages=LINE_RULE, limit: int = MAX_LINES) -> list[tuple[str, int]]:
     """Modules of ``packages`` longer than ``limit`` lines, longest first."""
     out = []
@@ -244,6 +272,26 @@ def test_the_layer_rule_sees_an_import_of_the_study(tmp_path, monkeypatch):
     assert "herman2019.check" in edges["sweep"] and "sweep" in edges["herman2019"]
 
 
+@pytest.mark.parametrize("package", ["sweep", "herman2019"])
+def test_no_private_floewave_module_is_imported_from_outside(package):
+    """sweep and the study use floewave's public names only (a private module of floewave
+    may change or go with any release of it)."""
+    assert sorted(private_floewave_imports(package)) == []
+
+
+def test_private_floewave_imports_are_found(tmp_path, monkeypatch):
+    pkg = tmp_path / "pkg"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text('"""p."""\n')
+    (pkg / "a.py").write_text('"""a."""\nimport floewave._jit\nfrom floewave import _kernels'
+                              '\nfrom floewave.paths import quiet_stdout\nimport floewave\n'
+                              'def f():\n    from floewave._march import march_coefficients\n')
+    monkeypatch.setattr(sys.modules[__name__], "ROOT", tmp_path)
+    assert private_floewave_imports("pkg") == [
+        "pkg.a imports floewave._jit", "pkg.a imports floewave._kernels",
+        "pkg.a imports floewave._march.march_coefficients"]
+
+
 @pytest.mark.parametrize("package", PACKAGES)
 def test_every_module_says_its_job(package):
     missing = [name for name, path in modules(package).items()
@@ -265,5 +313,7 @@ if __name__ == "__main__":
         print(f"  circle of parts: {' '.join(component)}")
     for line in private_imports(("sweep", "herman2019")):
         print(f"  private: {line}")
+    for line in private_floewave_imports("sweep"):
+        print(f"  private floewave: {line}")
     for name, n in long_modules(PACKAGES):
         print(f"  {n:5d} lines: {name}")

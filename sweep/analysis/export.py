@@ -4,6 +4,7 @@ from __future__ import annotations
 import importlib.util
 from pathlib import Path
 
+from floewave.paths import output_file_problem
 from sweep.analysis.load import load
 from sweep.analysis.tables import table_suffix
 from sweep.errors import ConfigError, StoreError
@@ -19,8 +20,6 @@ def export_table(store: str | Path, output: Path) -> int:
     if suffix is None:
         raise ConfigError(f"--output {output}: expected a .csv, .csv.gz or .parquet file"
                           " name")
-    from floewave._paths import output_file_problem
-
     problem = output_file_problem(output, "--output")
     if problem:
         raise ConfigError(problem)

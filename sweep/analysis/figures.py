@@ -41,6 +41,8 @@ d_f = 0.005 m, ``ml``) come first. Needs matplotlib (the ``plot`` extra).
 """
 from __future__ import annotations
 
+import json
+import sys
 from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
@@ -76,7 +78,7 @@ KINDS = ("fig2", "fig3", "fig5", "fig6", "summary")
 
 def fig2(df: pd.DataFrame, profiles: ProfileCache, out: Path, limit: int) -> list[Path]:
     """a/a0 per eps, one panel per dispersion relation (the paper's Fig. 2)."""
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: optional (plot extra), 0.8 s
 
     keys = ("L_x", "T", "a0", "C_sd", "d_f")
     written: list[Path] = []
@@ -117,7 +119,7 @@ def fig2(df: pd.DataFrame, profiles: ProfileCache, out: Path, limit: int) -> lis
 
 def fig3(df: pd.DataFrame, profiles: ProfileCache, out: Path, limit: int) -> list[Path]:
     """Mean gap, |F_w|, |F_c|, |F_d| versus x per eps (the paper's Fig. 3)."""
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: optional (plot extra), 0.8 s
 
     keys = ("L_x", "T", "a0", "C_sd", "d_f", "dispersion")
     panels = (("gap_mean", "mean floe–floe distance [m]"), ("F_w_mean", "mean |F_w| [N]"),
@@ -175,7 +177,7 @@ def fig3(df: pd.DataFrame, profiles: ProfileCache, out: Path, limit: int) -> lis
             ax.set_xlabel("distance from the ice edge x [m]")
         extra = status_handles(sub)
         if replica_ticks:
-            from matplotlib.lines import Line2D
+            from matplotlib.lines import Line2D  # lazy: optional (plot extra), 0.8 s
 
             extra.append(Line2D([], [], ls="none", marker="|", ms=10, mew=1.6, color="k",
                                 label=REPLICA_W_C))
@@ -194,8 +196,6 @@ REPLICA_W_C = ("| each replica's W_c (its own gaps drop below gap_threshold); th
 
 def _gap_threshold(row: pd.Series) -> float:
     """The point's ``gap_threshold`` [m] (from its config; the paper's 1e-4 m if absent)."""
-    import json
-
     try:
         return float(json.loads(str(row["config_json"])).get("gap_threshold", 1e-4))
     except (KeyError, ValueError, TypeError):
@@ -204,8 +204,8 @@ def _gap_threshold(row: pd.Series) -> float:
 
 def fig5(df: pd.DataFrame, profiles: ProfileCache, out: Path, limit: int) -> list[Path]:
     """a/a0 per floe size, ep solid and ml dashed (the paper's Fig. 5)."""
-    import matplotlib.pyplot as plt
-    from matplotlib.lines import Line2D
+    import matplotlib.pyplot as plt  # lazy: optional (plot extra), 0.8 s
+    from matplotlib.lines import Line2D  # lazy: optional (plot extra), 0.8 s
 
     keys = ("T", "a0", "C_sd", "eps", "d_f")
     written: list[Path] = []
@@ -235,7 +235,7 @@ def fig5(df: pd.DataFrame, profiles: ProfileCache, out: Path, limit: int) -> lis
 
 def _fig6(df: pd.DataFrame, profiles: ProfileCache, out: Path, limit: int,
           varying: str) -> list[Path]:
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: optional (plot extra), 0.8 s
 
     keys = tuple(k for k in ("L_x", "a0", "d_f", "C_sd", "eps", "dispersion")
                  if k != varying)
@@ -294,8 +294,6 @@ WHY = {
 
 
 def _stderr(message: str) -> None:
-    import sys
-
     print(f"sweep: {message}", file=sys.stderr)
 
 
@@ -321,7 +319,7 @@ def make_figures(path: str | Path, outdir: str | Path, max_figures: int = 20,
     if unknown:
         raise ConfigError(f"unknown figure kind {unknown[0]!r}; choose from {', '.join(KINDS)}")
     try:
-        import matplotlib
+        import matplotlib  # lazy: optional (plot extra): its absence is reported
 
         matplotlib.use("Agg")
     except ImportError:

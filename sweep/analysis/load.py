@@ -6,6 +6,8 @@ writer; only committed rows (below ``/table.attrs["n_rows"]``) are returned.
 from __future__ import annotations
 
 import json
+import os
+import re
 import time
 from pathlib import Path
 from typing import Any
@@ -26,6 +28,7 @@ from sweep.analysis.tables import (
 from sweep.errors import PointNotFoundError, StoreError, StoreUnreadableError
 from sweep.store import reader
 from sweep.store.cells import text
+from sweep.store.journal import journal_path
 from sweep.store.schema import (
     COLUMNS,
     DERIVED,
@@ -93,11 +96,6 @@ def journal_points(path: str | Path) -> int | None:
     journal write and its HDF5 write, or a killed run whose next start writes them).
     A quick count: the hash of each record line, not its checksum.
     """
-    import os
-    import re
-
-    from sweep.store.journal import journal_path
-
     jp = journal_path(os.path.realpath(path))  # beside the file, as the writer names it
     if not jp.exists():
         return None

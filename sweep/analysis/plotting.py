@@ -87,7 +87,7 @@ class ProfileCache:
 
 
 def colour_cycle(n: int) -> list:
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: optional (plot extra), 0.8 s
 
     cmap = plt.get_cmap("tab10" if n <= 10 else "viridis")
     return [cmap(i if n <= 10 else i / max(n - 1, 1)) for i in range(n)]
@@ -110,7 +110,7 @@ def not_converged_mask(df: pd.DataFrame) -> pd.Series:
 
 def status_handles(df: pd.DataFrame, ring: bool = False) -> list:
     """The legend entries explaining the status marks, for the points of ``df``."""
-    from matplotlib.lines import Line2D
+    from matplotlib.lines import Line2D  # lazy: optional (plot extra), 0.8 s
 
     if not not_converged_mask(df).any():
         return []
@@ -129,7 +129,7 @@ def legend_of(axes: Iterable, extra: Sequence = ()) -> tuple[list, list[str]]:
     """Handles and labels of every panel (each label once, first panel first; a curve's
     entry without the status crosses, which :data:`NOT_CONVERGED` explains) plus ``extra``
     handles."""
-    from matplotlib.lines import Line2D
+    from matplotlib.lines import Line2D  # lazy: optional (plot extra), 0.8 s
 
     handles, labels = [], []
     for ax in axes:
@@ -225,7 +225,7 @@ def draw_confined(ax, row: pd.Series, x_end: float, label: bool = True) -> None:
 
 
 def save_figure(fig, target: Path, written: list[Path]) -> None:
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: optional (plot extra), 0.8 s
 
     fig.savefig(target, dpi=120)
     plt.close(fig)

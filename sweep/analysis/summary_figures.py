@@ -33,7 +33,7 @@ __all__ = ["summary", "RATE_LABEL"]
 
 def summary(df: pd.DataFrame, profiles: ProfileCache, out: Path, limit: int) -> list[Path]:
     """W_c versus eps, and alpha_inner(omega) with the fitted exponents."""
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: optional (plot extra), 0.8 s
 
     written: list[Path] = []
     keys = ("L_x", "T", "a0", "C_sd", "d_f", "dispersion")
@@ -70,7 +70,7 @@ def summary(df: pd.DataFrame, profiles: ProfileCache, out: Path, limit: int) -> 
             ax.loglog(om[ok], fit["c"] * om[ok] ** fit["m"], "-", color=colour, lw=1)
             ax.loglog(om, pts["alpha_c"], "x--", color=colour, lw=0.8, ms=4,
                       label=f"  α_c (eq. 24): m = {fit['m_c']:.2f}")
-        from matplotlib.ticker import ScalarFormatter
+        from matplotlib.ticker import ScalarFormatter  # lazy: optional (plot extra), 0.8 s
 
         for axis in (ax.xaxis, ax.yaxis):
             axis.set_major_formatter(ScalarFormatter())
@@ -93,7 +93,7 @@ def collision_zone_figure(df: pd.DataFrame, keys: Sequence[str],
     """``collision_zone.png``: W_c versus eps, one curve per group (colour and marker by the
     parameters that differ between the groups, :func:`curve_styles`), offset in eps so that equal
     values stay visible; no compact zone: a cross at the top; not converged: a square."""
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: optional (plot extra), 0.8 s
 
     fig, ax = plt.subplots(figsize=(8.4, 4.6), constrained_layout=True)
     vary = [i for i, k in enumerate(keys) if len({kv[0][i] for kv in shown}) > 1]
@@ -129,7 +129,7 @@ def collision_zone_figure(df: pd.DataFrame, keys: Sequence[str],
     ax.set_ylabel("collision-zone width W_c [m]")
     extra = status_handles(pd.concat([sub for _, sub in shown]), ring=True)
     if marked_none:
-        from matplotlib.lines import Line2D
+        from matplotlib.lines import Line2D  # lazy: optional (plot extra), 0.8 s
 
         extra.append(Line2D([], [], ls="none", marker="x", color="k",
                             label=f"no compact zone (drawn at {ax_top:g} m)"))
@@ -145,7 +145,7 @@ def collision_stats_figure(df: pd.DataFrame, out: Path) -> list[Path]:
     """``collision_stats.png``: W_c / L_sheet and alpha_inner / alpha_c versus eps per floe
     size and dispersion relation, pooled over every other swept parameter
     (:func:`sweep.collision_stats`; bars: +-1 standard deviation over the pooled points)."""
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: optional (plot extra), 0.8 s
 
     st = collision_stats(df, by=["L_x", "dispersion", "eps"])
     if not (st["W_c_rel_mean"].notna().any() or st["inner_over_c_median"].notna().any()):

@@ -8,6 +8,7 @@ from pathlib import Path
 import pandas as pd
 
 import floewave
+from floewave.config import DISPERSIONS
 from sweep.errors import StoreError
 from sweep.store import reader
 from sweep.store.schema import COLUMNS, DERIVED
@@ -114,7 +115,6 @@ def typed_table(df: pd.DataFrame) -> pd.DataFrame:
     df["status"] = pd.Categorical(df["status"], categories=list(STATUS_ORDER) + extra)
     # every dispersion relation floewave knows, so tables of two stores concatenate as
     # categoricals (categories taken from each store's data would differ)
-    from floewave.config import DISPERSIONS
     df["dispersion"] = pd.Categorical(
         df["dispersion"], categories=sorted(set(DISPERSIONS) | set(df["dispersion"])))
     return df

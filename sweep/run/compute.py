@@ -12,9 +12,15 @@ model's own status otherwise: a :class:`sweep.protocol.Outcome`, which the maste
 from __future__ import annotations
 
 import contextlib
+import ctypes
+import faulthandler
 import importlib
 import os
+import pickle
+import select
 import signal
+import sys
+import threading
 import time
 import traceback
 from collections.abc import Callable
@@ -71,9 +77,6 @@ class _Deadline:
         raise PointTimeout(f"ran longer than point_timeout = {self.seconds:g} s")
 
     def __enter__(self) -> _Deadline:
-        import faulthandler
-        import threading
-
         if threading.current_thread() is not threading.main_thread():
             return self
         self._old = signal.signal(_TIMEOUT_SIGNAL, self._raise)
@@ -87,8 +90,6 @@ class _Deadline:
         return self
 
     def __exit__(self, *exc: Any) -> None:
-        import faulthandler
-
         if self._timer is None:
             return
         self._timer.cancel()
@@ -192,10 +193,6 @@ def compute_in_child(task: Task, fn: Callable[[ModelConfig], Any], rank: int = 0
     that dies (``os._exit``, a crash) makes the point ``crashed`` in this run. The
     campaign's process is never at the point's mercy. Stop signals are the parent's: the
     child ignores them; a :class:`GraceExpired` in the parent kills the child."""
-    import pickle
-    import select
-    import sys
-
     limit = float(task.timeout or 0.0)
     hard = limit + max(_CHILD_MARGIN, 0.05 * limit)
     sys.stdout.flush()
@@ -210,8 +207,6 @@ def compute_in_child(task: Task, fn: Callable[[ModelConfig], Any], rank: int = 0
             for sig in STOP_SIGNALS:
                 signal.signal(sig, signal.SIG_IGN)
             with contextlib.suppress(Exception):
-                import ctypes
-
                 ctypes.CDLL(None).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
             data = pickle.dumps(compute_point(task, fn, rank), pickle.HIGHEST_PROTOCOL)
             view = memoryview(data)

@@ -22,6 +22,7 @@ Set ``SWEEP_NO_GUARD=1`` to run without it (one process, as before).
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import os
 import signal
 import sys
@@ -38,8 +39,6 @@ _MASK: set[int] | None = None  # the child's signal mask before the fork
 def _die_with_parent(parent: int) -> None:
     """Linux: this process gets SIGKILL when its parent dies."""
     with contextlib.suppress(Exception):
-        import ctypes
-
         ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
     if os.getppid() != parent:  # the guard died before prctl
         os._exit(EXIT_INTERRUPTED)

@@ -22,6 +22,7 @@ from sweep.run.compute import DEFAULT_COMPUTE
 from sweep.run.master import Master, RunSummary
 from sweep.run.progress import Progress, log_line
 from sweep.run.signals import GraceExpired, StopSignals
+from sweep.run.sink import InlineSink, ResultSink
 from sweep.run.store_process import StoreProcess
 from sweep.run.transport import InProcessTransport, MPITransport, Transport
 from sweep.run.warmup import warm_up_configs
@@ -72,14 +73,9 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
         with StopSignals(campaign.run.grace_period, in_process=not mpi) as signals:
             git = {"git_commit": info["git_commit"], "git_dirty": info["git_dirty"],
                    "sweep_version": info["sweep_version"]}
-            if mpi and campaign.run.writer == "process":  # the master only schedules
-                store: Any = StoreProcess(store_path, campaign, extend=extend,
-                                          run_info=info, verify=verify,
-                                          worker_env=transport.worker_env, git=git,
-                                          opener=Store)
-            else:
-                store = Store(store_path, campaign, extend=extend, run_info=info,
-                              verify=verify)
+            store = _open_sink(store_path, campaign, campaign.run.writer if mpi else "inline",
+                               extend=extend, run_info=info, verify=verify,
+                               worker_env=transport.worker_env, git=git)
             outcome = "complete"
             try:
                 if signals.requested:
@@ -88,7 +84,7 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
                                       " store was being opened; nothing was lost — the"
                                       " campaign is resumable: run the same command again")
                 limit = campaign.run.point_timeout if point_timeout is None else point_timeout
-                master = Master(store, transport, compute, git, limit)
+                master = Master(store, transport, compute, limit)
                 _run_points(campaign, store, master, signals, summary, retry_failed,
                             progress_bar)
                 summary.elapsed = time.monotonic() - t0
@@ -106,8 +102,7 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
                 store.close(outcome)
                 # the writer's CPU once its store was open (opening it, which expands
                 # the grid, is start-up, as for an inline master); else its whole life's
-                summary.writer_cpu = (getattr(store, "loop_cpu", 0.0)
-                                      or getattr(store, "writer_cpu", 0.0))
+                summary.writer_cpu = store.store_cpu
     except BaseException as exc:
         if mpi and transport is not None:
             _end_mpi_job(exc, transport, master)
@@ -115,6 +110,19 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
     if mpi:
         transport.shutdown()
     return summary
+
+
+def _open_sink(store_path: str, campaign: Campaign, writer: str, *, extend: bool,
+               run_info: dict[str, Any], verify: bool,
+               worker_env: dict[int, dict[str, Any]], git: dict[str, Any]) -> ResultSink:
+    """The open store as the master's :class:`sweep.run.sink.ResultSink`: written by a
+    writer process (``writer`` "process": the master only schedules) or by the master
+    itself ("inline")."""
+    if writer == "process":
+        return StoreProcess(store_path, campaign, extend=extend, run_info=run_info,
+                            verify=verify, worker_env=worker_env, git=git, opener=Store)
+    return InlineSink(Store(store_path, campaign, extend=extend, run_info=run_info,
+                            verify=verify), worker_env, git)
 
 
 def _open_transport(comm: Any, compute: str, mpi: bool) -> Transport:
@@ -162,7 +170,7 @@ def _warm_up(master: Master, todo: list[Point], signals: StopSignals,
              f" or loaded from the numba cache){note}")
 
 
-def _run_points(campaign: Campaign, store: Store | StoreProcess, master: Master,
+def _run_points(campaign: Campaign, store: ResultSink, master: Master,
                 signals: StopSignals, summary: RunSummary, retry_failed: bool,
                 progress_bar: bool | None) -> None:
     """The campaign loop of :func:`run_campaign` (the store is open)."""
@@ -197,7 +205,7 @@ def _run_points(campaign: Campaign, store: Store | StoreProcess, master: Master,
         progress.close()
 
 
-def _known_outcomes(todo: list[Point], store: Store | StoreProcess, master: Master,
+def _known_outcomes(todo: list[Point], store: ResultSink, master: Master,
                     limit: int, retry_failed: bool) -> list[tuple[Point, str, str]]:
     """The points whose outcome is known without a worker, as ``(point, status,
     message)``: impossible points (``invalid``) and points that killed their worker

@@ -7,13 +7,15 @@ already waiting, store them all with one group commit (:meth:`sweep.store.store.
 one journal fsync, one HDF5 flush), count them as stored, repeat; ``None`` is the stop
 message. A worker holds one task at a time while points are slow; when points take less
 than a few commits' time it is given a short queue of tasks (up to :data:`_MAX_DEPTH`)
-so that it computes while the master commits. Each result becomes one
-:class:`sweep.store.record.Record` (:meth:`Master.record`).
+so that it computes while the master commits.
 
-With a store written by another process (:class:`sweep.run.store_process.StoreProcess`,
-MPI runs by default) the master *forwards* each result's bytes unread and hands its worker
-the next task at once (after the hand-out is journaled); the writer commits in groups and
-reports what it stored, and only then is a point counted as stored.
+The results go to a :class:`sweep.run.sink.ResultSink`: the master writing the store
+itself (:class:`sweep.run.sink.InlineSink`: each result becomes one
+:class:`sweep.store.record.Record`, a batch one group commit), or a writer process
+(:class:`sweep.run.store_process.StoreProcess`, MPI runs by default: the master passes
+each result's bytes on unread and hands its worker the next task once the hand-out is
+journaled; the writer commits in groups and reports what it stored). Either way a point
+counts as stored only once its sink says so.
 """
 from __future__ import annotations
 
@@ -25,13 +27,13 @@ from typing import Any
 
 from sweep.config import Point
 from sweep.errors import Interrupted, WorkerError
-from sweep.protocol import Kind, Outcome, Task, WorkerFailure, unpacked
+from sweep.protocol import Kind, Outcome, Task, WorkerFailure
 from sweep.run.compute import DEFAULT_COMPUTE
 from sweep.run.progress import Progress
 from sweep.run.signals import GraceExpired, StopSignals
+from sweep.run.sink import ResultSink
 from sweep.run.transport import Transport
-from sweep.store.record import Record, provenance_json
-from sweep.store.store import Store
+from sweep.store.record import Record
 
 __all__ = ["Master", "RunSummary"]
 
@@ -90,31 +92,29 @@ class Master:
 
     Parameters
     ----------
-    store : the open :class:`sweep.store.store.Store` (this process is its only writer), or
-        a :class:`sweep.run.store_process.StoreProcess` (a writer process is): results
-        are then forwarded, not stored here.
+    store : where the results go (:class:`sweep.run.sink.ResultSink`: the open store
+        written by this process, :class:`sweep.run.sink.InlineSink`, or by a writer
+        process, :class:`sweep.run.store_process.StoreProcess`).
     transport : :class:`sweep.run.transport.InProcessTransport` or
         :class:`sweep.run.transport.MPITransport`.
     compute : the compute function spec (its kernels are warmed up before the run).
     """
 
-    def __init__(self, store: Store, transport: Transport, compute: str = DEFAULT_COMPUTE,
-                 git: dict[str, Any] | None = None, point_timeout: float = 0.0) -> None:
+    def __init__(self, store: ResultSink, transport: Transport,
+                 compute: str = DEFAULT_COMPUTE, point_timeout: float = 0.0) -> None:
         self.store = store
         self.point_timeout = point_timeout
         self.transport = transport
         self.compute = compute
-        self.git = git or {}
-        self._provenance: dict[tuple[int, str], str] = {}
         self.outstanding = 0  # tasks handed out and not yet stored
         #: points in flight when an earlier run died: each is computed alone, so that a
         #: death while it runs is its attempt (``[run] max_attempts``)
         self.suspects: set[str] = set()
         self._queues: dict[int, collections.deque[tuple[Point, dict[str, Any]]]] = {}
         self.point_time = math.nan  # [s] moving average of a point's compute time
-        self.commit_time = math.nan  # [s] moving average of a batch's store time
-        #: the store is written by another process: results are forwarded to it
-        self.forwarding = hasattr(store, "forward")
+        #: [s] moving average of what a worker waits for at the store (its hand-out or its
+        #: batch's commit: ``store.waits_for``)
+        self.commit_time = math.nan
         self.at_workers = 0  # tasks sent whose results have not arrived
 
     @property
@@ -134,17 +134,14 @@ class Master:
                config: dict[str, Any] | None = None) -> Record:
         """The :class:`sweep.store.record.Record` of a worker's outcome (or of
         :meth:`sweep.protocol.Outcome.known`) for ``point``."""
-        return Record.from_outcome(point, out, config, self._provenance_of)
+        return Record.from_outcome(point, out, config, self.store.provenance)
 
-    def _provenance_of(self, rank: int, kernel_mode: str) -> str:
-        """The ``provenance`` column of a point computed by ``rank`` in ``kernel_mode``
-        (the same for all its points: built once)."""
-        key = (rank, kernel_mode)
-        prov = self._provenance.get(key)
-        if prov is None:
-            prov = self._provenance[key] = provenance_json(
-                self.transport.worker_env.get(rank, {}), self.git, kernel_mode)
-        return prov
+    def _timed(self, step: str, t0: float) -> None:
+        """Average the time since ``t0`` (``time.perf_counter``) into
+        :attr:`commit_time` if ``step`` ("handout", "commit") is what a worker waits for
+        at the store."""
+        if step == self.store.waits_for:
+            self.commit_time = _average(self.commit_time, time.perf_counter() - t0)
 
     def run(self, todo: list[Point], progress: Progress, signals: StopSignals,
             summary: RunSummary) -> None:
@@ -192,9 +189,8 @@ class Master:
                     # journaled before they go out: a point whose worker dies is counted
                     t0 = time.perf_counter()
                     self.store.handout([(p.hash, w) for p, _, w in sent])
-                    if self.forwarding and sent:  # the round trip a worker waits for
-                        self.commit_time = _average(self.commit_time,
-                                                    time.perf_counter() - t0)
+                    if sent:
+                        self._timed("handout", t0)
                     for point, config, worker in sent:
                         self.outstanding += 1
                         self.at_workers += 1
@@ -204,15 +200,14 @@ class Master:
                 if time.monotonic() > stop_at:
                     break
                 wait = min(1.0, max(stop_at - time.monotonic(), 0.0))
-                if self.forwarding and not self.at_workers:  # only the writer has them
+                if not self.at_workers:  # only the store has them (a writer process)
                     self.outstanding -= self._count(self.store.wait(wait), progress, summary)
                     continue
                 msg = self.transport.poll(wait)
                 progress.tick()
                 if msg is None:
-                    if self.forwarding:
-                        self.outstanding -= self._count(self.store.take_stored(), progress,
-                                                        summary)
+                    self.outstanding -= self._count(self.store.take_stored(), progress,
+                                                    summary)
                     continue
                 batch = [msg]
                 window_end = time.monotonic() + _BATCH_WINDOW
@@ -225,7 +220,7 @@ class Master:
                 self.outstanding -= self._store_batch(batch, queues, progress, summary)
         except GraceExpired:
             summary.interrupted = summary.interrupted or "signal"
-        if self.forwarding and self.outstanding:  # results at the writer: wait for them
+        if self.outstanding:  # results at a writer process: wait for them
             self.outstanding -= self._count(self.store.sync(), progress, summary)
         if summary.interrupted:
             summary.abandoned = abandoned = self.outstanding
@@ -246,12 +241,13 @@ class Master:
                      progress: Progress, summary: RunSummary) -> int:
         """Stage the results of ``batch``, commit them together, count them as stored.
 
-        Returns the number of points now stored (forwarding: those the writer reported
-        committed since the last call). A worker's error message is raised (as
-        :class:`WorkerError`) after the results before it are committed.
+        Returns the number of points now stored (those the store reports stored since
+        the last call: with a writer process, not yet all of ``batch``). A worker's error
+        message is raised (as :class:`WorkerError`) after the results before it are
+        stored.
         """
         t0 = time.perf_counter()
-        statuses: list[str] = []
+        results = 0
         error: WorkerFailure | None = None
         wall = 0.0
         for worker, kind, payload in batch:
@@ -264,28 +260,18 @@ class Master:
                 raise WorkerError(f"worker rank {worker} returned {kind} of point"
                                   f" {str(getattr(payload, 'hash', ''))[:12]}, expected the"
                                   f" result of {point.hash[:12]} (protocol error)")
-            if self.forwarding:  # the writer builds and stores its record
-                self.store.forward(payload)
-                statuses.append(payload.status)
-            else:
-                rec = self.record(point, unpacked(payload), config)
-                self.store.add(rec)
-                statuses.append(rec.status)
+            self.store.submit(point, payload, config)
+            results += 1
             wall += float(payload.wall_time)
-        if self.forwarding:
-            # stored when the writer says so (a worker's error: after the results before it)
-            stored = self._count(self.store.sync() if error is not None
-                                 else self.store.take_stored(), progress, summary)
-        else:
-            self.store.commit()  # now they are stored: count them
-            stored = self._count(statuses, progress, summary)
+        # a worker's error: raised once the results before it are stored
+        stored = self._count(self.store.settle(everything=error is not None), progress,
+                             summary)
         if error is not None:
             raise WorkerError(f"worker rank {error.rank} on {error.host}:"
                               f" {error.message}\n{error.traceback}")
-        if statuses:
-            self.point_time = _average(self.point_time, wall / len(statuses))
-            if not self.forwarding:
-                self.commit_time = _average(self.commit_time, time.perf_counter() - t0)
+        if results:
+            self.point_time = _average(self.point_time, wall / results)
+            self._timed("commit", t0)
         return stored
 
     @staticmethod

@@ -31,7 +31,7 @@ def mpi_world() -> Any:
     if not launched():
         return None
     try:
-        from mpi4py import MPI
+        from mpi4py import MPI  # lazy: initialises MPI; plain python runs use none
     except ImportError as exc:
         raise LaunchError(f"started by an MPI launcher but mpi4py cannot be imported: {exc};"
                           " pip install 'floewave[mpi]'") from None

@@ -9,6 +9,7 @@ non-blocking and read the writer's frames meanwhile), so neither side can deadlo
 from __future__ import annotations
 
 import contextlib
+import fcntl
 import os
 import pickle
 import select
@@ -19,7 +20,8 @@ import time
 import traceback
 from typing import Any
 
-from sweep.errors import StoreError
+from sweep.errors import StoreError, SweepError
+from sweep.system import STOP_SIGNALS
 
 __all__ = ["Channel", "Child", "become_writer", "dumps", "error_bytes", "ADD", "RESULT",
            "HANDOUT", "COMMIT", "RELEASE", "CLOSE", "OK", "STORED", "FAIL"]
@@ -46,7 +48,6 @@ class Channel:
         self.nonblocking_writes = nonblocking_writes
         for fd in (fd_in, fd_out):
             with contextlib.suppress(OSError, AttributeError):
-                import fcntl
                 fcntl.fcntl(fd, _F_SETPIPE_SZ, _PIPE_SIZE)
         if nonblocking_writes:
             os.set_blocking(fd_out, False)
@@ -125,8 +126,6 @@ class Channel:
 def error_bytes(exc: BaseException) -> bytes:
     """``exc`` pickled for the master (with the writer's traceback as a note when it is
     not one of sweep's own errors); a :class:`StoreError` naming it when it cannot be."""
-    from sweep.errors import SweepError
-
     if not isinstance(exc, SweepError):
         with contextlib.suppress(Exception):
             exc.add_note("in the store's writer process:\n" + "".join(
@@ -177,8 +176,6 @@ def become_writer(keep: tuple[int, int]) -> None:
     """In the forked child: stop signals ignored (the master decides when to stop), no
     signal wake-up descriptor, and no descriptor of the master's kept open (MPI's among
     them) but stdin/stdout/stderr and the two pipe ends ``keep``."""
-    from sweep.system import STOP_SIGNALS
-
     for sig in STOP_SIGNALS:
         with contextlib.suppress(ValueError, OSError):
             signal.signal(sig, signal.SIG_IGN)

@@ -14,6 +14,8 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+import floewave
+
 __all__ = ["Plan", "calibrate", "core_seconds", "given_rate", "kernel_shape", "plan"]
 
 #: Seconds each kernel shape is timed for by :func:`calibrate` (after a warm-up run).
@@ -41,8 +43,6 @@ def calibrate(points: Iterable[Any]) -> tuple[dict[tuple, float], str]:
     time other processes had the core. No valid point, or no
     ``floewave.run_point``: no rates (``{}``) and the reason.
     """
-    import floewave
-
     try:
         run_point = floewave.run_point
     except (AttributeError, ImportError) as exc:

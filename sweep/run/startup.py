@@ -21,6 +21,8 @@ from collections.abc import Sequence
 from typing import Any
 
 from sweep.errors import Interrupted
+from sweep.run import signals
+from sweep.run.mpi import launched
 from sweep.system import STOP_SIGNALS, note_start_up_stop, take_start_up_stop
 
 __all__ = ["FIRST", "LATE", "catch", "release"]
@@ -35,8 +37,6 @@ _UNRAISABLE: list[Any] = []  # the unraisable hook _quiet passes the others to
 
 
 def _handle(signum: int, frame: Any) -> None:
-    from sweep.run import signals
-
     if signals.campaign_over:  # nothing left to stop: the command ends as it would
         LATE.append(signum)
         return
@@ -61,9 +61,6 @@ def catch(argv: Sequence[str], command_line: bool) -> None:
     """Start the start-up of the command ``argv`` (``run`` and ``merge`` only)."""
     if not argv or argv[0] not in ("run", "merge"):
         return
-    from sweep.run import signals
-    from sweep.run.mpi import launched
-
     signals.campaign_over = False  # a new command: its stops stop it
     FIRST.clear()
     LATE.clear()

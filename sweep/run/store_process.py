@@ -37,8 +37,9 @@ import sys
 import time
 import traceback
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
+from sweep.config import Point
 from sweep.errors import StoreError
 from sweep.protocol import Outcome, Packed
 from sweep.run.pipe import (
@@ -57,6 +58,10 @@ from sweep.run.pipe import (
     dumps,
     error_bytes,
 )
+from sweep.run.sink import Provenance
+from sweep.store.cells import text
+from sweep.store.record import Record
+from sweep.store.store import Store
 
 __all__ = ["StoreProcess", "serve", "WRITER_MODES"]
 
@@ -83,8 +88,7 @@ class _Writer:
         self.chan = chan
         self.store = store
         self.points = {p.hash: p for p in campaign.points()}
-        self.worker_env, self.git = worker_env, git
-        self._provenance: dict[tuple[int, str], str] = {}
+        self.provenance = Provenance(worker_env, git)
         self.staged: list[str] = []   # statuses of the results staged, in order
         self.failed = False           # an error was sent: nothing more is stored
 
@@ -93,16 +97,6 @@ class _Writer:
         end of its pipe ends the loop, after what it sent is stored."""
         with contextlib.suppress(BrokenPipeError, ConnectionResetError):
             self.chan.write(kind, payload)
-
-    def provenance_of(self, rank: int, kernel_mode: str) -> str:
-        from sweep.store.record import provenance_json
-
-        key = (rank, kernel_mode)
-        prov = self._provenance.get(key)
-        if prov is None:
-            prov = self._provenance[key] = provenance_json(
-                self.worker_env.get(rank, {}), self.git, kernel_mode)
-        return prov
 
     def commit(self) -> None:
         if self.failed:
@@ -114,8 +108,6 @@ class _Writer:
 
     def handle(self, kind: int, body: bytes) -> str | None:
         """Act on one frame; the run's outcome once it is a ``CLOSE``."""
-        from sweep.store.record import Record
-
         if kind == RESULT:
             if not self.failed:
                 out: Outcome = pickle.loads(body)
@@ -124,7 +116,7 @@ class _Writer:
                     raise StoreError(f"the store's writer process: a result of point"
                                      f" {out.hash[:12]}, which is not in the campaign"
                                      " (protocol error)")
-                rec = Record.from_outcome(point, out, None, self.provenance_of)
+                rec = Record.from_outcome(point, out, None, self.provenance)
                 self.store.add(rec)
                 self.staged.append(rec.status)
         elif kind == ADD:
@@ -199,8 +191,6 @@ def serve(chan: Channel, opener: Any, args: dict[str, Any]) -> int:
         chan.write(FAIL, error_bytes(exc))
         return 1
     try:
-        from sweep.store.cells import text
-
         column = store.file["table"]["status"][:] if len(store) else []
         statuses = {h: text(column[i]) for h, i in store.rows.items()}
         writer = _Writer(chan, store, args["campaign"], args["worker_env"], args["git"])
@@ -217,24 +207,29 @@ def serve(chan: Channel, opener: Any, args: dict[str, Any]) -> int:
 
 
 class StoreProcess:
-    """The master's side: a :class:`sweep.store.store.Store` written by a child process.
+    """The master's side: a :class:`sweep.store.store.Store` written by a child process
+    (a :class:`sweep.run.sink.ResultSink`).
 
     It answers what the campaign loop asks of a store before the run (``h in store``,
     :meth:`status_of`, :meth:`handouts`), stages and commits the master's own records
     (:meth:`add`, :meth:`commit`), journals hand-outs and releases, passes results on
-    (:meth:`forward`) and reports which are stored (:meth:`take_stored`, :meth:`wait`).
+    (:meth:`submit`, :meth:`forward`) and reports which are stored (:meth:`settle`,
+    :meth:`take_stored`, :meth:`wait`, :meth:`sync`).
 
     Raises (on opening, as :class:`Store` does)
     ------
     StoreLockedError, SchemaVersionError, CampaignMismatchError, StoreError
     """
 
+    #: a worker waits for its next hand-out to be journaled; results are committed by
+    #: the writer meanwhile
+    waits_for: Literal["handout", "commit"] = "handout"
+
     def __init__(self, path: str | Path, campaign: Any, *, extend: bool = False,
                  run_info: dict[str, Any] | None = None, verify: bool = False,
                  worker_env: dict[int, dict[str, Any]] | None = None,
                  git: dict[str, Any] | None = None, opener: Any = None) -> None:
-        if opener is None:
-            from sweep.store.store import Store as opener
+        opener = Store if opener is None else opener
         args = {"path": str(path), "campaign": campaign, "extend": extend,
                 "run_info": run_info or {}, "verify": verify,
                 "worker_env": worker_env or {}, "git": git or {}}
@@ -267,6 +262,8 @@ class StoreProcess:
         os.close(to_writer[0])
         os.close(to_master[1])
         self._chan = Channel(to_master[0], to_writer[1], nonblocking_writes=True)
+        #: the master's own records' provenance (the writer builds the workers')
+        self.provenance = Provenance(args["worker_env"], args["git"])
         self._stored: list[str] = []
         self._closed = False
         #: [s] the writer's CPU, its whole life (open and close in it), once it ended
@@ -362,6 +359,17 @@ class StoreProcess:
         data = payload.data if isinstance(payload, Packed) else dumps(payload)
         self._send(RESULT, data)
 
+    def submit(self, point: Point, payload: Packed | Outcome,
+               config: dict[str, Any] | None = None) -> None:
+        """Pass one worker's result on to the writer, which builds and stores its
+        record (:meth:`forward`)."""
+        self.forward(payload)
+
+    def settle(self, everything: bool) -> list[str]:
+        """:meth:`sync` if ``everything``, else :meth:`take_stored`: the writer commits
+        in groups of its own."""
+        return self.sync() if everything else self.take_stored()
+
     def handout(self, hashes: list[tuple[str, int]], alone: bool = False) -> None:
         """Journal hand-outs ``[(hash, worker), ...]``; returns once they are written."""
         if not hashes:
@@ -398,6 +406,12 @@ class StoreProcess:
         return self.take_stored()
 
     # ------------------------------------------------------------------ closing
+    @property
+    def store_cpu(self) -> float:
+        """[s] the writer's CPU from the store's open to its close (its whole life's if
+        it did not say)."""
+        return self.loop_cpu or self.writer_cpu
+
     def close(self, outcome: str = "complete") -> None:
         """Have the writer commit what it was given, record the run's outcome and close
         the store; wait for it to end. A writer that already ended is only reaped."""

@@ -130,7 +130,7 @@ class MPITransport:
     """Rank 0's side of the MPI master/worker protocol (MPI-1 point-to-point)."""
 
     def __init__(self, comm: Any, compute: str = DEFAULT_COMPUTE) -> None:
-        from mpi4py import MPI
+        from mpi4py import MPI  # lazy: initialises MPI; in-process runs use none
 
         self.MPI = MPI
         self.comm = comm

@@ -14,6 +14,9 @@ import time
 from collections.abc import Iterable
 from typing import Any
 
+from floewave import ModelConfig
+from sweep.run.compute import resolve_compute
+
 __all__ = ["warm_up_configs", "warm_up"]
 
 #: The compute function whose kernels are warmed up.
@@ -24,7 +27,7 @@ def warm_up_configs(points: Iterable[Any], compute: str) -> list[dict[str, Any]]
     """One shrunken configuration (as a dict) per kernel variant of the valid ``points``."""
     if compute != WARMED:
         return []
-    from floewave.model import kernel_mode
+    from floewave.model import kernel_mode  # lazy: numba, 0.4 s; every sweep command imports this
 
     seen: dict[str, dict[str, Any]] = {}
     for p in points:
@@ -48,9 +51,6 @@ def warm_up(configs: list[dict[str, Any]], compute: str) -> tuple[float, str]:
     if not configs:
         return 0.0, ""
     try:
-        from floewave import ModelConfig
-        from sweep.run.compute import resolve_compute
-
         fn = resolve_compute(compute)
         for c in configs:
             fn(ModelConfig.from_dict(c))

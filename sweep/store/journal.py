@@ -44,6 +44,7 @@ import numpy as np
 
 from sweep.errors import BadJournalLineError, StoreError, StoreLockedError
 from sweep.identity import HASH_LENGTH, config_hashes_to
+from sweep.store.lock import KILLED_WRITER_WAIT, flock_waiting, holders_of
 from sweep.store.packed import packed, unpack_record
 from sweep.system import fsync_dir, utc_now
 
@@ -242,8 +243,6 @@ class Journal:
         except OSError as exc:
             raise StoreError(f"{path}: cannot open the journal: {exc.strerror or exc}"
                              ) from None
-        from sweep.store.lock import KILLED_WRITER_WAIT, flock_waiting, holders_of
-
         try:
             flock_waiting(fh.fileno(), time.monotonic() + KILLED_WRITER_WAIT)
         except BlockingIOError:

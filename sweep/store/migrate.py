@@ -10,6 +10,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+import h5py
+
 from sweep.errors import SchemaVersionError
 from sweep.store.schema import ADDED_IN, COLUMNS, MIGRATION_FILL, SCHEMA_VERSION, column
 
@@ -32,7 +34,6 @@ def add_columns(f: Any, version: int) -> None:
         col = column(name)
         fill = MIGRATION_FILL.get(name, col.fill)
         if col.kind == "str":
-            import h5py
             ds = table.create_dataset(name, shape=(size,), maxshape=(None,),
                                       chunks=table["hash"].chunks,
                                       dtype=h5py.string_dtype("utf-8"))

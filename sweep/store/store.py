@@ -34,16 +34,21 @@ Opening (all with stop signals deferred, so a stop can never interrupt it half-w
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import h5py
+
+import floewave
 from sweep.errors import (
     SchemaVersionError,
     StoreError,
 )
+from sweep.identity import canonical_json
 from sweep.store.campaign_check import check_campaign, check_legacy_journal, grid_hashes
 from sweep.store.cells import text
 from sweep.store.files import H5_ERRORS, MAX_NAME, InodeLock, check_space, inspect_file, oserror
@@ -74,8 +79,6 @@ def _stderr(message: str) -> None:
 
 
 def _json(text: str) -> dict[str, Any]:
-    import json
-
     return json.loads(text)
 
 
@@ -157,8 +160,6 @@ class Store(JournalRepair):
 
     # ------------------------------------------------------------------ opening
     def _open(self, campaign: Any, extend: bool) -> None:
-        import floewave
-
         journal = self.journal
         journal.trim_torn_tail()
         self.journal_trimmed = journal.trimmed
@@ -225,8 +226,6 @@ class Store(JournalRepair):
     def _campaign_json(campaign: Any) -> str:
         if campaign is None:
             return ""
-        from sweep.identity import canonical_json
-
         return canonical_json(campaign.definition())
 
     def _remove_stale_temps(self) -> None:
@@ -255,8 +254,6 @@ class Store(JournalRepair):
         if campaign is not None and text(f.attrs.get("campaign_hash", "")) != \
                 campaign.definition_hash():  # --extend (checked above)
             hist = f.require_group("campaign_history")
-            import h5py
-
             hist.create_dataset(str(len(hist)), data=text(f.attrs["campaign_toml"]),
                                 dtype=h5py.string_dtype("utf-8"))
             set_campaign(f, campaign)

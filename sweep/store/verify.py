@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from sweep.config import parse_campaign
+from sweep.store import reader
 from sweep.store.campaign_check import grid_hashes
 from sweep.store.cells import text as cell_text
 from sweep.store.journal import Journal, check_version, decode, journal_path, rejected_path
@@ -102,8 +103,6 @@ def differences(path: Path, journal: Journal,
     file at ``path`` that differs from the last good journal record of its point (and
     per journal line that would be set aside), the number of journal points the file
     lacks, and the stored hashes the journal lacks. ``f``: the file already open."""
-    from sweep.store import reader
-
     if f is None:
         with reader.open_file(path) as f:
             return differences(path, journal, f)

@@ -20,6 +20,7 @@ import h5py
 import numpy as np
 from h5py import h5a, h5d, h5g, h5s, h5t
 
+from sweep.identity import canonical_json
 from sweep.store.cells import text
 from sweep.store.schema import (
     COLUMNS,
@@ -68,8 +69,6 @@ def _dataset(gid: Any, name: str, data: Any) -> None:
 
 def set_campaign(f: h5py.File, campaign: Any) -> None:
     """Write the campaign identity attributes of the store root."""
-    from sweep.identity import canonical_json
-
     f.attrs["campaign_toml"] = campaign.text
     f.attrs["campaign_json"] = canonical_json(campaign.definition())
     f.attrs["campaign_hash"] = campaign.definition_hash()

@@ -14,6 +14,7 @@ from sweep.run.compute import compute_point
 from sweep.run.master import Master, RunSummary
 from sweep.run.progress import Progress
 from sweep.run.signals import StopSignals
+from sweep.run.sink import InlineSink
 from sweep.store.journal import Journal, journal_path
 from sweep.store.store import Store
 from sweep.testing import fake_point
@@ -41,7 +42,8 @@ class FakeTransport:
 
 
 def run(store, campaign, transport, timeout=0.0):
-    master = Master(store, transport, "sweep.testing:fake_point", point_timeout=timeout)
+    master = Master(InlineSink(store, transport.worker_env), transport,
+                    "sweep.testing:fake_point", point_timeout=timeout)
     summary = RunSummary(total=len(campaign.points()))
     progress = Progress(len(campaign.points()), bar=False, stream=io.StringIO())
     with StopSignals(5.0, in_process=True) as signals:

@@ -336,6 +336,7 @@ import os, signal, sys
 import sweep
 from sweep.run.master import Master, RunSummary
 from sweep.run.signals import StopSignals
+from sweep.run.sink import InlineSink
 from sweep.run.transport import InProcessTransport
 from sweep.store.store import Store
 campaign = sweep.parse_campaign({toml!r})
@@ -358,7 +359,8 @@ class Progress:  # counts acknowledged points; dies at the {kill_after}th
             print("acknowledged", Progress.done, "commits", *commits, flush=True)
             os.kill(os.getpid(), signal.SIGKILL)
 
-master = Master(store, InProcessTransport("sweep.testing:trivial_point"))
+transport = InProcessTransport("sweep.testing:trivial_point")
+master = Master(InlineSink(store, transport.worker_env), transport)
 with StopSignals(5.0, in_process=True) as signals:
     master.run(todo, Progress(), signals, RunSummary())
 """

@@ -11,7 +11,7 @@ import os
 import sys
 from pathlib import Path
 
-__all__ = ["output_file_problem", "output_dir_problem"]
+__all__ = ["output_file_problem", "output_dir_problem", "quiet_stdout"]
 
 
 def _nearest_existing(path: Path) -> Path:
