@@ -98,6 +98,11 @@ def render() -> str:
                 meaning += f" (derived when read: `{a} / {b}`; not stored)"
             out.append(f"| `{n}` | {c.units or '—'} | {c.kind} | {_cell(meaning)} |")
         out.append("")
+    from floewave.outputs import LAYOUT_MEANINGS
+
+    out += ["`compact_zone` is one of:", ""]
+    out += [f"- `{name}`: {meaning}" for name, meaning in LAYOUT_MEANINGS.items()]
+    out += [""]
     out += [
         "`status` is one of: " + ", ".join(f"`{s}`" for s in STATUSES) + ". The first"
         " three are the model's ([convergence.md](convergence.md)); `failed` (the model"

@@ -34,7 +34,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-__all__ = ["Output", "REQUIRED", "OUTPUTS", "W_C_RULES", "output", "profiles", "scalars",
+__all__ = ["Output", "REQUIRED", "OUTPUTS", "W_C_RULES", "LAYOUT_MEANINGS", "output", "profiles", "scalars",
            "replica_outputs", "history", "table_outputs"]
 
 #: :attr:`Output.default` of an output every model point reports (a required field).
@@ -172,6 +172,19 @@ _BY_NAME = {o.name: o for o in OUTPUTS}
 #: The collision-zone widths, one per rule, in the order figures draw them (the first is
 #: the paper's: the dot, its error bar and the compact-ice curve start there).
 W_C_RULES: tuple[Output, ...] = tuple(o for o in OUTPUTS if o.rule)
+
+#: The values of ``compact_zone``, the layout of a point's compact ice
+#: (:func:`floewave.results.compact_zones`), with what each means, in order of precedence
+#: (a tie between layouts over windows and replicas goes to the earlier one).
+LAYOUT_MEANINGS: dict[str, str] = {
+    "edge": "the paper's: collisional ice at the ice edge, then one compact zone from W_c to"
+            " the far end",
+    "compact": "compact from the first pair to the far end: no collisional zone (W_c = 0)",
+    "inverted": "compact from the ice edge, collisional further in, to the far end",
+    "patchy": "any other layout with a compact zone: a compact band with collisional ice on"
+              " both sides, or several compact zones",
+    "none": "no sustained compact zone: the whole ice is collisional (W_c is NaN)",
+}
 
 
 def output(name: str) -> Output:

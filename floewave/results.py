@@ -82,7 +82,7 @@ PointResult = point_result_type()
 
 
 #: Layouts of the compact zone (``PointResult.compact_zone``), see :func:`compact_zones`.
-LAYOUTS = ("edge", "compact", "inverted", "patchy", "none")
+LAYOUTS = tuple(outputs.LAYOUT_MEANINGS)  # ("edge", "compact", "inverted", "patchy", "none")
 
 
 @dataclass(frozen=True)

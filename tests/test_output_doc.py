@@ -30,3 +30,14 @@ def test_output_reference_names_every_column_and_dataset():
             REPLICA_VARS) + [HISTORY_VAR[0]]:
         assert f"| `{name}` |" in text, name
     assert "| `a_end_rel` | 1 | float | a_end / a0" in text
+
+
+def test_every_compact_zone_layout_is_explained():
+    """docs/output.md says what each value of ``compact_zone`` means (issue [harden] 9: it
+    listed the values without their meaning), for every layout the model can give."""
+    from floewave.results import LAYOUTS
+
+    text = (Path(__file__).resolve().parent.parent / "docs" / "output.md").read_text()
+    for layout in LAYOUTS:
+        line = next((x for x in text.splitlines() if x.startswith(f"- `{layout}`: ")), "")
+        assert len(line) > len(f"- `{layout}`: ") + 10, layout
