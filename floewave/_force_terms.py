@@ -9,6 +9,13 @@ functions of numbers, which LLVM inlines into the loop that calls them
 :mod:`floewave.forces`, collected in :class:`~floewave._kernels.KernelParams` ``P``. Option
 codes (``contact``, ``accumulate``, ...) are arguments, so that the built loop, which passes
 constants, gets them folded away. Flags and why: :mod:`floewave._jit`.
+
+:func:`eq8_forces` is inlined by numba itself (``inline="always"``, before typing): LLVM does
+not inline a function of its size (seen in the generated code, 2026-12-04: it stayed a
+function of its own, called every step with 17 arrays, ~120 machine words of arguments).
+Inlined into a loop compiled without reference counting (``advance``: ``_nrt=False``), the
+call costs nothing: the loop's machine code has the vector instructions of the loop that
+wrote the forces inline and slightly fewer instructions (no reference counting).
 """
 from __future__ import annotations
 

@@ -35,6 +35,10 @@ with velocity-dependent forces (drag, contact damping) evaluated at
 ``v* = u_half`` (``"half_step"``, as LIGGGHTS does; first order in the damping).
 
 The parts it calls live in the other kernel files (``floewave._jit.KERNEL_SOURCES``): the
+forces of eq. 8, one small function each, and their sum in :mod:`floewave._force_terms`
+(numba inlines the sum into the loop, and LLVM the terms: the loop compiles to the code it
+compiled to when the forces were written inline; ``advance`` is compiled without reference
+counting, which it never needs, so the inlined call costs no reference-count operations), the
 contact law in :mod:`floewave._contact`, the quadrature drag in :mod:`floewave._drag`, the
 exact drag in :mod:`floewave._exact` (per floe) and :mod:`floewave._exact_pass`, the floes
 with a root of either in :mod:`floewave._prefix`, and the option codes and array layouts in
@@ -55,7 +59,7 @@ from ._contact import contact_stiffness  # noqa: F401
 from ._drag import cell_sums, drag_pass, drag_sums, drag_tables  # noqa: F401
 from ._exact import drag_sums_exact, exact_geometry
 from ._exact_pass import exact_pass, exact_tables  # noqa: F401
-from ._force_terms import eq8_forces, skin_drag_sums
+from ._force_terms import eq8_forces, skin_drag, skin_drag_sums, wave_force
 from ._jit import JIT, JITN
 from ._layout import *  # noqa: F403 (option codes and row layouts, re-exported)
 from ._layout import (
@@ -66,6 +70,7 @@ from ._layout import (
     DRAG_EXACT,
     DRAG_QUADRATURE,
     HOLD_LINEAR,
+    HOLD_MIDPOINT,
     INTEG_HALF_STEP,
     INTEG_PREDICTOR,
     LANES,
@@ -279,9 +284,7 @@ def make_advance(opts: KernelOptions):
             wt = two_pi_nt * (istep % P.n_t)
             cwt = math.cos(wt)
             swt = math.sin(wt)
-            # --- forces of eq. 8, scaled to the left-hand side: (1 + C_m) F_w + F_d + F_c
-            # + F_s. Wave (Froude-Krylov) and ice-water drag: the drag sums of all floes
-            # first, then one loop over the floes
+            # --- forces of eq. 8 (eq8_forces), the drag sums of all floes first
             # (drag_every > 1: the drag sums are evaluated on the steps istep = 0 mod
             # drag_every and at an ``init``, and held in ``sc`` on the steps between; the
             # dissipation sum of an evaluation stands for the drag_every steps it holds)
@@ -366,8 +369,8 @@ def make_confined_window(drag: int):
                     s2, s3 = drag_sums_exact(a[i] * P.u_amp, c, s, 0.0, P.geom)
                 else:
                     s2, s3 = drag_sums(a[i] * P.u_amp, c, s, 0.0, cxi, sxi)
-                Fw = P.c_wave * a[i] * s
-                Fd = P.c_drag * s2
+                Fw = wave_force(a[i], s, P)
+                Fd = skin_drag(s2, P)
                 stats[ST_S3, i] += s3
                 stats[ST_X, i] += x0[i]
                 stats[ST_FW, i] += abs(Fw)
