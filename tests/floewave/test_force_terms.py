@@ -1,6 +1,10 @@
 """The forces of eq. 8 as the time loop computes them (floewave._force_terms): each term
 against its formula, and their sum against the numpy twin's (floewave._reference)."""
+import json
 import math
+import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -74,3 +78,34 @@ def test_eq8_forces_is_the_twins_sum(kw):
     assert np.any(gaps < 0)
     np.testing.assert_array_equal(in_contact[:-1], (gaps < 0).astype(np.int8))
     np.testing.assert_allclose(F, want, rtol=1e-12, atol=1e-9 * np.max(np.abs(want)))
+
+
+LOADS = """
+import json, numpy as np
+from floewave import ModelConfig, solve_dispersion
+from floewave import _kernels as K
+from floewave.model import FloeChain
+cfg = ModelConfig(T=1.2)
+k, _ = solve_dispersion(cfg)
+ch = FloeChain(cfg, k)
+a = np.full(cfg.n_floes, cfg.a0)
+ch.run(a, 8)
+ch.run(a, 8, np.zeros((K.N_STATS, cfg.n_floes)))
+print(json.dumps([[sum(d.stats.cache_hits.values()), sum(d.stats.cache_misses.values())]
+                  for d in (ch._spin, ch._average)]))
+"""
+
+
+@pytest.mark.slow  # two fresh interpreters, the first compiling with a cold cache
+def test_a_new_process_loads_the_built_loops_from_the_cache(tmp_path):
+    """The built time loop (a closure over numbers, calling the numba-inlined eq8_forces)
+    is compiled by the first process and loaded, not compiled, by the next."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+
+    def run():
+        out = subprocess.run([sys.executable, "-c", LOADS], env=env, check=True,
+                             capture_output=True, text=True).stdout
+        return json.loads(out.splitlines()[-1])
+
+    assert run() == [[0, 1], [0, 1]]
+    assert run() == [[1, 0], [1, 0]]
