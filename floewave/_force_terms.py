@@ -14,8 +14,9 @@ constants, gets them folded away. Flags and why: :mod:`floewave._jit`.
 not inline a function of its size (seen in the generated code, 2026-12-04: it stayed a
 function of its own, called every step with 17 arrays, ~120 machine words of arguments).
 Inlined into a loop compiled without reference counting (``advance``: ``_nrt=False``), the
-call costs nothing: the loop's machine code has the vector instructions of the loop that
-wrote the forces inline and slightly fewer instructions (no reference counting).
+call adds no reference-count operations: the loop's machine code has the vector instructions
+of the loop that wrote the forces inline and 3-7 % fewer instructions (static count); a
+callgrind count of 360 spin-up steps of 8 x 84 floes ran 0.9 % more (2026-12-04).
 """
 from __future__ import annotations
 
