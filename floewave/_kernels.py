@@ -35,6 +35,10 @@ with velocity-dependent forces (drag, contact damping) evaluated at
 ``v* = u_half`` (``"half_step"``, as LIGGGHTS does; first order in the damping).
 
 The parts it calls live in the other kernel files (``floewave._jit.KERNEL_SOURCES``): the
+forces of eq. 8, one small function each, and their sum in :mod:`floewave._force_terms`
+(numba inlines the sum into the loop, and LLVM the terms: the loop compiles to the code it
+compiled to when the forces were written inline; ``advance`` is compiled without reference
+counting, which it never needs, so the inlined call costs no reference-count operations), the
 contact law in :mod:`floewave._contact`, the quadrature drag in :mod:`floewave._drag`, the
 exact drag in :mod:`floewave._exact` (per floe) and :mod:`floewave._exact_pass`, the floes
 with a root of either in :mod:`floewave._prefix`, and the option codes and array layouts in
@@ -49,11 +53,13 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-# (contact_stiffness, cell_sums, drag_tables, exact_tables: re-exported)
-from ._contact import contact_law, contact_stiffness  # noqa: F401
+# (contact_stiffness, cell_sums, drag_pass, drag_tables, exact_pass, exact_tables:
+# re-exported)
+from ._contact import contact_stiffness  # noqa: F401
 from ._drag import cell_sums, drag_pass, drag_sums, drag_tables  # noqa: F401
 from ._exact import drag_sums_exact, exact_geometry
 from ._exact_pass import exact_pass, exact_tables  # noqa: F401
+from ._force_terms import eq8_forces, skin_drag, skin_drag_sums, wave_force
 from ._jit import JIT, JITN
 from ._layout import *  # noqa: F403 (option codes and row layouts, re-exported)
 from ._layout import (
@@ -64,22 +70,32 @@ from ._layout import (
     DRAG_EXACT,
     DRAG_QUADRATURE,
     HOLD_LINEAR,
+    HOLD_MIDPOINT,
     INTEG_HALF_STEP,
     INTEG_PREDICTOR,
     LANES,
     N_SC,
     N_STATS,
+    N_WORK,
     SC_S,
     SC_S2,
-    SC_S3,
-    ST_COLL,
-    ST_CONTACT,
-    ST_FC,
     ST_FD,
     ST_FW,
-    ST_GAP,
     ST_S3,
     ST_X,
+    W_CK,
+    W_CKC,
+    W_D0,
+    W_DI,
+    W_DS,
+    W_F,
+    W_FC,
+    W_SC,
+    W_SK,
+    W_SKC,
+    W_UH,
+    W_VC,
+    W_VS,
 )
 from .config import ModelConfig
 from .forces import (
@@ -88,21 +104,6 @@ from .forces import (
     orbital_velocity_amplitude,
     restitution_beta,
 )
-
-W_UH = 0         # rows of advance's scratch ``work``: half-step velocity,
-W_VS = 1         # velocity v* of the forces,
-W_F = 2          # force,
-W_CK = 3         # cos(k x), sin(k x),
-W_SK = 4
-W_FC = 5         # contact force of pair (j, j+1),
-W_VC = 6         # velocity and cos, sin(k x) at the centre of a held drag's steps
-W_CKC = 7        # (drag_every > 1),
-W_SKC = 8
-W_D0 = 9         # drag_hold "linear": the drag sums s2 of the last evaluation, their slope
-W_DS = 10        # per step from the evaluation before, and the step of the last
-W_DI = 11        # evaluation (a float)
-W_SC = 12        # then the drag scratch sc (N_SC rows)
-N_WORK = W_SC + N_SC
 
 
 class KernelParams(NamedTuple):
@@ -217,10 +218,9 @@ def make_advance(opts: KernelOptions):
     drag = int(drag)
     drag_every = int(drag_every)
     linear = drag_every > 1 and int(hold) == HOLD_LINEAR
-    w_s3 = float(drag_every)
     accumulate = bool(accumulate)
 
-    @njit(**JIT)
+    @njit(**JITN)
     def advance(x, u, acc, a, x0, in_contact, istep, nsteps, nf, P, cxi, sxi, mom, stats,
                 work, idx, init):
         nt = x.shape[0]
@@ -236,7 +236,6 @@ def make_advance(opts: KernelOptions):
                 or (accumulate and (stats.shape[0] < N_STATS or stats.shape[1] != nt))):
             raise ValueError("advance: x, u, acc, a, x0, in_contact (and stats) must all"
                              " have R N_f entries (stats: N_STATS rows)")
-        R = nt // nf
         dt = P.dt
         uh = work[W_UH, :nt]
         vs = work[W_VS, :nt]
@@ -285,19 +284,14 @@ def make_advance(opts: KernelOptions):
             wt = two_pi_nt * (istep % P.n_t)
             cwt = math.cos(wt)
             swt = math.sin(wt)
-            # --- forces of eq. 8, scaled to the left-hand side: (1 + C_m) F_w + F_d + F_c
-            # + F_s. Wave (Froude-Krylov) and ice-water drag: the drag sums of all floes
-            # first, then one loop over the floes
+            # --- forces of eq. 8 (eq8_forces), the drag sums of all floes first
             # (drag_every > 1: the drag sums are evaluated on the steps istep = 0 mod
             # drag_every and at an ``init``, and held in ``sc`` on the steps between; the
             # dissipation sum of an evaluation stands for the drag_every steps it holds)
             fresh = drag_every == 1 or step < 0 or istep % drag_every == 0
             if drag_every == 1 or step < 0 or (linear and fresh):
-                if drag == DRAG_EXACT:
-                    exact_pass(ck, sk, cwt, swt, a, vs, P, mom, accumulate, sc, idx)
-                else:
-                    drag_pass(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc,
-                              idx)
+                skin_drag_sums(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc,
+                               idx, drag)
                 if linear:
                     # "linear": the sums of the true state of this step; the slope from
                     # the last evaluation (none across an ``init``: new amplitudes)
@@ -327,53 +321,12 @@ def make_advance(opts: KernelOptions):
                         se = e * (1.0 - e2 * (1.0 / 6.0))
                         ckc[j] = ck[j] * ce - sk[j] * se
                         skc[j] = sk[j] * ce + ck[j] * se
-                    if drag == DRAG_EXACT:
-                        exact_pass(ckc, skc, cwc, swc, a, vc, P, mom, accumulate, sc, idx)
-                    else:
-                        drag_pass(ckc, skc, cwc, swc, a, vc, P, cxi, sxi, mom, accumulate,
-                                  sc, idx)
+                    skin_drag_sums(ckc, skc, cwc, swc, a, vc, P, cxi, sxi, mom, accumulate,
+                                   sc, idx, drag)
                 for j in range(nt):         # the wave phase of this step (wave force)
                     sc[SC_S, j] = sk[j] * cwt - ck[j] * swt
-            for j in range(nt):
-                Fw = P.c_wave * a[j] * sc[SC_S, j]
-                Fd = P.c_drag * sc[SC_S2, j]
-                F[j] = P.one_cm * Fw + Fd
-                if accumulate:
-                    if drag_every == 1:
-                        stats[ST_S3, j] += sc[SC_S3, j]
-                    elif fresh:
-                        stats[ST_S3, j] += w_s3 * sc[SC_S3, j]
-                    stats[ST_X, j] += x[j]
-                    stats[ST_FW, j] += abs(Fw)
-                    stats[ST_FD, j] += abs(Fd)
-            # contacts between neighbours j, j+1 of each replica
-            for r in range(R):
-                o = r * nf
-                for j in range(o, o + nf - 1):
-                    gap = x[j + 1] - x[j] - P.L_x
-                    touch = gap < 0.0
-                    f = 0.0
-                    if touch:       # (most pairs are apart: the law only where they touch)
-                        f = contact_law(-gap, vs[j + 1] - vs[j], P, contact, damping, clip)
-                    Fc[j] = f
-                    if accumulate:
-                        stats[ST_GAP, j] += gap
-                        if touch:
-                            stats[ST_CONTACT, j] += 1.0
-                            if in_contact[j] == 0:
-                                stats[ST_COLL, j] += 1.0
-                    in_contact[j] = 1 if touch else 0
-                Fc[o + nf - 1] = 0.0
-                F[o] -= Fc[o]
-                if accumulate:
-                    stats[ST_FC, o] += abs(Fc[o])
-                for j in range(o + 1, o + nf):
-                    F[j] = (F[j] + Fc[j - 1]) - Fc[j]
-                    if accumulate:
-                        stats[ST_FC, j] += abs(Fc[j - 1] - Fc[j])
-                # edge springs (boom and beach) on the first and last floe
-                F[o] -= P.k_s * (x[o] - x0[o])
-                F[o + nf - 1] -= P.k_s * (x[o + nf - 1] - x0[o + nf - 1])
+            eq8_forces(F, Fc, x, vs, a, x0, sc, in_contact, stats, nf, P, contact, damping,
+                       clip, accumulate, drag_every, fresh)
             if step >= 0:
                 for j in range(nt):
                     acc[j] = F[j] * P.inv_mass
@@ -416,8 +369,8 @@ def make_confined_window(drag: int):
                     s2, s3 = drag_sums_exact(a[i] * P.u_amp, c, s, 0.0, P.geom)
                 else:
                     s2, s3 = drag_sums(a[i] * P.u_amp, c, s, 0.0, cxi, sxi)
-                Fw = P.c_wave * a[i] * s
-                Fd = P.c_drag * s2
+                Fw = wave_force(a[i], s, P)
+                Fd = skin_drag(s2, P)
                 stats[ST_S3, i] += s3
                 stats[ST_X, i] += x0[i]
                 stats[ST_FW, i] += abs(Fw)

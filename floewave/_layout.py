@@ -42,6 +42,23 @@ N_GATHER = 13
 N_SC = SC_GATHER + N_GATHER
 LANES = 16       # gathered floes are padded to a multiple of this (vector body)
 
+# rows of the time loop's scratch ``work`` (shape (N_WORK, R N_f + LANES)), each the one
+# after the row before
+W_UH = 0                 # half-step velocity u_{n+1/2}                          [m s^-1]
+W_VS = W_UH + 1          # velocity v* of the velocity-dependent forces          [m s^-1]
+W_F = W_VS + 1           # force of eq. 8 (floewave._force_terms.eq8_forces)     [N]
+W_CK = W_F + 1           # cos(k x_i), rotated by k dx_i every step              [-]
+W_SK = W_CK + 1          # sin(k x_i)                                            [-]
+W_FC = W_SK + 1          # contact force of pair (i, i+1), > 0 pushing apart     [N]
+W_VC = W_FC + 1          # a held drag's (drag_every > 1, "midpoint") velocity   [m s^-1]
+W_CKC = W_VC + 1         # ... and cos, sin(k x_i) at the centre of its steps    [-]
+W_SKC = W_CKC + 1
+W_D0 = W_SKC + 1         # drag_hold "linear": the sums s2 of the last evaluation [m^2 s^-2]
+W_DS = W_D0 + 1          # ... their slope per step from the evaluation before   [m^2 s^-2]
+W_DI = W_DS + 1          # ... the step of the last evaluation (a float)         [-]
+W_SC = W_DI + 1          # then the drag scratch sc (N_SC rows, SC_* above)
+N_WORK = W_SC + N_SC
+
 # entries of the cell-table moments of :func:`drag_tables`
 M_N = 0          # number of cells n_x
 M_CB = 1         # mean of cxi

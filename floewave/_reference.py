@@ -2,7 +2,8 @@
 
 Used as an independent check of the numba kernel (tests) and as the speed peer in
 ``benchmarks/bench_kernel.py``. Same update formulas, vectorised over floes and drag cells;
-no statistics accumulation.
+no statistics accumulation. Laid out as the kernel: one function per force of eq. 8 (as
+:mod:`floewave._force_terms`), :func:`forces` their sum, :func:`advance` the time loop.
 """
 from __future__ import annotations
 
@@ -13,10 +14,28 @@ import numpy as np
 from . import _kernels as K
 
 
-def pair_contact(x: np.ndarray, v: np.ndarray, P: K.KernelParams,
-                 opts: K.KernelOptions) -> np.ndarray:
+def wave_force(x: np.ndarray, a: np.ndarray, wt: float, P: K.KernelParams) -> np.ndarray:
+    """Froude-Krylov force F_w,i = c_wave a_i sin(k x_i - omega t) on every floe [N], wave
+    phase ``wt`` = omega t (:func:`floewave._force_terms.wave_force`)."""
+    return P.c_wave * a * np.sin(P.k * x - wt)
+
+
+def skin_drag(x: np.ndarray, v: np.ndarray, a: np.ndarray, wt: float, P: K.KernelParams,
+              cxi: np.ndarray, sxi: np.ndarray) -> np.ndarray:
+    """Skin drag F_d on every floe [N] (eq. 15 summed over the drag cells), wave phase
+    ``wt`` (:func:`floewave._force_terms.skin_drag`)."""
+    th = P.k * x - wt
+    s, c = np.sin(th), np.cos(th)
+    ur = (a * P.u_amp)[:, None] * (c[:, None] * cxi[None, :] - s[:, None] * sxi[None, :]) \
+        - v[:, None]
+    return P.c_drag * np.sum(np.abs(ur) * ur, axis=1)
+
+
+def contact_force(x: np.ndarray, v: np.ndarray, P: K.KernelParams,
+                  opts: K.KernelOptions) -> np.ndarray:
     """Contact force between floes i and i + 1 (N_f - 1 values, > 0 pushes them apart) [N]:
-    the contact law of :mod:`._contact` (stiffness, damping, optional clipping: ``opts``)."""
+    the contact law of :mod:`._contact` (stiffness, damping, optional clipping: ``opts``;
+    :func:`floewave._force_terms.contact_force`)."""
     delta = -(x[1:] - x[:-1] - P.L_x)
     touch = delta > 0
     d = np.where(touch, delta, 0.0)
@@ -34,30 +53,29 @@ def pair_contact(x: np.ndarray, v: np.ndarray, P: K.KernelParams,
     return Fc
 
 
-def drag(x: np.ndarray, v: np.ndarray, a: np.ndarray, wt: float, P: K.KernelParams,
-         cxi: np.ndarray, sxi: np.ndarray) -> np.ndarray:
-    """F_d on every floe [N] (eq. 15 summed over the drag cells), wave phase ``wt``."""
-    th = P.k * x - wt
-    s, c = np.sin(th), np.cos(th)
-    ur = (a * P.u_amp)[:, None] * (c[:, None] * cxi[None, :] - s[:, None] * sxi[None, :]) \
-        - v[:, None]
-    return P.c_drag * np.sum(np.abs(ur) * ur, axis=1)
+def edge_spring(x: float, x_start: float, P: K.KernelParams) -> float:
+    """Edge-spring force F_s = -k_s (x - x(0)) [N] on the first or last floe
+    (:func:`floewave._force_terms.edge_spring`)."""
+    return -(P.k_s * (x - x_start))
 
 
 def forces(x: np.ndarray, v: np.ndarray, a: np.ndarray, x0: np.ndarray, wt: float,
            P: K.KernelParams, opts: K.KernelOptions, cxi: np.ndarray, sxi: np.ndarray,
            Fd: np.ndarray | None = None) -> np.ndarray:
-    """(1 + C_m) F_w + F_d + F_c + F_s on every floe [N] (eq. 8, left-hand-side scaled);
+    """The right-hand side of eq. 8 on every floe [N]
+    (:func:`floewave._force_terms.eq8_forces`)::
+
+        F_i = (1 + C_m) F_w,i + F_d,i + F_c,i + F_s,i
+
     ``Fd`` a held drag (else evaluated here)."""
-    Fw = P.c_wave * a * np.sin(P.k * x - wt)
     if Fd is None:
-        Fd = drag(x, v, a, wt, P, cxi, sxi)
-    F = P.one_cm * Fw + Fd
-    Fc = pair_contact(x, v, P, opts)
+        Fd = skin_drag(x, v, a, wt, P, cxi, sxi)
+    F = P.one_cm * wave_force(x, a, wt, P) + Fd
+    Fc = contact_force(x, v, P, opts)
     F[:-1] -= Fc
     F[1:] += Fc
-    F[0] -= P.k_s * (x[0] - x0[0])
-    F[-1] -= P.k_s * (x[-1] - x0[-1])
+    F[0] += edge_spring(x[0], x0[0], P)
+    F[-1] += edge_spring(x[-1], x0[-1], P)
     return F
 
 
@@ -93,7 +111,7 @@ def advance(x, u, acc, a, x0, istep, nsteps, P, opts, cxi, sxi, held=None, slope
             F = forces(x, vs, a, x0, wt, P, opts, cxi, sxi)
         elif linear:
             if istep % n_hold == 0 or last is None:
-                new = drag(x, vs, a, wt, P, cxi, sxi)
+                new = skin_drag(x, vs, a, wt, P, cxi, sxi)
                 slope = ((new - last) / (istep - i_last) if last is not None
                          else np.zeros_like(new))
                 last, i_last = new, istep
@@ -101,7 +119,7 @@ def advance(x, u, acc, a, x0, istep, nsteps, P, opts, cxi, sxi, held=None, slope
         else:
             if istep % n_hold == 0 or Fd is None:
                 wc = 2.0 * math.pi / P.n_t * ((istep % P.n_t) + 0.5 * (n_hold - 1))
-                Fd = drag(x + h * vs, vs + h * acc, a, wc, P, cxi, sxi)
+                Fd = skin_drag(x + h * vs, vs + h * acc, a, wc, P, cxi, sxi)
             F = forces(x, vs, a, x0, wt, P, opts, cxi, sxi, Fd)
         acc[:] = F * P.inv_mass
         u[:] = uh + 0.5 * dt * acc

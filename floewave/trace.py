@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from . import _kernels as K
-from ._reference import pair_contact
+from ._reference import contact_force
 from .config import ConfigError, ModelConfig
 from .forces import cell_offsets
 from .model import FloeChain, run_point
@@ -95,7 +95,7 @@ def instantaneous(x: np.ndarray, u: np.ndarray, a: np.ndarray, wt: float, P: K.K
     th = P.k * (x[rows, None] + xi[None, :]) - wt
     u_rel = (a[rows] * P.u_amp)[:, None] * np.cos(th) - u[rows, None]
     S_sd[rows] = -cfg.rho_w * cfg.C_sd * np.mean(np.abs(u_rel) ** 3, axis=1)
-    pair = pair_contact(x, u, P, K.kernel_options(cfg, False))
+    pair = contact_force(x, u, P, K.kernel_options(cfg, False))
     F_c = np.zeros_like(x)
     F_c[:-1] -= pair
     F_c[1:] += pair
