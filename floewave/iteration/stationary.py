@@ -1,7 +1,7 @@
 """The stationary iteration protocol (``protocol = "stationary"``, the default): when the
 floe state is stationary, and what the point then reports.
 
-The legacy protocol (``"noise_floor"``, :func:`floewave.model.run_point`) stops iterating
+The legacy protocol (``"noise_floor"``, :mod:`floewave.iteration.noise_floor`) stops iterating
 when the residual stops falling and averages the next windows. That signal cannot see a floe
 arrangement that is still relaxing (W_c drifting 36 -> 27 -> 19 m over the first 50 periods
 at Fig. 2's ``ep`` eps 0.8 point), so it averaged a transient. This protocol:
@@ -10,7 +10,7 @@ at Fig. 2's ``ep`` eps 0.8 point), so it averaged a transient. This protocol:
    of the configuration alone, and spins the floes up for ``n0`` periods under it;
 2. runs windows of ``nT`` periods; after each it measures every floe's dissipation
    coefficient c = S_sd / a^3 and **updates a by the self-consistent march**
-   (:func:`floewave._march.march_coefficients`, a Newton-like step: exact in one window for
+   (:func:`floewave.march_coefficients`, a Newton-like step: exact in one window for
    fixed floes), at first from the last window's c, from window ``n_average`` on from the
    mean c of the windows after the current truncation point;
 3. **tests stationarity** with MSER (White 1997, *Simulation* 69, 323; White, Cobb & Spratt
@@ -28,7 +28,7 @@ at Fig. 2's ``ep`` eps 0.8 point), so it averaged a transient. This protocol:
    at ``max_iterations`` windows, reporting the estimate from the windows after the
    truncation (or the last half when no stationary stretch was found) with its error bars.
 
-The estimate (:func:`floewave.ensemble.estimate_point` with coefficients) is the march of
+The estimate (:func:`floewave.iteration.estimate.estimate_point` with coefficients) is the march of
 the mean coefficient, never a mean of marched, clipped profiles. With ``coupling =
 "independent"`` (the default) every replica marches its own a(x), so the replicas are
 independent runs (but for the shared truncation point d, which decides which windows
@@ -41,20 +41,14 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ._march import march_coefficients
-from .config import ModelConfig
-from .ensemble import (
-    Iteration,
-    Records,
-    coefficients,
-    estimate_point,
-    mean_coefficients,
-    residual,
-    stderr,
-    zone_of,
-)
-from .errors import NumericalError
-from .transient import drag_time, transient_windows
+from .._march import march_coefficients
+from ..collision_stats import zone_of
+from ..config import ModelConfig
+from ..errors import NumericalError
+from ..transient import drag_time, transient_windows
+from .estimate import Records, estimate_point, stderr
+from .march import coefficients, mean_coefficients, residual
+from .result import Estimate, Iteration
 from .window import FIELDS, run_window
 
 __all__ = ["confined_profile", "mser_truncation", "iterate_stationary", "drag_time",
@@ -167,7 +161,7 @@ class _Windows:
                       for s in range(Y.shape[1]))
 
     def records(self, d: int) -> Records:
-        """The windows after d as :class:`floewave.ensemble.Records`."""
+        """The windows after d as :class:`floewave.iteration.estimate.Records`."""
         kept = range(d, len(self))
         profiles = {}
         for name in FIELDS:
@@ -181,13 +175,13 @@ class _Windows:
                        C=np.array([self.C[j] for j in kept]))
 
 
-def _targets_met(cfg: ModelConfig, est: dict) -> bool:
+def _targets_met(cfg: ModelConfig, est: Estimate) -> bool:
     if cfg.target_stderr > 0:
-        se = np.asarray(est["a_stderr"], dtype=float)
+        se = np.asarray(est.a_stderr, dtype=float)
         if not np.all(np.isfinite(se)) or float(np.max(se)) > cfg.target_stderr * cfg.a0:
             return False
-    se_w = est["W_c_stderr"]
-    if cfg.target_W_c_stderr > 0 and est["compact_zone"] != "none" and est["W_c_n"] >= 2:
+    se_w = est.W_c_stderr
+    if cfg.target_W_c_stderr > 0 and est.compact_zone != "none" and est.W_c_n >= 2:
         return bool(np.isfinite(se_w) and se_w <= cfg.target_W_c_stderr)
     return True
 
@@ -197,8 +191,8 @@ def iterate_stationary(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g: 
                        progress: Callable[[int, float, str], None] | None = None
                        ) -> Iteration:
     """Run the protocol (module docstring) on ``chain`` (R replicas): the
-    :class:`~floewave.ensemble.Iteration` whose estimate is
-    :func:`floewave.ensemble.estimate_point` of the averaged windows (with R = 1
+    :class:`~floewave.iteration.result.Iteration` whose estimate is
+    :func:`floewave.iteration.estimate.estimate_point` of the averaged windows (with R = 1
     ``a_stderr`` the autocorrelation-corrected standard error over windows), its history
     the update's residual per window, its noise the median residual of the averaged
     windows and its truncation the windows discarded as transient."""
@@ -209,7 +203,7 @@ def iterate_stationary(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g: 
     history: list[float] = []
     status = "not_converged"
     d, stationary = 0, False
-    est: dict | None = None
+    est: Estimate | None = None
     for it in range(1, cfg.max_iterations + 1):
         windows, S = run_window(cfg, chain, x0s, a, it == 1)
         zones = [zone_of(cfg, w.x_mean, w.gap_mean) for w in windows]
@@ -233,8 +227,8 @@ def iterate_stationary(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g: 
             est = _with_convergence(cfg, _estimate(cfg, wins, d_use, c_g, k), a_new,
                                     wins.A[-1])
             if deterministic and R == 1:        # a fixed point reached exactly
-                est["a_stderr"] = np.abs(a_new[0] - wins.A[-1][0])
-                est["a_end_stderr"] = float(est["a_stderr"][-1])
+                est.a_stderr = np.abs(a_new[0] - wins.A[-1][0])
+                est.a_end_stderr = float(est.a_stderr[-1])
             if (deterministic and R == 1) or _targets_met(cfg, est):
                 status = "converged" if deterministic else "converged_noisy"
                 d = d_use
@@ -255,8 +249,8 @@ def iterate_stationary(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g: 
 SE_FLOOR = 1e-6
 
 
-def _with_convergence(cfg: ModelConfig, est: dict, a_new: np.ndarray,
-                      a_old: np.ndarray) -> dict:
+def _with_convergence(cfg: ModelConfig, est: Estimate, a_new: np.ndarray,
+                      a_old: np.ndarray) -> Estimate:
     """An ensemble's SE(a) with the change of the replica-mean forcing in the last update,
     |mean_r (a_new - a)|, in quadrature (signed changes of single replicas cancel: it is how
     far the pooled estimate was still moving, which the jackknife alone does not see) and
@@ -264,19 +258,19 @@ def _with_convergence(cfg: ModelConfig, est: dict, a_new: np.ndarray,
     if cfg.n_chains < 2:
         return est
     conv = np.abs(np.mean(a_new - a_old, axis=0))
-    se = np.sqrt(np.asarray(est["a_stderr"], dtype=float) ** 2 + conv**2)
-    est["a_stderr"] = np.maximum(se, SE_FLOOR * cfg.a0)
-    est["a_end_stderr"] = float(est["a_stderr"][-1])
+    se = np.sqrt(np.asarray(est.a_stderr, dtype=float) ** 2 + conv**2)
+    est.a_stderr = np.maximum(se, SE_FLOOR * cfg.a0)
+    est.a_end_stderr = float(est.a_stderr[-1])
     return est
 
 
-def _estimate(cfg: ModelConfig, wins: _Windows, d: int, c_g: float, k: float) -> dict:
+def _estimate(cfg: ModelConfig, wins: _Windows, d: int, c_g: float, k: float) -> Estimate:
     est = estimate_point(cfg, wins.records(d), c_g, k)
     if cfg.n_chains == 1:
         # one trajectory: the windows' implied profiles, autocorrelation-corrected
         per = [march_coefficients(cfg, mean_coefficients(C[None]), c_g, k)[0]
                for C in wins.C[d:]]
-        est["a_stderr"] = (stderr(per) if len(per) > 1
+        est.a_stderr = (stderr(per) if len(per) > 1
                            else np.full(cfg.n_floes, np.nan))
-        est["a_end_stderr"] = float(est["a_stderr"][-1])
+        est.a_end_stderr = float(est.a_stderr[-1])
     return est

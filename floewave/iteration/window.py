@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _kernels as K
-from .config import ModelConfig
+from .. import _kernels as K
+from ..config import ModelConfig
 
 __all__ = ["Window", "dissipation", "run_window"]
 
