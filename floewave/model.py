@@ -13,7 +13,8 @@ from .config import ModelConfig
 from .dispersion import alpha_confined
 from .ensemble import initial_positions
 from .errors import NumericalError
-from .iteration import iterate_noise_floor, iterate_stationary
+from .iteration.noise_floor import iterate_noise_floor
+from .iteration.stationary import iterate_stationary
 from .results import PointResult
 
 __all__ = ["FloeChain", "NumericalError", "run_point", "kernel_mode"]
