@@ -25,10 +25,10 @@ import time
 import numpy as np
 
 from floewave import ModelConfig, march_coefficients
+from floewave._march import coefficients, mean_coefficients
 from floewave.collision_stats import zone_of
 from floewave.dispersion import alpha_confined
 from floewave.ensemble import initial_positions
-from floewave.iteration.march import coefficients, mean_coefficients
 from floewave.iteration.stationary import confined_profile
 from floewave.iteration.window import run_window
 from floewave.model import FloeChain

@@ -2,8 +2,8 @@
 iteration that finds a(x) on an ensemble of floe chains, in one room.
 
 - :mod:`.window` runs one averaging window on the chains and keeps its statistics;
-- :mod:`.march` is the update: eq. 20 marched from the dissipation, its coefficients and
-  the residual (the self-consistent march itself is compiled: :mod:`floewave._march`);
+- the update, eq. 20 marched from the dissipation or self-consistent from its coefficients,
+  and the residual, is :mod:`floewave._march` (compiled, so beside the other kernel files);
 - :mod:`.stationary` and :mod:`.noise_floor` are the two protocols (``cfg.protocol``);
 - :mod:`.estimate` makes the point's estimate of the averaged windows, with its error bars;
 - :mod:`.result` types what a protocol hands :func:`floewave.run_point`: an

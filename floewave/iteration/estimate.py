@@ -21,14 +21,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._march import march_coefficients
+from .._march import march_coefficients, march_rows, mean_coefficients
 from ..collision_stats import collision_statistics, gap_rule_widths
 from ..config import ModelConfig
-from ..results import LAYOUTS, Zones, fit_exponential, fit_inverse, jackknife_se, zone_fits
-from .march import march_rows, mean_coefficients
+from ..results import LAYOUTS, fit_exponential, fit_inverse, fit_zone, jackknife_se, zone_fits
 from .result import ESTIMATED, Estimate
 
-__all__ = ["Records", "estimate_point", "fit_zone", "effective_sample_size", "stderr"]
+__all__ = ["Records", "estimate_point", "windows_estimate", "targets_met", "SE_FLOOR",
+           "effective_sample_size", "stderr"]
+
+#: the smallest standard error of a reported, as a fraction of a0: below it two runs of a
+#: non-chaotic point (replicas agreeing to rounding) differ by more than their jackknife
+#: says (measured: 1e-9 a0 apart with standard errors of 1e-11 to 1e-10 a0)
+SE_FLOOR = 1e-6
 
 
 def effective_sample_size(samples: np.ndarray) -> float:
@@ -76,22 +81,6 @@ class Records:
     C: np.ndarray | None = None
 
 
-def fit_zone(x: np.ndarray, L_x: float, layout: str, W_c: float, end: float,
-             ice_extent: float) -> Zones:
-    """A :class:`Zones` for fitting from an ensemble's mean bounds: the compact zone runs
-    from the pair nearest W_c to the pair nearest its end (pairs sit at x_i + L_x / 2)."""
-    n = len(x)
-    keep = np.zeros(max(n - 1, 0), dtype=bool)
-    if layout == "none" or not math.isfinite(W_c):
-        return Zones("none", math.nan, math.nan, ice_extent, keep, (0, 0), 0)
-    right = x[:-1] + 0.5 * L_x
-    i0 = 0 if W_c <= 0 else int(np.argmin(np.abs(right - W_c)))
-    i1 = n - 1 if end >= ice_extent - 1e-9 else int(np.argmin(np.abs(right - end))) + 1
-    i1 = max(i1, i0 + 1)
-    keep[i0:i1] = True
-    return Zones(layout, W_c, end, ice_extent, keep, (i0, i1), 1)
-
-
 def _majority(layouts: list[str]) -> str:
     """The most common layout; ties go to the earlier entry of :data:`LAYOUTS`."""
     counts = Counter(layouts)
@@ -102,8 +91,9 @@ def estimate_point(cfg: ModelConfig, rec: Records, c_g: float, k: float) -> Esti
     """The point's estimates and their jackknife standard errors from the replicas.
 
     Returns the :class:`~floewave.iteration.result.Estimate` with the profiles (``a``,
-    ``a_stderr`` and every Window field that is an output, as the replica mean), ``W_c``, ``W_c_stderr``, ``W_c_n``, ``compact_zone``, ``compact_end``,
-    ``ice_extent``, the per-replica ``W_c_replicas`` / ``compact_end_replicas``,
+    ``a_stderr`` and every Window field that is an output, as the replica mean), ``W_c``,
+    ``W_c_stderr``, ``W_c_n``, ``compact_zone``, ``compact_end``, ``ice_extent``, the
+    per-replica ``W_c_replicas`` / ``compact_end_replicas``,
     the other W_c rules (:func:`floewave.collision_stats.gap_rule_widths`: the rule on
     each replica's time-mean gaps) and the collision statistics
     (:func:`floewave.collision_stats.collision_statistics`) with their ``*_stderr``, the
@@ -201,3 +191,50 @@ def _typed(out: dict) -> Estimate:
     """The :class:`Estimate` of ``out`` (its fields by name; the Window means that are no
     output, ``s3_mean``, stay behind)."""
     return Estimate(**{o.name: out[o.name] for o in ESTIMATED})
+
+
+def _with_convergence(cfg: ModelConfig, est: Estimate, a_new: np.ndarray,
+                      a_old: np.ndarray) -> Estimate:
+    """An ensemble's SE(a) with the change of the replica-mean forcing in the last update,
+    |mean_r (a_new - a)|, in quadrature (signed changes of single replicas cancel: it is how
+    far the pooled estimate was still moving, which the jackknife alone does not see) and
+    at least :data:`SE_FLOOR` a0."""
+    if cfg.n_chains < 2:
+        return est
+    conv = np.abs(np.mean(a_new - a_old, axis=0))
+    se = np.sqrt(np.asarray(est.a_stderr, dtype=float) ** 2 + conv**2)
+    est.a_stderr = np.maximum(se, SE_FLOOR * cfg.a0)
+    est.a_end_stderr = float(est.a_stderr[-1])
+    return est
+
+
+def windows_estimate(cfg: ModelConfig, wins, d: int, c_g: float, k: float,
+                     a_new: np.ndarray) -> Estimate:
+    """The stationary protocol's estimate of its windows after d
+    (:class:`floewave.iteration.windows.Windows`) that last marched ``a_new``:
+    :func:`estimate_point` of their records; with R = 1 ``a_stderr`` the
+    autocorrelation-corrected standard error of the profiles the windows imply, else
+    with the last update's change in quadrature (:func:`_with_convergence`)."""
+    est = estimate_point(cfg, wins.records(d), c_g, k)
+    if cfg.n_chains == 1:
+        # one trajectory: the windows' implied profiles, autocorrelation-corrected
+        per = [march_coefficients(cfg, mean_coefficients(C[None]), c_g, k)[0]
+               for C in wins.C[d:]]
+        est.a_stderr = (stderr(per) if len(per) > 1
+                        else np.full(cfg.n_floes, np.nan))
+        est.a_end_stderr = float(est.a_stderr[-1])
+    return _with_convergence(cfg, est, a_new, wins.A[-1])
+
+
+def targets_met(cfg: ModelConfig, est: Estimate) -> bool:
+    """Does the stationary protocol's estimate meet the error-bar targets: max_i SE(a_i) <=
+    ``target_stderr`` a0 and, with a compact zone in at least two replicas, SE(W_c) <=
+    ``target_W_c_stderr`` (a target <= 0 is no condition)."""
+    if cfg.target_stderr > 0:
+        se = np.asarray(est.a_stderr, dtype=float)
+        if not np.all(np.isfinite(se)) or float(np.max(se)) > cfg.target_stderr * cfg.a0:
+            return False
+    se_w = est.W_c_stderr
+    if cfg.target_W_c_stderr > 0 and est.compact_zone != "none" and est.W_c_n >= 2:
+        return bool(np.isfinite(se_w) and se_w <= cfg.target_W_c_stderr)
+    return True

@@ -16,11 +16,11 @@ import math
 
 import numpy as np
 
+from .._march import march_amplitude, march_rows, residual
 from ..collision_stats import zone_of
 from ..config import ModelConfig
 from ..errors import NumericalError
 from .estimate import Records, estimate_point, stderr
-from .march import march_amplitude, march_rows, residual
 from .result import Estimate, Iteration
 from .window import Window, run_window
 

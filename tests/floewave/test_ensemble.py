@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 
 from floewave import ModelConfig, run_point
+from floewave._march import march_amplitude, march_rows
 from floewave.collision_stats import zone_of
 from floewave.config import ConfigError
 from floewave.ensemble import initial_positions
 from floewave.iteration.estimate import Records, estimate_point
-from floewave.iteration.march import march_amplitude, march_rows
 from floewave.results import jackknife_se
 
 SHORT = dict(L_x=1.5, T=1.2, a0=0.02, eps=0.8, dispersion="ep", n0=2, nT=1,

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from floewave import ModelConfig, run_point
-from floewave.iteration.march import march_amplitude, residual
+from floewave._march import march_amplitude, residual
 from floewave.iteration.noise_floor import noise_floor_reached
 
 # the earlier protocol with the model's numerics (dt 1e-3, the drag every 4 steps: 20 times

@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 
 from floewave import InvalidPointError, ModelConfig, march_coefficients, run_point
-from floewave.iteration.march import coefficients, march_amplitude, mean_coefficients
-from floewave.iteration.stationary import confined_profile, halves_z, mser_truncation
+from floewave._march import coefficients, march_amplitude, mean_coefficients
+from floewave.iteration.stationary import confined_profile
+from floewave.iteration.windows import halves_z, mser_truncation
 
 
 def test_self_consistent_march_solves_eq20_with_its_own_dissipation():
@@ -194,7 +195,7 @@ def test_the_convergence_term_and_the_floor_of_an_ensembles_error_bar():
     from copy import copy
     from types import SimpleNamespace
 
-    from floewave.iteration.stationary import SE_FLOOR, _with_convergence
+    from floewave.iteration.estimate import SE_FLOOR, _with_convergence
 
     cfg = ModelConfig(L_x=3.0)
     n = cfg.n_floes
