@@ -165,25 +165,25 @@ def estimate_point(cfg: ModelConfig, rec: Records, c_g: float, k: float) -> Esti
         out["W_c_stderr"] = float(W_r[has].std(ddof=1) / math.sqrt(m))
     else:
         out["W_c_stderr"] = math.nan
-    # the same rule on each replica's gaps time-averaged over the whole averaging, and the
-    # ice-wide collision statistics (floewave.collision_stats); no effect on the above
-    out.update(gap_rule_widths(cfg, prof))
-    out.update(collision_statistics(cfg, prof))
     if R < 2:
         out["a_stderr"] = np.full(len(full["a"]), np.nan)
         for name in fits:
             out[name + "_stderr"] = math.nan
         out["a_end_stderr"] = math.nan
-        return _typed(out)
-    loo = []
-    for r in range(R):
-        sub = np.ones(R, dtype=bool)
-        sub[r] = False
-        loo.append(estimate(sub))
-    out["a_stderr"] = jackknife_se(np.array([e["a"] for e in loo]))
-    out["a_end_stderr"] = float(out["a_stderr"][-1])
-    for name in fits:
-        out[name + "_stderr"] = float(jackknife_se(np.array([e[name][0] for e in loo])))
+    else:
+        loo = []
+        for r in range(R):
+            sub = np.ones(R, dtype=bool)
+            sub[r] = False
+            loo.append(estimate(sub))
+        out["a_stderr"] = jackknife_se(np.array([e["a"] for e in loo]))
+        out["a_end_stderr"] = float(out["a_stderr"][-1])
+        for name in fits:
+            out[name + "_stderr"] = float(jackknife_se(np.array([e[name][0] for e in loo])))
+    # the same rule on each replica's gaps time-averaged over the whole averaging, and the
+    # ice-wide collision statistics (floewave.collision_stats); no effect on the above
+    out.update(gap_rule_widths(cfg, prof))
+    out.update(collision_statistics(cfg, prof))
     return _typed(out)
 
 
@@ -218,8 +218,7 @@ def windows_estimate(cfg: ModelConfig, wins, d: int, c_g: float, k: float,
     est = estimate_point(cfg, wins.records(d), c_g, k)
     if cfg.n_chains == 1:
         # one trajectory: the windows' implied profiles, autocorrelation-corrected
-        per = [march_coefficients(cfg, mean_coefficients(C[None]), c_g, k)[0]
-               for C in wins.C[d:]]
+        per = [implied[0] for implied in wins.implied[d:]]
         est.a_stderr = (stderr(per) if len(per) > 1
                         else np.full(cfg.n_floes, np.nan))
         est.a_end_stderr = float(est.a_stderr[-1])

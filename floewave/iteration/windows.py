@@ -60,12 +60,14 @@ def _rounded(y: np.ndarray, resolution: float) -> np.ndarray:
 
 class Windows:
     """What the windows so far measured: per window j the dissipation S (R, N_f), the
-    forcing a (R, N_f), the Window statistics and zones of every replica."""
+    forcing a (R, N_f), the coefficients C = S / a^3 and the profiles they imply alone
+    (the march of C, (R, N_f)), the Window statistics and zones of every replica."""
 
     def __init__(self) -> None:
         self.S: list[np.ndarray] = []
         self.A: list[np.ndarray] = []
         self.C: list[np.ndarray] = []
+        self.implied: list[np.ndarray] = []
         self.windows: list[list] = []
         self.zones: list[list] = []
         self.series: list[np.ndarray] = []
@@ -78,6 +80,7 @@ class Windows:
         self.windows.append(windows)
         self.zones.append(zones)
         implied = march_coefficients(cfg, mean_coefficients(C[None]), c_g, k)   # (R, N_f)
+        self.implied.append(implied)
         compact = np.array([np.mean(np.asarray(w.gap_mean[:-1]) < cfg.gap_threshold)
                             for w in windows])
         # (3, R): per replica the sheet-mean and last-floe amplitude this window implies,
