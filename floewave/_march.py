@@ -2,7 +2,8 @@
 from the measured dissipation (:func:`march_amplitude`, :func:`march_rows`), and
 self-consistent from per-floe dissipation coefficients c = S_sd / a^3
 (:func:`march_coefficients`, compiled), with the coefficients of a window
-(:func:`coefficients`, :func:`mean_coefficients`) and the residual between two profiles.
+(:func:`coefficients`, :func:`mean_coefficients`), the residual between two profiles and
+when its history stopped falling (:func:`noise_floor_reached`).
 
 Eq. 20 marches a_i^2 = a_{i-1}^2 + L_x (S_{i-1} + S_i) / (rho_w g c_g) from the ice edge with
 S measured under the amplitudes of the iteration. The skin-drag dissipation of eq. 19 is
@@ -21,9 +22,9 @@ profile. Used as the iteration's update (a Newton-like step for the fixed point)
 estimator (the march of the mean coefficient, not the mean of marched profiles:
 :mod:`floewave.iteration.stationary`).
 
-The compiled part calls no other kernel file, but takes its flags from ``floewave._jit.JIT``: it is one of
-``floewave._jit.KERNEL_SOURCES``, so a change of the flags (which numba's own key does not
-hold) recompiles it too.
+The compiled part calls no other kernel file, but takes its flags from
+``floewave._jit.JIT``: it is one of ``floewave._jit.KERNEL_SOURCES``, so a change of the
+flags (which numba's own key does not hold) recompiles it too.
 """
 from __future__ import annotations
 
@@ -34,8 +35,8 @@ import numpy as np
 
 from ._jit import JIT
 
-__all__ = ["march_coefficients", "march_amplitude", "march_rows", "residual", "coefficients",
-           "mean_coefficients"]
+__all__ = ["march_coefficients", "march_amplitude", "march_rows", "residual",
+           "noise_floor_reached", "coefficients", "mean_coefficients"]
 
 _G = 9.81  # [m s^-2] (floewave.dispersion.G; repeated: this file imports no other)
 
@@ -130,6 +131,16 @@ def residual(a_old: np.ndarray, a_new: np.ndarray) -> float:
     if not ok.any():
         return 0.0
     return float(np.max(np.abs(a_new[ok] - a_old[ok]) / a_old[ok]))
+
+
+def noise_floor_reached(history: list[float], window: int) -> bool:
+    """True when the residual stopped decreasing: the median of the last ``window``
+    residuals exceeds half the median of the ``window`` before them."""
+    if window <= 0 or len(history) < 2 * window:
+        return False
+    last = float(np.median(history[-window:]))
+    prev = float(np.median(history[-2 * window:-window]))
+    return last > 0.5 * prev
 
 
 def coefficients(S: np.ndarray, A: np.ndarray) -> np.ndarray:

@@ -26,9 +26,10 @@ from ..collision_stats import collision_statistics, gap_rule_widths
 from ..config import ModelConfig
 from ..results import LAYOUTS, fit_exponential, fit_inverse, fit_zone, jackknife_se, zone_fits
 from .result import ESTIMATED, Estimate
+from .window import FIELDS
 
 __all__ = ["Records", "estimate_point", "windows_estimate", "targets_met", "SE_FLOOR",
-           "effective_sample_size", "stderr"]
+           "samples_records", "precise_enough", "effective_sample_size", "stderr", "max_stderr"]
 
 #: the smallest standard error of a reported, as a fraction of a0: below it two runs of a
 #: non-chaotic point (replicas agreeing to rounding) differ by more than their jackknife
@@ -237,3 +238,46 @@ def targets_met(cfg: ModelConfig, est: Estimate) -> bool:
     if cfg.target_W_c_stderr > 0 and est.compact_zone != "none" and est.W_c_n >= 2:
         return bool(np.isfinite(se_w) and se_w <= cfg.target_W_c_stderr)
     return True
+
+
+def max_stderr(samples: list[np.ndarray]) -> float:
+    """max_i of :func:`stderr` [m]."""
+    return float(np.max(stderr(samples)))
+
+
+def samples_records(kept: list[tuple]) -> Records:
+    """The noise-floor protocol's samples, (S, a_new, windows, zones) per averaging
+    iteration, as :class:`Records`."""
+    S = np.array([s[0] for s in kept])
+    a_new = np.array([s[1] for s in kept])
+    profiles = {}
+    for name in FIELDS:
+        total = 0.0
+        for sample in kept:
+            total = total + np.array([getattr(w, name) for w in sample[2]])
+        profiles[name] = total / len(kept)
+    zones = [sample[3] for sample in kept]
+    return Records(S, a_new, profiles,
+                   np.array([[z.W_c for z in row] for row in zones]),
+                   np.array([[z.compact_end for z in row] for row in zones]),
+                   [[z.layout for z in row] for row in zones])
+
+
+def precise_enough(cfg: ModelConfig, samples: list, c_g: float,
+                   k: float) -> tuple[bool, Estimate | None]:
+    """May the noise-floor protocol's averaging stop? max_i SE(a_i) <= ``target_stderr`` a0
+    (the iteration standard error for one trajectory, the jackknife over replicas for an
+    ensemble) and, for an ensemble with a compact zone in at least two replicas, SE(W_c) <=
+    ``target_W_c_stderr``. A target <= 0 is no condition. Also returns the ensemble's
+    estimate when it was computed (the point's, if the averaging stops here)."""
+    if cfg.n_chains == 1:
+        return (cfg.target_stderr <= 0
+                or max_stderr([s[1][0] for s in samples]) <= cfg.target_stderr * cfg.a0), None
+    if cfg.target_stderr <= 0 and cfg.target_W_c_stderr <= 0:
+        return True, None
+    est = estimate_point(cfg, samples_records(samples), c_g, k)
+    if cfg.target_stderr > 0 and float(np.max(est.a_stderr)) > cfg.target_stderr * cfg.a0:
+        return False, est
+    se_w = est.W_c_stderr
+    return (cfg.target_W_c_stderr <= 0 or not math.isfinite(se_w)
+            or se_w <= cfg.target_W_c_stderr), est

@@ -3,43 +3,27 @@ a <- a + relax (a_new - a) from a = a0 with a_new marched from each window's dis
 (eq. 20), until
 
 - ``converged``: residual max_i |a_new - a| / a < delta; reports the last a_new;
-- ``converged_noisy``: the residual reached its noise floor (:func:`noise_floor_reached`);
-  a is the mean of a_new over ``n_average`` further iterations (or until the error-bar
-  targets hold), ``a_stderr`` its standard error (autocorrelation-corrected) and
-  ``noise`` the median residual over that window;
+- ``converged_noisy``: the residual reached its noise floor
+  (:func:`floewave._march.noise_floor_reached`); a is the mean of a_new over
+  ``n_average`` further iterations (or until the error-bar targets hold), ``a_stderr``
+  its standard error (autocorrelation-corrected) and ``noise`` the median residual over
+  that window;
 - ``not_converged``: ``max_iterations`` reached first (mean of any averaged iterations,
   else the last a_new).
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from .._march import march_amplitude, march_rows, residual
+from .._march import march_amplitude, march_rows, noise_floor_reached, residual
 from ..collision_stats import zone_of
 from ..config import ModelConfig
 from ..errors import NumericalError
-from .estimate import Records, estimate_point, stderr
+from .estimate import estimate_point, precise_enough, samples_records, stderr
 from .result import Estimate, Iteration
-from .window import Window, run_window
+from .window import run_window
 
-__all__ = ["iterate_noise_floor", "noise_floor_reached", "max_stderr"]
-
-
-def noise_floor_reached(history: list[float], window: int) -> bool:
-    """True when the residual stopped decreasing: the median of the last ``window``
-    residuals exceeds half the median of the ``window`` before them."""
-    if window <= 0 or len(history) < 2 * window:
-        return False
-    last = float(np.median(history[-window:]))
-    prev = float(np.median(history[-2 * window:-window]))
-    return last > 0.5 * prev
-
-
-def max_stderr(samples: list[np.ndarray]) -> float:
-    """max_i of :func:`stderr` [m]."""
-    return float(np.max(stderr(samples)))
+__all__ = ["iterate_noise_floor"]
 
 
 def iterate_noise_floor(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g: float,
@@ -59,6 +43,8 @@ def iterate_noise_floor(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g:
     a_prev = a
     for it in range(1, cfg.max_iterations + 1):
         windows, S = run_window(cfg, chain, x0s, a, it == 1)
+        # the paper's W_c is a property of one averaging window: found per window and replica
+        zones = [zone_of(cfg, w.x_mean, w.gap_mean) for w in windows]
         if cfg.coupling == "mean":
             a_new = np.broadcast_to(march_amplitude(cfg, S.mean(axis=0), c_g, k), (R, n))
         else:
@@ -69,8 +55,6 @@ def iterate_noise_floor(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g:
         rows = range(1) if cfg.coupling == "mean" else range(R)
         res = max(residual(a[r], a_new[r]) for r in rows)
         history.append(res)
-        # the paper's W_c is a property of one averaging window: found per window and replica
-        zones = [zone_of(cfg, w.x_mean, w.gap_mean) for w in windows]
         last = (S, np.array(a_new), windows, zones)
         if phase == "average":
             samples.append(last)
@@ -89,7 +73,7 @@ def iterate_noise_floor(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g:
             # samples start the average
             samples.extend(recent)
         elif phase == "average" and len(samples) >= cfg.n_average:
-            enough, stop_est = _precise_enough(cfg, samples, c_g, k)
+            enough, stop_est = precise_enough(cfg, samples, c_g, k)
             if enough:
                 status = "converged_noisy"
                 break
@@ -98,7 +82,7 @@ def iterate_noise_floor(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g:
     kept = samples if samples else [last]
     # the estimate that ended the averaging is the point's (same samples): not recomputed
     est = (stop_est if status == "converged_noisy" and stop_est is not None
-           else estimate_point(cfg, _records(kept), c_g, k))
+           else estimate_point(cfg, samples_records(kept), c_g, k))
     if R == 1:   # one trajectory: the iteration standard error (as the paper's model)
         if samples:
             est.a_stderr = (stderr([s[1][0] for s in samples]) if len(samples) > 1
@@ -118,40 +102,3 @@ def iterate_noise_floor(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g:
     else:
         noise = 0.0 if status == "converged" else float(history[-1])
     return Iteration(status, est, history, noise)
-
-
-def _records(kept: list[tuple]) -> Records:
-    """The averaging window's samples as :class:`floewave.iteration.estimate.Records`."""
-    S = np.array([s[0] for s in kept])
-    a_new = np.array([s[1] for s in kept])
-    profiles = {}
-    for name in Window.FIELDS:
-        total = 0.0
-        for sample in kept:
-            total = total + np.array([getattr(w, name) for w in sample[2]])
-        profiles[name] = total / len(kept)
-    zones = [sample[3] for sample in kept]
-    return Records(S, a_new, profiles,
-                   np.array([[z.W_c for z in row] for row in zones]),
-                   np.array([[z.compact_end for z in row] for row in zones]),
-                   [[z.layout for z in row] for row in zones])
-
-
-def _precise_enough(cfg: ModelConfig, samples: list, c_g: float,
-                    k: float) -> tuple[bool, Estimate | None]:
-    """May the averaging stop? max_i SE(a_i) <= ``target_stderr`` a0 (the iteration
-    standard error for one trajectory, the jackknife over replicas for an ensemble) and,
-    for an ensemble with a compact zone in at least two replicas, SE(W_c) <=
-    ``target_W_c_stderr``. A target <= 0 is no condition. Also returns the ensemble's
-    estimate when it was computed (the point's, if the averaging stops here)."""
-    if cfg.n_chains == 1:
-        return (cfg.target_stderr <= 0
-                or max_stderr([s[1][0] for s in samples]) <= cfg.target_stderr * cfg.a0), None
-    if cfg.target_stderr <= 0 and cfg.target_W_c_stderr <= 0:
-        return True, None
-    est = estimate_point(cfg, _records(samples), c_g, k)
-    if cfg.target_stderr > 0 and float(np.max(est.a_stderr)) > cfg.target_stderr * cfg.a0:
-        return False, est
-    se_w = est.W_c_stderr
-    return (cfg.target_W_c_stderr <= 0 or not math.isfinite(se_w)
-            or se_w <= cfg.target_W_c_stderr), est

@@ -4,8 +4,7 @@ import numpy as np
 import pytest
 
 from floewave import ModelConfig, run_point
-from floewave._march import march_amplitude, residual
-from floewave.iteration.noise_floor import noise_floor_reached
+from floewave._march import march_amplitude, noise_floor_reached, residual
 
 # the earlier protocol with the model's numerics (dt 1e-3, the drag every 4 steps: 20 times
 # faster than model version 5's dt 1e-4 with the drag every step, which these tests used)
