@@ -18,7 +18,7 @@ at Fig. 2's ``ep`` eps 0.8 point), so it averaged a transient. This protocol:
    amplitude implied by the window alone, and the fraction of compact pairs) the truncation
    d minimising sum_{j>d} (y_j - ybar_d)^2 / (n - d)^2 is found; the series counts as
    stationary after d when d <= n / 2 (MSER's own validity rule) and, on the windows after
-   d, the first and second halves agree (:func:`~floewave.iteration.windows.halves_z`, a
+   d, the first and second halves agree (:func:`~floewave.iteration.stationarity.halves_z`, a
    Geweke test with the independent replicas as samples: MSER alone, on 12-20 windows,
    let slow drifts through);
    only windows after d are ever averaged (never the first ``transient_min``);
@@ -49,6 +49,7 @@ from ..errors import NumericalError
 from ..transient import drag_time, transient_windows
 from .estimate import SE_FLOOR, targets_met, windows_estimate
 from .result import Estimate, Iteration
+from .stationarity import truncation
 from .window import run_window
 from .windows import Windows
 
@@ -83,7 +84,7 @@ def iterate_stationary(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g: 
         windows, S = run_window(cfg, chain, x0s, a, it == 1)
         zones = [zone_of(cfg, w.x_mean, w.gap_mean) for w in windows]
         wins.add(cfg, S, np.array(a), windows, zones, c_g, k)
-        d, stationary = wins.truncation(cfg, d_min)
+        d, stationary = truncation(cfg, wins.series, d_min)
         C_avg = mean_coefficients(np.array(wins.C[d:]))                 # (R, N_f)
         if cfg.coupling == "mean":
             C_avg = np.broadcast_to(mean_coefficients(C_avg), C_avg.shape)

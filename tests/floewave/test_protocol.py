@@ -9,7 +9,7 @@ import pytest
 from floewave import InvalidPointError, ModelConfig, march_coefficients, run_point
 from floewave._march import coefficients, march_amplitude, mean_coefficients
 from floewave.iteration.stationary import confined_profile
-from floewave.iteration.windows import halves_z, mser_truncation
+from floewave.iteration.stationarity import halves_z, mser_truncation
 
 
 def test_self_consistent_march_solves_eq20_with_its_own_dissipation():
