@@ -16,7 +16,6 @@ from __future__ import annotations
 import numpy as np
 
 from .._march import march_amplitude, march_rows, noise_floor_reached, residual
-from ..collision_stats import zone_of
 from ..config import ModelConfig
 from ..errors import NumericalError
 from .estimate import estimate_point, precise_enough, samples_records, stderr
@@ -43,8 +42,7 @@ def iterate_noise_floor(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g:
     a_prev = a
     for it in range(1, cfg.max_iterations + 1):
         windows, S = run_window(cfg, chain, x0s, a, it == 1)
-        # the paper's W_c is a property of one averaging window: found per window and replica
-        zones = [zone_of(cfg, w.x_mean, w.gap_mean) for w in windows]
+        zones = [w.zone for w in windows]      # the compact zone of each replica's window
         if cfg.coupling == "mean":
             a_new = np.broadcast_to(march_amplitude(cfg, S.mean(axis=0), c_g, k), (R, n))
         else:

@@ -43,7 +43,6 @@ from collections.abc import Callable
 import numpy as np
 
 from .._march import march_coefficients, mean_coefficients, residual
-from ..collision_stats import zone_of
 from ..config import ModelConfig
 from ..errors import NumericalError
 from ..transient import drag_time, transient_windows
@@ -82,7 +81,7 @@ def iterate_stationary(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g: 
     est: Estimate | None = None
     for it in range(1, cfg.max_iterations + 1):
         windows, S = run_window(cfg, chain, x0s, a, it == 1)
-        zones = [zone_of(cfg, w.x_mean, w.gap_mean) for w in windows]
+        zones = [w.zone for w in windows]
         wins.add(cfg, S, np.array(a), windows, zones, c_g, k)
         d, stationary = truncation(cfg, wins.series, d_min)
         C_avg = mean_coefficients(np.array(wins.C[d:]))                 # (R, N_f)
