@@ -47,7 +47,7 @@ class Iteration:
     """
 
     status: str
-    estimate: Any
+    estimate: Estimate
     history: list[float]
     noise: float
     truncation: int | None = None
