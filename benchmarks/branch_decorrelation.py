@@ -24,14 +24,15 @@ import time
 
 import numpy as np
 
-from floewave import ModelConfig
-from floewave._march import march_coefficients
+from floewave import ModelConfig, march_coefficients
+from floewave._march import coefficients, mean_coefficients
+from floewave.collision_stats import zone_of
 from floewave.dispersion import alpha_confined
-from floewave.ensemble import coefficients, initial_positions, mean_coefficients, zone_of
+from floewave.ensemble import initial_positions
+from floewave.iteration.stationary import confined_profile
+from floewave.iteration.window import run_window
 from floewave.model import FloeChain
-from floewave.protocol import confined_profile
 from floewave.transient import transient_windows
-from floewave.window import run_window
 
 R = 8
 

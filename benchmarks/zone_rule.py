@@ -25,7 +25,7 @@ import numpy as np
 
 import sweep
 from floewave import ModelConfig
-from floewave.ensemble import zone_of
+from floewave.collision_stats import zone_of
 from floewave.results import _runs
 from sweep.analysis.stats import RESULT_STATUSES
 

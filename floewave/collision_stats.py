@@ -4,7 +4,7 @@ time-mean gaps (issue 23): per replica from what its averaging windows recorded,
 replicas with a delete-one jackknife standard error (docs/output.md, docs/dfscan.md).
 
 Definitions (``prof`` are the (R, N_f) time means over the averaging windows of the
-:class:`floewave.window.Window` fields, per replica; pairs are (i, i + 1), i < N_f - 1):
+:class:`floewave.iteration.window.Window` fields, per replica; pairs are (i, i + 1), i < N_f - 1):
 
 ``contact_fraction_mean`` [1]
     per replica the mean over the N_f - 1 pairs of the fraction of time steps the pair is

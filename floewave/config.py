@@ -104,7 +104,7 @@ class ModelConfig:
         predicted end-of-step velocity u + dt*a: second order) or ``"half_step"``
         (forces at the half-step velocity as LIGGGHTS does: first order in the damping)
     protocol : ``"stationary"`` (default: eq. 25 start, self-consistent march update, MSER
-        stationarity test, stop at the error-bar targets; :mod:`floewave.protocol`) or
+        stationarity test, stop at the error-bar targets; :mod:`floewave.iteration.stationary`) or
         ``"noise_floor"`` (the earlier protocol: a = a0 start, relaxed update, averaging
         once the residual stops falling; with relax = 1 and noise_window = 0 the paper's
         plain algorithm). ``relax``, ``noise_window`` and ``reuse_floor`` apply to
@@ -126,7 +126,7 @@ class ModelConfig:
         whose residuals revealed the noise floor (instead of discarding them)
     transient_min : windows never averaged by the stationary protocol (whatever MSER says)
     transient_drag_times : the stationary protocol discards at least this many drag
-        relaxation times tau_d as transient (:func:`floewave.protocol.drag_time`; 0: no
+        relaxation times tau_d as transient (:func:`floewave.transient.drag_time`; 0: no
         such bound)
     stationarity : the stationary protocol's transient: ``"mser"`` (MSER truncation, the
         default) or ``"fixed"`` (the first ``transient_min`` windows; reference runs)

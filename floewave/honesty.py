@@ -25,8 +25,8 @@ import numpy as np
 from . import MODEL_VERSION
 from .config import InvalidPointError, ModelConfig
 from .dispersion import solve_dispersion
+from .iteration.estimate import SE_FLOOR
 from .model import run_point
-from .protocol import SE_FLOOR
 from .transient import drag_time
 
 #: the paper's grid (docs/model.md §7), from which :func:`points` draws
@@ -140,7 +140,7 @@ def z_scores(r1: dict, r2: dict, name: str) -> np.ndarray:
 
 def floored(rec: dict, a0: float) -> dict:
     """``rec`` with SE(a) and SE(a_end) at least the model's floor
-    (:data:`floewave.protocol.SE_FLOOR` a0; runs stored before the floor existed)."""
+    (:data:`floewave.iteration.estimate.SE_FLOOR` a0; runs stored before the floor existed)."""
     out = dict(rec)
     out["a_stderr"] = np.maximum(np.asarray(rec["a_stderr"], float), SE_FLOOR * a0).tolist()
     out["a_end_stderr"] = max(float(rec["a_end_stderr"]), SE_FLOOR * a0)

@@ -12,8 +12,8 @@ import numpy as np
 from . import outputs
 
 __all__ = ["PointResult", "PROFILE_FIELDS", "SCALAR_FIELDS", "REPLICA_FIELDS", "LAYOUTS", "Zones",
-           "point_result_type", "compact_zones", "zone_fits", "fit_inverse", "fit_exponential",
-           "power_law", "power_law_weighted", "jackknife_se"]
+           "point_result_type", "compact_zones", "fit_zone", "zone_fits", "fit_inverse",
+           "fit_exponential", "power_law", "power_law_weighted", "jackknife_se"]
 
 #: Per-floe (length N_f) or per-pair (length N_f - 1, padded to N_f with NaN) profiles.
 PROFILE_FIELDS = tuple(o.name for o in outputs.profiles())
@@ -235,6 +235,22 @@ def zone_fits(x: np.ndarray, a: np.ndarray, a0: float, zones: Zones, *, min_floe
     else:
         inner[:i1 + 1] = True       # compact from the first floe (W_c = 0): no edge zone
     return (*fit(edge), *fit(inner))
+
+
+def fit_zone(x: np.ndarray, L_x: float, layout: str, W_c: float, end: float,
+             ice_extent: float) -> Zones:
+    """A :class:`Zones` for fitting from an ensemble's mean bounds: the compact zone runs
+    from the pair nearest W_c to the pair nearest its end (pairs sit at x_i + L_x / 2)."""
+    n = len(x)
+    keep = np.zeros(max(n - 1, 0), dtype=bool)
+    if layout == "none" or not math.isfinite(W_c):
+        return Zones("none", math.nan, math.nan, ice_extent, keep, (0, 0), 0)
+    right = x[:-1] + 0.5 * L_x
+    i0 = 0 if W_c <= 0 else int(np.argmin(np.abs(right - W_c)))
+    i1 = n - 1 if end >= ice_extent - 1e-9 else int(np.argmin(np.abs(right - end))) + 1
+    i1 = max(i1, i0 + 1)
+    keep[i0:i1] = True
+    return Zones(layout, W_c, end, ice_extent, keep, (i0, i1), 1)
 
 
 def _linfit(x: np.ndarray, y: np.ndarray) -> tuple[float, float, np.ndarray]:

@@ -2,7 +2,7 @@
 skin-drag dissipation S_sd and contact force, recorded every ``every`` time steps.
 
 Opt-in and separate from :func:`floewave.run_point`, which it does not touch (off by
-default, free when off). A trace runs a :class:`floewave.model.FloeChain` with a *fixed*
+default, free when off). A trace runs a :class:`floewave.chain.FloeChain` with a *fixed*
 amplitude profile a(x) taken from a converged :class:`~floewave.PointResult` (the
 converged state of the attenuation iteration; docs/model.md §4): from the initial state it
 spins up ``spin_up`` periods (default ``cfg.n0``), then records ``periods`` periods
@@ -35,9 +35,10 @@ import numpy as np
 
 from . import _kernels as K
 from ._reference import contact_force
+from .chain import FloeChain
 from .config import ConfigError, ModelConfig
 from .forces import cell_offsets
-from .model import FloeChain, run_point
+from .model import run_point
 
 __all__ = ["Trace", "trace_point", "floes_at", "instantaneous", "PAPER_DISTANCES"]
 

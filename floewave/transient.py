@@ -1,5 +1,5 @@
 """How long a point's transient lasts at least: the drag relaxation time of a floe
-(:mod:`floewave.protocol`'s lower bound on the windows it discards; also the campaign
+(:mod:`floewave.iteration.stationary`'s lower bound on the windows it discards; also the campaign
 runner's cost estimate). Imports no kernel."""
 from __future__ import annotations
 

@@ -13,7 +13,7 @@ from floewave.collision_stats import (
     collision_statistics,
     gap_zone_width,
 )
-from floewave.ensemble import Records, estimate_point
+from floewave.iteration.estimate import Records, estimate_point
 
 #: 12 floes of 0.5 m (11 pairs); the compact-zone rule: 3 pairs spanning >= 1.5 m, no bridge
 CFG = ModelConfig(L_x=0.5, L_y=10.0, L_sheet=6.0, T=1.5, nT=2, C_sd=0.05, rho_w=1000.0,
@@ -36,7 +36,7 @@ def test_w_c_gap_of_time_mean_gaps_differs_from_the_per_window_mean():
     Per window W_c = 2.0 and 4.0 m (mean 3.0); the time-mean gaps of pairs 3..6 are
     (OPEN + SHUT) / 2 = 1e-3 m > 1e-4 m, so the averaged gaps are compact from pair 7 only:
     W_c_gap = 4.0 m, 1 m above the per-window mean."""
-    from floewave.ensemble import zone_of
+    from floewave.collision_stats import zone_of
     w1, w2 = gaps(3), gaps(7)
     per_window = [zone_of(CFG, X, g).W_c for g in (w1, w2)]
     assert per_window == [2.0, 4.0]
@@ -110,9 +110,9 @@ def test_estimate_point_keeps_w_c_and_adds_w_c_gap():
                   W_c=np.array([[2.0], [4.0]]), compact_end=np.array([[6.0], [6.0]]),
                   layouts=[["edge"], ["edge"]])
     est = estimate_point(CFG, rec, c_g=1.0, k=2.0)
-    assert est["W_c"] == 3.0 and est["W_c_gap"] == 4.0
-    assert est["collision_rate"] == pytest.approx(4.0 / 2)
-    assert set(GAP_AND_COLLISION_FIELDS) <= set(est)
+    assert est.W_c == 3.0 and est.W_c_gap == 4.0
+    assert est.collision_rate == pytest.approx(4.0 / 2)
+    assert set(GAP_AND_COLLISION_FIELDS) <= set(est.outputs())
 
 
 def test_columns_finite_on_a_small_real_point():

@@ -101,8 +101,8 @@ def _statistic_bias(**fields) -> float:
     import math
 
     from floewave.forces import cell_offsets
+    from floewave.iteration.window import Window, dissipation
     from floewave.trace import instantaneous
-    from floewave.window import Window, dissipation
     cfg = ModelConfig(L_sheet=30.0, replicas=1, placement="uniform", **fields)
     k = solve_dispersion(cfg)[0]
     a = cfg.a0 * np.linspace(1.0, 0.6, cfg.n_floes)

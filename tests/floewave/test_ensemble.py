@@ -12,16 +12,12 @@ import numpy as np
 import pytest
 
 from floewave import ModelConfig, run_point
+from floewave._march import march_amplitude, march_rows
+from floewave.collision_stats import zone_of
 from floewave.config import ConfigError
-from floewave.ensemble import (
-    Records,
-    estimate_point,
-    initial_positions,
-    jackknife_se,
-    march_rows,
-    zone_of,
-)
-from floewave.model import march_amplitude
+from floewave.ensemble import initial_positions
+from floewave.iteration.estimate import Records, estimate_point
+from floewave.results import jackknife_se
 
 SHORT = dict(L_x=1.5, T=1.2, a0=0.02, eps=0.8, dispersion="ep", n0=2, nT=1,
              max_iterations=4, noise_window=2, n_average=2, n0_warm=0, replicas=1,
@@ -139,11 +135,11 @@ def test_estimates_and_standard_errors_from_replica_records():
     rec, xw = _records(cfg, 5, 3, rng)
     est = estimate_point(cfg, rec, 0.9, 3.0)
     # W_c: the mean of the per-replica W_c, with the standard error of that mean
-    W = est["W_c_replicas"]
-    assert np.isfinite(W).all() and est["W_c_n"] == 5
-    assert est["compact_zone"] == "edge"
-    assert est["W_c"] == pytest.approx(W.mean(), rel=1e-12)
-    assert est["W_c_stderr"] == pytest.approx(W.std(ddof=1) / math.sqrt(5), rel=1e-12)
+    W = est.W_c_replicas
+    assert np.isfinite(W).all() and est.W_c_n == 5
+    assert est.compact_zone == "edge"
+    assert est.W_c == pytest.approx(W.mean(), rel=1e-12)
+    assert est.W_c_stderr == pytest.approx(W.std(ddof=1) / math.sqrt(5), rel=1e-12)
     # a replica's W_c: the mean over its windows of the window's W_c, the right end of
     # floe 10 + 2 r + j in window j
     for r in range(5):
@@ -152,13 +148,13 @@ def test_estimates_and_standard_errors_from_replica_records():
     # a: the average over iterations of the march of the replica-mean dissipation
     a = np.mean([march_amplitude(cfg, rec.S[j].mean(axis=0), 0.9, 3.0) for j in range(3)],
                 axis=0)
-    np.testing.assert_allclose(est["a"], a, rtol=1e-13)
-    assert np.isfinite(est["a_stderr"]).all() and (est["a_stderr"] > 0).all()
+    np.testing.assert_allclose(est.a, a, rtol=1e-13)
+    assert np.isfinite(est.a_stderr).all() and (est.a_stderr > 0).all()
     for name in ("alpha_all", "alpha_exp", "alpha_edge", "alpha_inner"):
-        assert np.isfinite(est[name]) and est[name + "_stderr"] > 0, name
-    assert est["a_end_stderr"] == est["a_stderr"][-1]
+        assert np.isfinite(getattr(est, name)) and getattr(est, name + "_stderr") > 0, name
+    assert est.a_end_stderr == est.a_stderr[-1]
     # profiles: replica means
-    np.testing.assert_allclose(est["F_w_mean"], rec.profiles["F_w_mean"].mean(axis=0))
+    np.testing.assert_allclose(est.F_w_mean, rec.profiles["F_w_mean"].mean(axis=0))
 
 
 def test_independent_coupling_standard_error_of_a_is_that_of_the_replica_mean():
@@ -168,22 +164,22 @@ def test_independent_coupling_standard_error_of_a_is_that_of_the_replica_mean():
     rec.a_new[...] = rng.random(rec.a_new.shape) * 0.01
     est = estimate_point(cfg, rec, 0.9, 3.0)
     per = rec.a_new.mean(axis=0)                    # each replica's average
-    np.testing.assert_allclose(est["a"], per.mean(axis=0), rtol=1e-12)
-    np.testing.assert_allclose(est["a_stderr"], per.std(axis=0, ddof=1) / 2, rtol=1e-10)
+    np.testing.assert_allclose(est.a, per.mean(axis=0), rtol=1e-12)
+    np.testing.assert_allclose(est.a_stderr, per.std(axis=0, ddof=1) / 2, rtol=1e-10)
 
 
 def test_replicas_without_a_compact_zone_do_not_enter_W_c():
     cfg = ModelConfig(L_x=0.5, replicas=5)
     rec, _ = _records(cfg, 5, 2, np.random.default_rng(4), none=(3,))
     est = estimate_point(cfg, rec, 0.9, 3.0)
-    W = est["W_c_replicas"]
-    assert np.isnan(W[3]) and est["W_c_n"] == 4
-    assert est["W_c"] == pytest.approx(np.nanmean(W), rel=1e-12)
+    W = est.W_c_replicas
+    assert np.isnan(W[3]) and est.W_c_n == 4
+    assert est.W_c == pytest.approx(np.nanmean(W), rel=1e-12)
     # most replicas without a zone: the point has none
     rec, _ = _records(cfg, 5, 2, np.random.default_rng(4), none=(0, 1, 2))
     est = estimate_point(cfg, rec, 0.9, 3.0)
-    assert est["compact_zone"] == "none" and math.isnan(est["W_c"])
-    assert math.isnan(est["alpha_inner"]) and est["W_c_n"] == 0
+    assert est.compact_zone == "none" and math.isnan(est.W_c)
+    assert math.isnan(est.alpha_inner) and est.W_c_n == 0
 
 
 def test_one_replica_mean_and_independent_coupling_agree_bit_for_bit():
@@ -234,9 +230,9 @@ def test_a_layout_that_flips_without_one_replica_has_no_zone_error_bars():
     cfg = ModelConfig(L_x=0.5, replicas=2, coupling="mean")
     rec, _ = _records(cfg, 2, 2, np.random.default_rng(5), none=(1,))
     est = estimate_point(cfg, rec, 0.9, 3.0)
-    assert est["compact_zone"] == "edge" and est["W_c_n"] == 1
-    assert math.isnan(est["alpha_edge_stderr"]) and math.isnan(est["alpha_inner_stderr"])
-    assert np.isfinite(est["alpha_all_stderr"])
+    assert est.compact_zone == "edge" and est.W_c_n == 1
+    assert math.isnan(est.alpha_edge_stderr) and math.isnan(est.alpha_inner_stderr)
+    assert np.isfinite(est.alpha_all_stderr)
 
 
 def test_confined_runs_one_chain_whatever_R():

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from floewave import ModelConfig, run_point
-from floewave.model import march_amplitude, noise_floor_reached, residual
+from floewave._march import march_amplitude, noise_floor_reached, residual
 
 # the earlier protocol with the model's numerics (dt 1e-3, the drag every 4 steps: 20 times
 # faster than model version 5's dt 1e-4 with the drag every step, which these tests used)
@@ -69,7 +69,7 @@ def test_paper_plain_algorithm_available(monkeypatch):
     """relax = 1, no noise handling: the paper's iteration a <- a_new (each iteration's
     wave forcing is the amplitude the previous one marched); it stops at the first residual
     below delta or at max_iterations."""
-    import floewave.model as M
+    import floewave.iteration.noise_floor as M
 
     forcing, marched = [], []           # per iteration: a given to the window, a_new
 

@@ -1,4 +1,4 @@
-"""The stationary iteration protocol (floewave.protocol, floewave._march): the
+"""The stationary iteration protocol (floewave.iteration.stationary, floewave._march): the
 self-consistent march against eq. 20, the confined limit, the stationarity tests on series
 whose transient is known, and the time-step rule."""
 import math
@@ -6,11 +6,10 @@ import math
 import numpy as np
 import pytest
 
-from floewave import InvalidPointError, ModelConfig, run_point
-from floewave._march import march_coefficients
-from floewave.ensemble import coefficients, mean_coefficients
-from floewave.model import march_amplitude
-from floewave.protocol import confined_profile, halves_z, mser_truncation
+from floewave import InvalidPointError, ModelConfig, march_coefficients, run_point
+from floewave._march import coefficients, march_amplitude, mean_coefficients
+from floewave.iteration.stationary import confined_profile
+from floewave.iteration.stationarity import halves_z, mser_truncation
 
 
 def test_self_consistent_march_solves_eq20_with_its_own_dissipation():
@@ -157,7 +156,7 @@ def test_the_transient_spans_the_drag_relaxation_time():
     and drag area both scale with it); the transient is transient_drag_times tau_d long,
     at least transient_min windows and at most half of max_iterations."""
     from floewave import solve_dispersion
-    from floewave.protocol import drag_time, transient_windows
+    from floewave.iteration.stationary import drag_time, transient_windows
 
     cfg = ModelConfig(C_sd=0.005, T=1.1)
     k, _ = solve_dispersion(cfg)
@@ -193,24 +192,27 @@ def test_the_march_root_is_exact_where_the_cubic_term_dominates():
 def test_the_convergence_term_and_the_floor_of_an_ensembles_error_bar():
     """SE(a)^2 = jackknife^2 + |mean_r (a_new - a)|^2, at least SE_FLOOR a0; one chain
     keeps its own error bar."""
-    from floewave.protocol import SE_FLOOR, _with_convergence
+    from copy import copy
+    from types import SimpleNamespace
+
+    from floewave.iteration.estimate import SE_FLOOR, _with_convergence
 
     cfg = ModelConfig(L_x=3.0)
     n = cfg.n_floes
-    est = {"a_stderr": np.full(n, 3e-5), "a_end_stderr": 3e-5}
+    est = SimpleNamespace(a_stderr=np.full(n, 3e-5), a_end_stderr=3e-5)   # an Estimate's two
     a_old = np.full((2, n), 0.01)
     a_new = a_old + np.array([[4e-5], [4e-5]])          # both replicas moved by +4e-5
-    out = _with_convergence(cfg, dict(est), a_new, a_old)
-    np.testing.assert_allclose(out["a_stderr"], 5e-5, rtol=1e-12)        # 3-4-5
-    assert out["a_end_stderr"] == pytest.approx(5e-5, rel=1e-12)
+    out = _with_convergence(cfg, copy(est), a_new, a_old)
+    np.testing.assert_allclose(out.a_stderr, 5e-5, rtol=1e-12)        # 3-4-5
+    assert out.a_end_stderr == pytest.approx(5e-5, rel=1e-12)
     opposite = a_old + np.array([[4e-5], [-4e-5]])       # signed changes cancel
-    np.testing.assert_allclose(_with_convergence(cfg, dict(est), opposite, a_old)["a_stderr"],
+    np.testing.assert_allclose(_with_convergence(cfg, copy(est), opposite, a_old).a_stderr,
                                3e-5, rtol=1e-12)
-    tiny = {"a_stderr": np.full(n, 1e-15), "a_end_stderr": 1e-15}
-    floor = _with_convergence(cfg, tiny, a_old, a_old)["a_stderr"]
+    tiny = SimpleNamespace(a_stderr=np.full(n, 1e-15), a_end_stderr=1e-15)
+    floor = _with_convergence(cfg, tiny, a_old, a_old).a_stderr
     assert np.all(floor == SE_FLOOR * cfg.a0)
     one = ModelConfig(L_x=3.0, replicas=1)
-    assert _with_convergence(one, dict(est), a_new, a_old)["a_stderr"] is est["a_stderr"]
+    assert _with_convergence(one, copy(est), a_new, a_old).a_stderr is est.a_stderr
 
 
 def test_mean_coupling_under_the_stationary_protocol_shares_one_profile():

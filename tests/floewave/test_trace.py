@@ -8,9 +8,10 @@ import pytest
 from floewave import ModelConfig
 from floewave import _kernels as K
 from floewave._reference import forces as reference_forces
+from floewave.chain import FloeChain
 from floewave.cli import main
 from floewave.forces import cell_offsets
-from floewave.model import FloeChain, Window, dissipation
+from floewave.iteration.window import Window, dissipation
 from floewave.trace import floes_at, instantaneous, trace_point
 
 SMALL = dict(L_sheet=6.0, n0=1, nT=1, max_iterations=3)

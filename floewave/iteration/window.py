@@ -1,17 +1,21 @@
 """One averaging window of the attenuation iteration (docs/model.md §4 steps 2-3): running it on
-the R chains and its statistics per floe (§6), from the kernel's accumulators."""
+the R chains, its statistics per floe (§6) from the kernel's accumulators, and its compact
+zone."""
 from __future__ import annotations
 
 import numpy as np
 
-from . import _kernels as K
-from .config import ModelConfig
+from .. import _kernels as K
+from ..collision_stats import zone_of
+from ..config import ModelConfig
 
 __all__ = ["Window", "dissipation", "run_window"]
 
 
 class Window:
-    """Statistics of one nT-period averaging window, normalised to per-step means."""
+    """Statistics of one nT-period averaging window, normalised to per-step means, and its
+    compact zone (``zone``: the paper's W_c is a property of one window,
+    :func:`floewave.collision_stats.zone_of` of its mean positions and gaps)."""
 
     def __init__(self, cfg: ModelConfig, stats: np.ndarray, nsteps: int, x0: np.ndarray):
         n = stats.shape[1]
@@ -30,6 +34,7 @@ class Window:
         self.F_w_mean = rows[K.ST_FW]
         self.F_c_mean = rows[K.ST_FC]
         self.F_d_mean = rows[K.ST_FD]
+        self.zone = zone_of(cfg, self.x_mean, self.gap_mean)
 
     FIELDS = ("s3_mean", "x_mean", "gap_mean", "contact_fraction", "collisions", "F_w_mean",
               "F_c_mean", "F_d_mean")
