@@ -7,9 +7,9 @@ from pathlib import Path
 
 import pandas as pd
 
-import floewave
 from floewave.config import DISPERSIONS
 from sweep.errors import StoreError
+from sweep.identity import DIMENSIONS
 from sweep.store import reader
 from sweep.store.schema import COLUMNS, DERIVED
 
@@ -79,7 +79,7 @@ def load_table(path: str | Path) -> pd.DataFrame:
         frame["_file"] = f.name
         frames.append(frame)
     df = pd.concat(frames, ignore_index=True)
-    missing = [c for c in ("hash", "config_json", "status", *floewave.SWEPT_FIELDS)
+    missing = [c for c in ("hash", "config_json", "status", *DIMENSIONS)
                if c not in df]
     if missing:
         raise StoreError(f"{path}: not a sweep table (no column {missing[0]})")
@@ -90,7 +90,7 @@ def load_table(path: str | Path) -> pd.DataFrame:
         raise StoreError(f"{path}: point {h} appears {int((df['hash'] == h).sum())} times"
                          f" ({where}): a campaign's tables hold each point once")
     prov = df["provenance"].astype(str) if "provenance" in df else None
-    swept = {k: df[k].to_numpy() for k in floewave.SWEPT_FIELDS}
+    swept = {k: df[k].to_numpy() for k in DIMENSIONS}
     swept["dispersion"] = df["dispersion"].astype(str).to_numpy()
     reader.check_hashes(path, df["hash"].astype(str), df["config_json"].astype(str), None,
                         prov, swept)
