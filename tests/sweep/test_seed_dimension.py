@@ -154,3 +154,19 @@ def test_status_plan_and_figures_of_a_seeded_campaign(tmp_path, capsys):
     assert "seeds are not pooled" in capsys.readouterr().err
     assert sorted(p.name for p in out.iterdir()) == ["seed=0", "seed=1"]
     assert all(len(list((out / d).glob("fig2_*.png"))) == 1 for d in ("seed=0", "seed=1"))
+
+
+def test_a_table_exported_before_schema_5_gets_its_seed_from_config(tmp_path):
+    import pandas as pd
+
+    from sweep.analysis.export import export_table
+    store = tmp_path / "s.h5"
+    run_campaign(parse_campaign(BASE + "seed = 4\n[sweep]\neps = [0.2, 0.6]\n"), str(store),
+                 compute=FAKE)
+    table = tmp_path / "t.csv"
+    export_table(store, table)
+    old = pd.read_csv(table, dtype=str).drop(columns="seed")
+    old.to_csv(table, index=False)
+    got = sweep.load(table)
+    assert list(got["seed"]) == [4, 4] and got.columns.get_loc("seed") == \
+        got.columns.get_loc("dispersion") + 1
