@@ -6,9 +6,10 @@ ensembles (two seeds) of the Fig. 2 campaign: sigma = RMS(difference) / sqrt(2) 
 points, for each ratio and zone. ``sweep.paper.points.FLOORS["log10_force"]`` states the
 result, rounded up.
 
-    python benchmarks/paper_floors.py paper/seed0 paper/seed1
+    python benchmarks/paper_floors.py paper --seeds 0 1
 
-(the stores of ``sweep paper-check --run --seeds 0 1 --stores paper``).
+(the two seeds' rows of ``paper/fig2.h5``, the store of ``herman2019 check --run --seeds
+0 1 --stores paper``, its seeds swept).
 """
 from __future__ import annotations
 
@@ -26,10 +27,12 @@ RATIOS = (("F_w/F_d compact", "compact", "F_w_mean", "F_d_mean"),
           ("F_c/F_w compact", "compact", "F_c_mean", "F_w_mean"))
 
 
-def measures(store: Path) -> dict[tuple[str, str, float], float]:
-    """{(ratio, dispersion, eps): median log10 ratio} of the Fig. 2 store in ``store``."""
+def measures(store: Path, seed: int) -> dict[tuple[str, str, float], float]:
+    """{(ratio, dispersion, eps): median log10 ratio} of seed ``seed``'s rows of the Fig. 2
+    store in ``store``."""
     path = store / "fig2.h5"
     df = sweep.load(path)
+    df = df[df["seed"] == seed]
     out = {}
     for _, row in df.iterrows():
         for name, zone, num, den in RATIOS:
@@ -41,9 +44,11 @@ def measures(store: Path) -> dict[tuple[str, str, float], float]:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("stores", nargs=2, type=Path, help="two seeds' paper-check store dirs")
+    ap.add_argument("stores", type=Path, help="the paper-check store dir (its fig2.h5)")
+    ap.add_argument("--seeds", type=int, nargs=2, default=(0, 1), metavar="S",
+                    help="the two seeds compared (default 0 1)")
     args = ap.parse_args()
-    a, b = (measures(s) for s in args.stores)
+    a, b = (measures(args.stores, s) for s in args.seeds)
     print(f"{'ratio':24s} {'points':>6s} {'sigma [decade]':>15s} {'max |diff|':>11s}")
     for name, *_ in RATIOS:
         d = np.array([a[k] - b[k] for k in a if k[0] == name

@@ -22,7 +22,7 @@ OUT = Path(__file__).resolve().parent / "output.md"
 #: (so a new column appears without an edit here).
 GROUPS = (
     ("Identity and swept parameters", ("hash", "L_x", "T", "a0", "C_sd", "eps", "d_f",
-                                        "dispersion")),
+                                        "dispersion", "seed")),
     ("Status", ("status", "message", "iterations", "residual", "noise")),
     ("Collision zone", ("n_floes", "W_c", "W_c_stderr", "W_c_n", "W_c_gap", "W_c_gap_stderr",
                         "compact_zone", "compact_end", "ice_extent")),

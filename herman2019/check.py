@@ -27,7 +27,7 @@ from sweep.run.compute import DEFAULT_COMPUTE
 from sweep.run.launch import run_campaign
 
 __all__ = ["PaperReport", "default_configs", "campaign_files", "run_campaigns", "check_stores",
-           "format_table", "markdown_cell"]
+           "seed_rows", "load_tables", "format_table", "markdown_cell"]
 
 
 # ---------------------------------------------------------------------- stores and output
@@ -81,11 +81,31 @@ def run_campaigns(stores: Path, files: Mapping[str, Path], *, compute: str | Non
                      progress_bar=False, command=f"{command} ({name})")
 
 
+def seed_rows(df: pd.DataFrame, seed: int | None, path: Path) -> pd.DataFrame | str:
+    """The rows of seed ``seed`` of a store's table, indexed as a store of that seed
+    alone (``seed`` None: the table, if it holds one seed); a message when there are none,
+    or when ``seed`` is None and the store holds several seeds (a settling's store: its
+    seeds are never mixed)."""
+    seeds = sorted(set(df["seed"])) if "seed" in df else []
+    if seed is None:
+        if len(seeds) > 1:
+            return (f"{path} holds {len(seeds)} seeds (a settling's store): check it with"
+                    " --settle or --seeds")
+        return df
+    rows = df[df["seed"] == seed]
+    if rows.empty:
+        return f"no store rows of seed {seed} in {path} (run it with --run)"
+    return rows.reset_index(drop=True)
+
+
 def check_stores(stores: str | Path = "paper", *, run: bool = False,
                  configs: str | Path | None = None, compute: str | None = None,
-                 log: Callable[[str], None] | None = None) -> PaperReport:
+                 log: Callable[[str], None] | None = None, seed: int | None = None,
+                 tables: Mapping[str, Any] | None = None) -> PaperReport:
     """Check the paper's claims on ``<stores>/<name>.h5`` for each of
-    :data:`PAPER_CAMPAIGNS`.
+    :data:`PAPER_CAMPAIGNS`: on its rows of ensemble seed ``seed`` when given (a store
+    that sweeps the seed: :mod:`herman2019.seeds`); ``tables``: those stores' tables
+    already loaded (``None`` for a missing one).
 
     With ``run``, each campaign ``<configs>/<name>.toml`` is first run (or resumed: a
     complete store is left as it is) into its store, in-process. A store that is missing
@@ -109,18 +129,21 @@ def check_stores(stores: str | Path = "paper", *, run: bool = False,
     if run:
         run_campaigns(stores, campaign_files(configs), compute=compute, log=log,
                       command="herman2019 check --run")
-    tables: dict[str, pd.DataFrame | None] = {}
+    loaded = dict(tables) if tables is not None else load_tables(paths)
+    tables = {}
     problems: dict[str, str] = {}
     for name, path in paths.items():
-        if not path.exists():
-            problems[name] = f"no store {path} (run it with --run)"
+        df = loaded.get(name)
+        if isinstance(df, str) or df is None:
+            problems[name] = df or f"no store {path} (run it with --run)"
             tables[name] = None
             continue
-        try:
-            tables[name] = load(path)
-        except StoreError as exc:
-            problems[name] = f"cannot read {path}: {exc}"
+        rows = seed_rows(df, seed, path)
+        if isinstance(rows, str):
+            problems[name] = rows
             tables[name] = None
+        else:
+            tables[name] = rows
 
     cache: dict[tuple[str, str], Any] = {}
 
@@ -134,6 +157,21 @@ def check_stores(stores: str | Path = "paper", *, run: bool = False,
 
     checks = paper_checks(tables, profile, missing=problems)
     return PaperReport(checks, {k: str(v) for k, v in paths.items()}, problems)
+
+
+def load_tables(paths: Mapping[str, Path]) -> dict[str, pd.DataFrame | str | None]:
+    """Each store's table (:func:`sweep.load`): ``None`` for a missing store, the problem
+    for an unreadable one."""
+    out: dict[str, pd.DataFrame | str | None] = {}
+    for name, path in paths.items():
+        if not path.exists():
+            out[name] = None
+            continue
+        try:
+            out[name] = load(path)
+        except StoreError as exc:
+            out[name] = f"cannot read {path}: {exc}"
+    return out
 
 
 def markdown_cell(text: str) -> str:

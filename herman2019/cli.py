@@ -56,12 +56,13 @@ def build_parser() -> argparse.ArgumentParser:
                     help="compute function for --run (tests; default floewave:run_point)")
     pc.add_argument("--json", action="store_true", help="machine-readable output")
     pc.add_argument("--seeds", type=int, nargs="+", default=None, metavar="S",
-                    help="check independent ensembles: the campaigns with [base] seed = S"
-                    " in DIR/seed<S>/ (run with --run); a verdict stands only where every"
-                    " seed gives it")
+                    help="check independent ensembles: each seed S's rows of DIR/<name>.h5,"
+                    " the campaigns with the seeds swept (run with --run); a verdict stands"
+                    " only where every seed gives it")
     pc.add_argument("--settle", action="store_true", help="settle every row: pool seeds"
-                    " 0, 1, ... in DIR/seed<S>/, added in looks of 4, 8, ... seeds (with"
-                    " --run: run as needed) read group-sequentially (docs/paper-check.md)")
+                    " 0, 1, ... (swept in DIR/<name>.h5), added in looks of 4, 8, ... seeds"
+                    " (with --run: run as needed, each campaign extended by the look's"
+                    " seeds) read group-sequentially (docs/paper-check.md)")
     pc.add_argument("--max-seeds", type=int, default=None, metavar="N",
                     help="--settle: the last look's seeds (4 x a power of 2; default 64)")
     pc.add_argument("--first-seed", type=int, default=None, metavar="S",
@@ -71,7 +72,8 @@ def build_parser() -> argparse.ArgumentParser:
                     help="--settle: stop adding seeds to a chain of a/a0 whose undecided"
                     " steps all lie within +-M of a0 (off by default; docs/paper-check.md)")
     pc.add_argument("--jobs", type=int, default=None, metavar="N",
-                    help="--settle --run: run a look's seeds in N processes (default 1)")
+                    help="--settle --run: run a look's seeds with sweep run under mpiexec,"
+                    " N workers (default 1: in this process)")
 
     rp = sub.add_parser("report", help="sweep report of a store with the paper-check table"
                         " of the stores in DIR")
@@ -145,7 +147,7 @@ def cmd_check(args: argparse.Namespace) -> int:
         if jobs < 1:
             raise ConfigError(f"--jobs {jobs}: at least 1")
         if args.jobs is not None and not args.run:
-            raise ConfigError("--jobs: only with --run (it says how many processes run seeds)")
+            raise ConfigError("--jobs: only with --run (it says how many MPI workers run seeds)")
         settled = settle(args.stores, max_seeds=most, first_seed=first, run=args.run,
                          configs=args.configs, compute=args.compute, log=log, jobs=jobs,
                          floor=args.floor)

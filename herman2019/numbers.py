@@ -154,7 +154,7 @@ def timings(out: Path) -> None:
 
 
 #: The settled table's design (docs/paper-check.md "Settled verdicts"): fresh seeds from 64
-#: (seeds 0-63 were the pilot that chose the budget), a budget of 256 seeds, 2 processes.
+#: (seeds 0-63 were the pilot that chose the budget), a budget of 256 seeds, 2 MPI workers.
 SETTLE_FIRST_SEED, SETTLE_MAX_SEEDS, SETTLE_JOBS = 64, 256, 2
 
 

@@ -35,7 +35,7 @@ __all__ = ["FLOORS", "X_NEAR", "Check", "Profile", "point", "col", "label_of",
 #:   (single-trajectory stores carry no spread of alpha_inner).
 #: - ``log10_force``: 0.02 decade on a median log10 force ratio over a zone (F_w / F_d,
 #:   F_c / F_w). Measured: the time-mean force profiles carry no standard error, so
-#:   ``python benchmarks/paper_floors.py paper/seed0 paper/seed1`` compares the Fig. 2
+#:   ``python benchmarks/paper_floors.py paper --seeds 0 1`` compares the Fig. 2
 #:   points of two independent ensembles: sigma = RMS difference / sqrt(2) = 0.007-0.017
 #:   decade (compact zone 0.007-0.010, collisional 0.017, model version 7), rounded up.
 #:   (Until model version 7 this floor was 0.1 decade, assumed.)

@@ -4,12 +4,15 @@ seeds, looked at group-sequentially.
 A claim that is inconclusive, or that holds with one seed and not another, is usually one
 whose error bar is too wide for its margin. Settling buys precision where it is needed:
 
-1. **Seeds.** Each paper campaign is run once per seed S (``[base] seed = S``, stores in
-   ``<stores>/seed<S>/``, as ``--seeds`` does). A seed is an independent ensemble of the
-   same points, the same cost again, so pooling S seeds divides the SE by sqrt(S) at S
-   times the cost (``benchmarks/settle_cost.py`` compares more replicas and longer
-   averaging). The stores resume: a point already stored is never recomputed.
-2. **Pooling.** The checks are run on each seed's stores, and every estimate a rule reads
+1. **Seeds.** The seeds are a campaign dimension: each paper campaign is one campaign with
+   ``[sweep] seed = [...]`` and one store ``<stores>/<name>.h5``, run by sweep's one
+   executor and grown by ``--extend`` as a look adds seeds
+   (:func:`herman2019.seeds.run_seeds`, as ``--seeds`` does). A seed is an independent
+   ensemble of the same points, the same cost again, so pooling S seeds divides the SE by
+   sqrt(S) at S times the cost (``benchmarks/settle_cost.py`` compares more replicas and
+   longer averaging). The stores resume: a point already stored is never recomputed.
+2. **Pooling.** The checks are run on each seed's rows of the stores
+   (:func:`herman2019.check.check_stores` with ``seed``), and every estimate a rule reads
    is recorded (:func:`herman2019.estimates.observing`). The pooled table is the checks run
    once more, each rule reading the estimates pooled over the seeds (:func:`pool`): the
    mean of the seeds' values, with the SE of that mean: sqrt(sum se_s^2) / S from the
@@ -37,8 +40,8 @@ whose error bar is too wide for its margin. Settling buys precision where it is 
 
 Seeds ``first_seed``, ``first_seed + 1``, ... are pooled (``--first-seed``): a settling on
 fresh seeds is independent of one already run (the uniform campaign's replica 0 aside, the
-same chain for every seed). ``jobs`` runs a look's seeds in that many processes (each seed's
-stores are its own files; a point's result does not depend on who runs it).
+same chain for every seed). ``jobs`` > 1 runs a look's campaigns with ``sweep run`` under
+``mpiexec``, ``jobs`` workers (a point's result does not depend on who runs it).
 
 The error bars being pooled must be honest for the rate to hold: :func:`calibration`
 compares the seeds' spread with their stated SEs over every pooled estimate.
@@ -46,14 +49,13 @@ compares the seeds' spread with their stated SEs over every pooled estimate.
 from __future__ import annotations
 
 import math
-import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from herman2019.check import campaign_files, check_stores, default_configs, run_campaigns
+from herman2019.check import campaign_files, check_stores, default_configs, load_tables
 from herman2019.claims import PAPER_CAMPAIGNS
 from herman2019.estimates import FAILS, HOLDS, INCONCLUSIVE, critical, observing, z_critical
 from herman2019.points import NO_EFFECT, Check
@@ -65,7 +67,7 @@ from herman2019.pooling import (
     campaigns_of,
     widening,
 )
-from herman2019.seeds import seeded_configs
+from herman2019.seeds import run_seeds
 from herman2019.sequential import boundaries
 from sweep.errors import ConfigError
 
@@ -121,25 +123,34 @@ def looks_for(max_seeds: int) -> tuple[int, ...]:
     return tuple(looks)
 
 
+def _tables(stores: Path) -> dict[str, Any]:
+    return load_tables({name: stores / f"{name}.h5" for name in PAPER_CAMPAIGNS})
+
+
+def _has_rows(tables: dict[str, Any], seed: int) -> bool:
+    return any(hasattr(df, "columns") and "seed" in df and bool((df["seed"] == seed).any())
+               for df in tables.values())
+
+
 def pooled_checks(stores: Path, seeds: Sequence[int], z: float,
                   recorded: dict[int, Recorder], widen: dict[tuple, float] | None = None
                   ) -> tuple[list[Check], list[int]]:
-    """The checks on ``<stores>/seed<S>/`` pooled over ``seeds`` (each seed's
-    :class:`Recorder` in ``recorded``, made here if missing) and read against ``z``; with
-    the number of seeds pooled per row."""
+    """The checks on each seed's rows of ``<stores>/<name>.h5`` pooled over ``seeds``
+    (each seed's :class:`Recorder` in ``recorded``, made here if missing) and read against
+    ``z``; with the number of seeds pooled per row."""
+    tables = _tables(stores)
     for s in seeds:
         if s not in recorded:
             rec = Recorder()
-            where = stores / f"seed{s}"
-            if where.is_dir() or s == seeds[0]:      # the carrier's absence is an error
+            if _has_rows(tables, s) or s == seeds[0]:   # the carrier's absence is an error
                 with observing(rec):
-                    report = check_stores(where)
+                    report = check_stores(stores, seed=s, tables=tables)
                 rec.problems = {name: p for name, p in report.problems.items()
                                 if not p.startswith("no store")}
             recorded[s] = rec
     pooler = Pooler([recorded[s] for s in seeds], widen)
     with observing(pooler), critical(z):
-        report = check_stores(stores / f"seed{seeds[0]}")
+        report = check_stores(stores, seed=seeds[0], tables=tables)
     return report.checks, pooler.used
 
 
@@ -170,7 +181,7 @@ class SettleReport:
     stored: dict[str, float] = field(default_factory=dict)
     #: "seed S: campaign" -> a store that exists but cannot be read (exit status 3)
     problems: dict[str, str] = field(default_factory=dict)
-    #: processes that ran the seeds (``jobs``)
+    #: MPI workers that ran the seeds (``jobs``; 1: in-process)
     jobs: int = 1
     #: the settling's wall time [s], running and reading
     elapsed_s: float = 0.0
@@ -200,60 +211,6 @@ def _extendable(check: Check) -> bool:
     """Whether more seeds can move the row: not an analytic value, and on a campaign."""
     return bool(campaigns_of(check)) and not (
         check.estimates and all(e.source == "exact" for e in check.estimates))
-
-
-def _run_seed(stores: Path, configs: Path, seed: int, names: Sequence[str],
-              compute: str | None, log: Callable[[str], None] | None) -> dict[str, Any]:
-    """Run (or resume) ``names`` with ``[base] seed = seed`` into ``<stores>/seed<S>/``:
-    the points added and their CPU and wall time."""
-    from sweep.analysis.load import load
-
-    where = stores / f"seed{seed}"
-    cfgs = seeded_configs(configs, seed, where / "configs")
-
-    def points() -> int:
-        return sum(len(load(p)) for p in (where / f"{n}.h5" for n in names) if p.exists())
-
-    before = points()
-    cpu, wall = time.process_time(), time.monotonic()
-    run_campaigns(where, campaign_files(cfgs, names), compute=compute,
-                  log=(lambda m: log(f"seed {seed}: {m}")) if log else None,
-                  command=f"herman2019 check --settle (seed {seed})")
-    return {"seed": seed, "campaigns": list(names), "points": points() - before,
-            "cpu_s": round(time.process_time() - cpu, 2),
-            "wall_s": round(time.monotonic() - wall, 2)}
-
-
-def _stderr(msg: str) -> None:
-    print(f"herman2019: {msg}", file=sys.stderr, flush=True)
-
-
-def _run_seeds(stores: Path, configs: Path, seeds: Sequence[int], names: Sequence[str],
-               compute: str | None, log: Callable[[str], None] | None, jobs: int
-               ) -> list[dict[str, Any]]:
-    """:func:`_run_seed` for each of ``seeds``, in ``jobs`` processes (spawned: a fresh
-    interpreter each; their messages go to stderr when ``log`` is given)."""
-    if jobs <= 1 or len(seeds) <= 1:
-        return [_run_seed(stores, configs, s, names, compute, log) for s in seeds]
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
-
-    with ProcessPoolExecutor(max_workers=min(jobs, len(seeds)),
-                             mp_context=multiprocessing.get_context("spawn")) as pool:
-        futures = [pool.submit(_run_seed, stores, configs, s, names, compute,
-                               _stderr if log else None) for s in seeds]
-        out = []
-        for s, f in zip(seeds, futures, strict=True):
-            try:
-                out.append(f.result())
-            except BaseException:
-                # the seeds not started are not run; the running ones finish their point
-                # set (a store resumes, so nothing is lost)
-                pool.shutdown(wait=True, cancel_futures=True)
-                if log:
-                    log(f"seed {s}: failed; the seeds after it were not started")
-                raise
-        return out
 
 
 def settle(stores: str | Path, *, max_seeds: int = 64, first_seed: int = 0,
@@ -295,10 +252,12 @@ def settle(stores: str | Path, *, max_seeds: int = 64, first_seed: int = 0,
             names = [nm for nm in PAPER_CAMPAIGNS
                      if any(nm in campaigns_of(rows[i]) for i in open_rows)]
         if run:
-            for r in _run_seeds(stores, configs, seeds[:n], names, compute, log, jobs):
-                if r["points"]:
-                    runs.append(r)
-                    recorded.pop(r["seed"], None)
+            r = run_seeds(stores, configs, seeds[:n], names, compute, log, jobs)
+            if r["points"]:
+                runs.append(r)
+            for s, added in r["per_seed"].items():
+                if added:
+                    recorded.pop(s, None)
         elif not stores.is_dir():
             raise ConfigError(f"--stores {stores}: no such directory (run with --run)")
         if log:
@@ -356,21 +315,16 @@ def _audit(stores: Path, rows: list[Settled], looks: Sequence[int], cs: Sequence
 
 
 def stored_cost(stores: Path, seeds: Sequence[int]) -> dict[str, float]:
-    """The points in the seeds' stores and their summed point ``wall_time`` [s]; those of
-    seeds 0 and 1 (what ``--seeds 0 1`` runs) apart."""
-    from sweep.analysis.load import load
-    from sweep.errors import StoreError
-
+    """The points of the seeds in the stores and their summed point ``wall_time`` [s];
+    those of seeds 0 and 1 (what ``--seeds 0 1`` runs) apart."""
     n = {True: 0, False: 0}
     cpu = {True: 0.0, False: 0.0}
+    tables = [df for df in _tables(stores).values() if hasattr(df, "columns")]
     for s in seeds:
-        for path in sorted((stores / f"seed{s}").glob("*.h5")):
-            try:
-                df = load(path)
-            except StoreError:
-                continue
+        for df in tables:
+            rows = df[df["seed"] == s]
             first = s < 2
-            n[first] += len(df)
-            cpu[first] += float(df["wall_time"].sum()) if "wall_time" in df else 0.0
+            n[first] += len(rows)
+            cpu[first] += float(rows["wall_time"].sum()) if "wall_time" in rows else 0.0
     return {"stored_points": n[True] + n[False], "stored_core_s": round(cpu[True] + cpu[False]),
             "stored_points_seeds_2_up": n[False], "stored_core_s_seeds_2_up": round(cpu[False])}

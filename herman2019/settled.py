@@ -87,7 +87,9 @@ def format_settled(report: SettleReport) -> str:
                      f" replicas about {HONEST_R8:.1f}).")
     lines.append(f"Settling's cost: this run added {cost['points_added']} points in"
                  f" {cost['cpu_s']:.0f} CPU s ({cost['wall_s']:.0f} s wall summed over the"
-                 f" seeds, in {report.jobs} process{'es' if report.jobs > 1 else ''}; the"
+                 " looks' runs, "
+                 + ("in 1 process" if report.jobs == 1 else f"{report.jobs} MPI workers")
+                 + "; the"
                  f" settling took {cost['elapsed_s']:.0f} s wall, reading included); the"
                  f" table rests on {cost.get('stored_points', 0)} stored points"
                  f" ({cost.get('stored_core_s', 0)} core-s)"

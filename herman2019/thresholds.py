@@ -135,10 +135,10 @@ def undecided_reason(row: Settled, *, budget: int, floor: float | None = None) -
     if bounds is None:
         return f"undecided {where}"
     lo, hi = bounds
-    worst = min(est, key=lambda e: min(abs(e.value - lo), abs(hi - e.value)) / e.se)
+    worst = min(est, key=lambda e: abs(_z(min(abs(e.value - lo), abs(hi - e.value)), e.se)))
     bound = lo if abs(worst.value - lo) < abs(hi - worst.value) else hi
     return (f"{_short(worst.label)}: {worst.value:.4g} ± {worst.se:.2g} against the bound"
-            f" {bound:.4g} ({(worst.value - bound) / worst.se:+.1f} SE) {where}: the"
+            f" {bound:.4g} ({_z(worst.value - bound, worst.se):+.1f} SE) {where}: the"
             " value sits on the threshold")
 
 

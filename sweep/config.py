@@ -1,8 +1,9 @@
 """Campaign files: TOML with ``[base]``, ``[sweep]`` and ``[run]``, validated up front.
 
 A campaign is a base :class:`floewave.ModelConfig` plus, per swept dimension, the list
-of values to try; the grid is their Cartesian product in :data:`floewave.SWEPT_FIELDS`
-order. Every problem found is reported, one message per bad key and value, before
+of values to try; the grid is their Cartesian product in :data:`sweep.identity.DIMENSIONS`
+order (:data:`floewave.SWEPT_FIELDS`, then ``seed``: the seeds of an ensemble are one
+more dimension). Every problem found is reported, one message per bad key and value, before
 anything runs or is written (:class:`sweep.errors.ConfigError`, exit status 2).
 
 Physically impossible points (``T/dt`` not integral, an ``ml`` period beyond the
@@ -28,7 +29,7 @@ from floewave import ModelConfig, solve_dispersion
 from floewave.help import did_you_mean
 from floewave.transient import transient_windows
 from sweep.errors import ConfigError
-from sweep.identity import canonical_json, point_hash, sha256_hex
+from sweep.identity import DIMENSIONS, canonical_json, point_hash, sha256_hex
 
 __all__ = ["Campaign", "Point", "RunOptions", "load_campaign", "parse_campaign",
            "DEFAULT_EXPECTED_ITERATIONS"]
@@ -126,7 +127,7 @@ class Campaign:
 
     @property
     def swept_fields(self) -> tuple[str, ...]:
-        """The swept dimensions, in :data:`floewave.SWEPT_FIELDS` order."""
+        """The swept dimensions, in :data:`sweep.identity.DIMENSIONS` order."""
         return tuple(self.sweep)
 
     @property
@@ -171,7 +172,7 @@ class Campaign:
         return cache[key]
 
     def points(self) -> list[Point]:
-        """Expand the grid (product in SWEPT_FIELDS order), with hashes and costs."""
+        """Expand the grid (product in DIMENSIONS order), with hashes and costs."""
         return list(self._grid)
 
     @functools.cached_property
@@ -282,7 +283,7 @@ def parse_campaign(text: str, source: str = "<string>") -> Campaign:
     assert base is not None
     if not sweep:
         raise ConfigError(f"{source}: [sweep] is empty: list the values of at least one"
-                          f" swept dimension ({', '.join(floewave.SWEPT_FIELDS)})")
+                          f" swept dimension ({', '.join(DIMENSIONS)})")
     size = math.prod(len(v) for v in sweep.values())
     if size > run.max_points:
         raise ConfigError(f"{source}: the grid has {size:,} points, more than [run]"
@@ -339,7 +340,7 @@ def _parse_base(table: dict[str, Any], source: str, errors: list[str]) -> ModelC
 def _parse_sweep(table: dict[str, Any], base: ModelConfig | None, source: str,
                  errors: list[str]) -> dict[str, tuple[Any, ...]]:
     sweep: dict[str, tuple[Any, ...]] = {}
-    allowed = floewave.SWEPT_FIELDS
+    allowed = DIMENSIONS
     for key, values in table.items():
         if key not in allowed:
             errors.append(f"{source}: [sweep] {key} = {values!r}: not a swept dimension"

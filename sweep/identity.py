@@ -25,7 +25,15 @@ import floewave
 from floewave import ModelConfig
 
 __all__ = ["canonical_json", "point_hash", "short_hash", "sha256_hex", "HASH_LENGTH",
-           "SHORT_LENGTH", "config_hashes_to"]
+           "SHORT_LENGTH", "config_hashes_to", "DIMENSIONS"]
+
+#: The fields a campaign may sweep, in grid order: floewave's swept parameters
+#: (:data:`floewave.SWEPT_FIELDS`), then the ensemble ``seed`` (a point's seed is part of
+#: its configuration, so of its hash, whether swept or set in ``[base]``). Seed comes last:
+#: the grid's last dimension varies fastest, so a point's seeds are neighbours in the
+#: grid, in ``load_xarray``'s last axis and in a seed-by-seed ``--extend``, and a campaign
+#: that sweeps no seed keeps its grid order.
+DIMENSIONS: tuple[str, ...] = (*floewave.SWEPT_FIELDS, "seed")
 
 HASH_LENGTH = 64
 SHORT_LENGTH = 12

@@ -225,12 +225,15 @@ def _status(df: pd.DataFrame, dims: Sequence[str], total: int, journaled: int | 
             + _table(["hash", "status", *dims, "reason"], rows, classes=classes))
 
 
-def _img(png: Path) -> str:
+def _img(png: Path, name: str | None = None) -> str:
+    """One figure, captioned with ``name`` (default its file name; a seed's figures:
+    ``seed=<S>/<file>``)."""
+    name = name or png.name
     data = base64.b64encode(png.read_bytes()).decode("ascii")
     prefix = next((p for p in sorted(CAPTIONS, key=len, reverse=True)
                    if png.name.startswith(p)), "")
-    return (f'<figure><img alt="{_e(png.name)}" src="data:image/png;base64,{data}">'
-            f"<figcaption><b>{_e(png.name)}</b> — {_e(CAPTIONS.get(prefix, ''))}"
+    return (f'<figure><img alt="{_e(name)}" src="data:image/png;base64,{data}">'
+            f"<figcaption><b>{_e(name)}</b> — {_e(CAPTIONS.get(prefix, ''))}"
             "</figcaption></figure>")
 
 
@@ -242,7 +245,7 @@ def _figures(path: Path, max_figures: int) -> str:
         except ConfigError as exc:   # nothing drawable, no results, no matplotlib
             files = []
             notes = notes or [str(exc)]
-        imgs = "".join(_img(f) for f in files)
+        imgs = "".join(_img(f, str(Path(f).relative_to(tmp))) for f in files)
     why = "".join(f"<li>{_e(n)}</li>" for n in notes)
     return ('<h2 id="figures">Figures</h2>'
             + (f"<p>Not drawn:</p><ul>{why}</ul>" if why else "")

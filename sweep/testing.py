@@ -25,7 +25,7 @@ import numpy as np
 
 from floewave import ModelConfig
 
-__all__ = ["fake_point", "raising_point", "nan_point", "trivial_point", "sleepy_point",
+__all__ = ["fake_point", "seeded_point", "raising_point", "nan_point", "trivial_point", "sleepy_point",
            "power_point", "faulty_point", "crashing_point", "stuck_point",
            "sleepy_trivial_point", "exiting_point", "c_exit_point", "misfit_point",
            "stdout_closing_point", "stubborn_point", "replay_point", "replay_cost", "REPLAY_COSTS",
@@ -75,6 +75,26 @@ def fake_point(cfg: ModelConfig) -> dict[str, Any]:
         "wall_time": 1e-3, "kernel_mode": "fake", "a_end": float(a[-1]), "a0": cfg.a0,
         "residual_history": hist,
     }
+
+
+def seeded_point(cfg: ModelConfig) -> dict[str, Any]:
+    """:func:`fake_point` with the ensemble's scatter: its W_c, rates and amplitudes moved
+    by a draw of the point's ``seed`` (and its other fields), with standard errors, so
+    that independent seeds of one point differ as an ensemble's would."""
+    other = cfg.to_dict()
+    other.pop("seed")
+    key = int(hashlib.sha256(json.dumps(other, sort_keys=True).encode()).hexdigest()[:8], 16)
+    u = np.random.default_rng([cfg.seed, key]).standard_normal(4)
+    out = fake_point(cfg)
+    a = out["a"] * (1.0 + 0.004 * u[0])
+    rate = 1.0 + 0.05 * u[1]
+    out.update(a=a, a_stderr=0.004 * a, a_end=float(a[-1]), a_end_stderr=0.004 * float(a[-1]),
+               W_c=out["W_c"] + 0.5 * u[2], W_c_stderr=0.5,
+               **{k: out[k] * rate for k in ("alpha_all", "alpha_edge", "alpha_inner",
+                                            "alpha_exp")},
+               **{f"{k}_stderr": 0.05 * out[k] for k in ("alpha_all", "alpha_edge",
+                                                         "alpha_inner", "alpha_exp")})
+    return out
 
 
 def raising_point(cfg: ModelConfig) -> dict[str, Any]:

@@ -27,6 +27,10 @@ everything else fixed, so a store of any campaign gives whatever figures its gri
           omega with the fitted exponents m, :func:`sweep.alpha_omega`; groups with >= 3
           periods).
 
+A campaign that sweeps ``seed`` gets each seed's figures in ``OUT/seed=<seed>/``, drawn from
+that seed's points alone: figures neither pool nor average seeds (pool them with
+:func:`sweep.collision_stats` or :func:`sweep.alpha_omega` with a ``by`` without ``seed``).
+
 Status is marked in every figure and explained in its legend: a ``not_converged`` curve
 (``max_iterations`` reached; the mean so far) carries crosses, a ``not_converged`` point (or a
 pooled group holding one) an open square. Curves differ in colour and marker by the swept
@@ -334,8 +338,18 @@ def make_figures(path: str | Path, outdir: str | Path, max_figures: int = 20,
     profiles = ProfileCache(path)
     written: list[Path] = []
     reasons: dict[str, str] = {}
+    seeds = sorted(df["seed"].unique()) if "seed" in df else []
+    # swept seeds are not pooled: each seed's points are drawn as a campaign of their own
+    parts = ([(df, out)] if len(seeds) < 2 else
+             [(df[df["seed"] == s], out / f"seed={s}") for s in seeds])
+    if len(seeds) > 1 and log is not None:
+        log(f"{len(seeds)} seeds swept: each seed's figures are in {out}/seed=<seed>/ (its"
+            " points alone: seeds are not pooled nor averaged)")
     for kind in kinds:
-        drawn = _DRAW[kind](df, profiles, out, max_figures)
+        drawn = []
+        for sub, where in parts:
+            where.mkdir(parents=True, exist_ok=True)
+            drawn += _DRAW[kind](sub, profiles, where, max_figures)
         for part in PARTS[kind]:
             if not any(f.name.startswith(part) for f in drawn):
                 reasons[part] = WHY[part]

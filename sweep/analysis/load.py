@@ -17,7 +17,6 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-import floewave
 from sweep.analysis.tables import (
     STATUS_ORDER,
     column_attrs,
@@ -26,6 +25,7 @@ from sweep.analysis.tables import (
     typed_table,
 )
 from sweep.errors import PointNotFoundError, StoreError, StoreUnreadableError
+from sweep.identity import DIMENSIONS
 from sweep.store import reader
 from sweep.store.cells import text
 from sweep.store.journal import journal_path
@@ -165,7 +165,7 @@ def _load(path: str | Path) -> pd.DataFrame:
         # every row's config_json still hashes to its hash (StoreCorruptedError if not)
         reader.check_hashes(path, data["hash"], data["config_json"], reader.model_version(f),
                             data["provenance"],
-                            {k: data[k] for k in floewave.SWEPT_FIELDS if k in data})
+                            {k: data[k] for k in DIMENSIONS if k in data})
     df = _with_derived(typed_table(pd.DataFrame(data)))
     df.attrs.update(column_attrs())         # shared, not deep-copied into every derived frame
     df.attrs["campaign"] = campaign

@@ -31,7 +31,7 @@ PAPER_SETUP = {"L_x": 0.5, "T": 1.2, "a0": 0.0125, "C_sd": 0.05, "eps": 0.6, "d_
 DISP_ORDER = ("ml", "ep", "ow")
 DISP_STYLE = {"ep": "-", "ml": "--", "ow": ":"}
 SYMBOL = {"L_x": "L_x", "T": "T", "a0": "a_0", "C_sd": "C_sd", "eps": "ε", "d_f": "d_f",
-          "dispersion": ""}
+          "dispersion": "", "seed": "seed"}
 
 
 def format_value(name: str, value: Any) -> str:
@@ -55,7 +55,7 @@ def figure_file(prefix: str, keys: Sequence[str], values: Sequence[Any]) -> str:
 
 def closeness_to_paper(keys: Sequence[str], values: Sequence[Any]) -> tuple:
     """Sort key: number of values differing from the paper's setup, then the values."""
-    diff = sum(PAPER_SETUP[k] != v for k, v in zip(keys, values, strict=True))
+    diff = sum(PAPER_SETUP.get(k, v) != v for k, v in zip(keys, values, strict=True))
     return (diff, tuple(str(v) for v in values))
 
 

@@ -27,13 +27,14 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
-from floewave import SWEPT_FIELDS
 from floewave.results import STATUSES, power_law, power_law_weighted
+from sweep.identity import DIMENSIONS
 
 __all__ = ["SWEPT", "RESULT_STATUSES", "derived", "collision_stats", "alpha_omega"]
 
-#: The seven swept parameters, in grid order (floewave's).
-SWEPT = SWEPT_FIELDS
+#: The dimensions a campaign may sweep, in grid order: floewave's seven parameters, then
+#: the ensemble ``seed`` (:data:`sweep.identity.DIMENSIONS`).
+SWEPT = DIMENSIONS
 #: Statuses of points that have results (the model's own statuses).
 RESULT_STATUSES = STATUSES
 
@@ -258,7 +259,9 @@ def alpha_omega(df: pd.DataFrame, alpha: str = "alpha_inner",
         comparison with eq. 24), ``alpha_all``, ``alpha_edge``, ``alpha_exp`` or
         ``alpha_c``.
     by : the parameters that define a group; default every swept parameter except T
-        that is a column of ``df`` (so each group is one curve alpha(T)). Points of a group
+        that is a column of ``df`` (so each group is one curve alpha(T)), ``seed`` only
+        when it takes more than one value (swept seeds: one fit per seed; pass a ``by``
+        without ``seed`` to pool a point's seeds into one fit). Points of a group
         that share a T (when ``by`` is coarser) all enter the fit.
     min_periods : fewer distinct T with a positive, finite alpha give NaN m.
 
@@ -281,8 +284,9 @@ def alpha_omega(df: pd.DataFrame, alpha: str = "alpha_inner",
     """
     if alpha not in df.columns:
         raise KeyError(f"alpha_omega: no column {alpha!r}")
-    keys = _as_list(by) if by is not None else [k for k in SWEPT if k in df.columns
-                                                and k != "T"]
+    keys = _as_list(by) if by is not None else [
+        k for k in SWEPT if k in df.columns and k != "T"
+        and (k != "seed" or df[k].nunique() > 1)]
     if "T" in keys:
         raise ValueError("alpha_omega: T is the fitted variable, it cannot be a group key")
     d = df[df["status"].isin(statuses)] if "status" in df.columns else df

@@ -7,11 +7,11 @@ from pathlib import Path
 
 import pandas as pd
 
-import floewave
 from floewave.config import DISPERSIONS
 from sweep.errors import StoreError
+from sweep.identity import DIMENSIONS
 from sweep.store import reader
-from sweep.store.schema import COLUMNS, DERIVED
+from sweep.store.schema import COLUMNS, DERIVED, FROM_CONFIG, config_values
 
 __all__ = ["load_table", "table_suffix", "typed_table", "column_attrs", "SharedAttr",
            "TABLE_SUFFIXES", "STATUS_ORDER"]
@@ -55,7 +55,8 @@ def table_suffix(path: str | Path) -> str | None:
 def load_table(path: str | Path) -> pd.DataFrame:
     """The per-point table from exported tables (``sweep export``): one ``.csv``,
     ``.csv.gz`` or ``.parquet`` file, or every such file in a directory (sorted by name),
-    concatenated. Typed as :func:`load` types a store's table; every row's
+    concatenated (a table exported before schema 5 gets its ``seed`` column from each
+    row's ``config_json``). Typed as :func:`load` types a store's table; every row's
     ``config_json`` must hash to its ``hash`` under its provenance's model version and no
     point may appear twice (:class:`StoreError` naming the point and its files)."""
     p = Path(path)
@@ -79,7 +80,12 @@ def load_table(path: str | Path) -> pd.DataFrame:
         frame["_file"] = f.name
         frames.append(frame)
     df = pd.concat(frames, ignore_index=True)
-    missing = [c for c in ("hash", "config_json", "status", *floewave.SWEPT_FIELDS)
+    for c in FROM_CONFIG:       # a table exported before schema 5: from each config_json
+        if c not in df and "config_json" in df:
+            at = df.columns.get_loc("dispersion") + 1 if "dispersion" in df else len(df.columns)
+            df.insert(at, c, pd.array(config_values(c, df["config_json"].astype(str)),
+                                      dtype="int64"))
+    missing = [c for c in ("hash", "config_json", "status", *DIMENSIONS)
                if c not in df]
     if missing:
         raise StoreError(f"{path}: not a sweep table (no column {missing[0]})")
@@ -90,7 +96,7 @@ def load_table(path: str | Path) -> pd.DataFrame:
         raise StoreError(f"{path}: point {h} appears {int((df['hash'] == h).sum())} times"
                          f" ({where}): a campaign's tables hold each point once")
     prov = df["provenance"].astype(str) if "provenance" in df else None
-    swept = {k: df[k].to_numpy() for k in floewave.SWEPT_FIELDS}
+    swept = {k: df[k].to_numpy() for k in DIMENSIONS}
     swept["dispersion"] = df["dispersion"].astype(str).to_numpy()
     reader.check_hashes(path, df["hash"].astype(str), df["config_json"].astype(str), None,
                         prov, swept)

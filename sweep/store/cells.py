@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from sweep.errors import UnstorableError
-from sweep.store.schema import COLUMNS, PROFILE_VARS, REPLICA_VARS
+from sweep.store.schema import COLUMNS, FROM_CONFIG, PROFILE_VARS, REPLICA_VARS, config_values
 
 __all__ = ["normalise_record", "check_profiles", "text", "texts", "NO_PROFILES"]
 
@@ -75,6 +75,10 @@ def normalise_record(record: dict[str, Any]) -> dict[str, Any]:
         if col is None:     # not a stored column (derived ones included): dropped
             continue
         row[name] = col.fill if value is None else _convert(col.kind, name, value)
+    for name in FROM_CONFIG:  # a record of an older schema (a journal line) lacks it
+        if name not in row and "config_json" in row:
+            row[name] = _convert(_STORED[name].kind, name,
+                                 config_values(name, [row["config_json"]])[0])
     profiles = {}
     for name, value in (record.get("profiles") or {}).items():
         if np.iscomplexobj(value):

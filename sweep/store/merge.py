@@ -8,9 +8,9 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-import floewave
 from sweep.config import parse_campaign
 from sweep.errors import CampaignMismatchError, Interrupted, SchemaVersionError, StoreError
+from sweep.identity import DIMENSIONS
 from sweep.provenance import environment
 from sweep.store import reader
 from sweep.store.cells import text
@@ -104,10 +104,10 @@ def merge(output: str | Path, inputs: list[str | Path]) -> str:
                 texts.append(text(f.attrs["campaign_toml"]))
                 # every row still hashes to its hash: a merge never spreads a bad row
                 cols = reader.table_columns(f, ("hash", "config_json", "provenance",
-                                                *floewave.SWEPT_FIELDS))
+                                                *DIMENSIONS))
                 reader.check_hashes(path, cols["hash"], cols["config_json"],
                                     reader.model_version(f), cols["provenance"],
-                                    {k: cols[k] for k in floewave.SWEPT_FIELDS if k in cols})
+                                    {k: cols[k] for k in DIMENSIONS if k in cols})
         except StoreError:
             raise
         except (OSError, KeyError, ValueError, RuntimeError, TypeError) as exc:

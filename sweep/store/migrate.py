@@ -13,7 +13,16 @@ from typing import Any
 import h5py
 
 from sweep.errors import SchemaVersionError
-from sweep.store.schema import ADDED_IN, COLUMNS, MIGRATION_FILL, SCHEMA_VERSION, column
+from sweep.store.cells import texts
+from sweep.store.schema import (
+    ADDED_IN,
+    COLUMNS,
+    FROM_CONFIG,
+    MIGRATION_FILL,
+    SCHEMA_VERSION,
+    column,
+    config_values,
+)
 
 __all__ = ["MIGRATIONS", "migration_steps", "migrate", "add_columns", "added_in"]
 
@@ -25,7 +34,8 @@ def added_in(version: int) -> list[str]:
 
 def add_columns(f: Any, version: int) -> None:
     """Add the columns of schema ``version`` to an older store's table, with their fill
-    values (:data:`MIGRATION_FILL` where given)."""
+    values (:data:`MIGRATION_FILL` where given; a :data:`FROM_CONFIG` column: each row's
+    value in its ``config_json``)."""
     table = f["table"]
     size = table["hash"].shape[0]
     for name in added_in(version):
@@ -43,6 +53,8 @@ def add_columns(f: Any, version: int) -> None:
                                       chunks=table["hash"].chunks,
                                       dtype={"float": "float64", "int": "int64"}[col.kind])
             ds[...] = fill
+        if name in FROM_CONFIG and size:
+            ds[...] = config_values(name, texts(table["config_json"][:size]))
 
 
 def _v1_to_v2(f: Any) -> None:
@@ -64,6 +76,12 @@ def _v3_to_v4(f: Any) -> None:
     add_columns(f, 4)
 
 
+def _v4_to_v5(f: Any) -> None:
+    """Add the ``seed`` column (a swept dimension since schema 5), each row's seed read
+    from its ``config_json`` (rows beyond ``n_rows``, and rows without one: -1)."""
+    add_columns(f, 5)
+
+
 #: Migrations: from-version -> (to-version, description, function(h5py.File)). A store
 #: older than SCHEMA_VERSION is migrated step by step on open (by a writer; readers read
 #: an old store as it is, missing columns as fill values).
@@ -75,6 +93,8 @@ MIGRATIONS: dict[int, tuple[int, str, Any]] = {
            "datasets", _v2_to_v3),
     3: (4, f"add {', '.join(n for n in added_in(4) if not n.endswith('_stderr'))} and"
            " their *_stderr (NaN for old points)", _v3_to_v4),
+    4: (5, "add seed (the ensemble seed, a dimension a campaign may sweep), each row's"
+           " from its config_json", _v4_to_v5),
 }
 
 

@@ -30,10 +30,12 @@ from sweep.store.journal import Journal
 from sweep.store.record import Record
 from sweep.store.schema import (
     COLUMNS,
+    FROM_CONFIG,
     HISTORY_VAR,
     MIGRATION_FILL,
     PROFILE_VARS,
     REPLICA_VARS,
+    config_values,
     profile_path,
 )
 
@@ -80,7 +82,9 @@ def table_columns(f: h5py.File, names: Iterable[str] | None = None,
                   n: int | None = None) -> dict[str, np.ndarray]:
     """The committed rows of the table columns ``names`` (default: all of
     :data:`sweep.store.schema.COLUMNS`), strings decoded; a column an older schema version
-    lacks reads as its fill value (:data:`sweep.store.schema.MIGRATION_FILL` where given)."""
+    lacks reads as its fill value (:data:`sweep.store.schema.MIGRATION_FILL` where given;
+    a :data:`sweep.store.schema.FROM_CONFIG` column as each row's value in its
+    ``config_json``, as the migration fills it)."""
     table = f["table"]
     n = n_rows(f) if n is None else n
     wanted = set(names) if names is not None else None
@@ -90,6 +94,9 @@ def table_columns(f: h5py.File, names: Iterable[str] | None = None,
             continue
         if c.name in table:
             out[c.name] = texts(table[c.name][:n])
+        elif c.name in FROM_CONFIG:
+            out[c.name] = np.asarray(config_values(c.name, table["config_json"][:n]),
+                                     dtype=np.int64 if c.kind == "int" else None)
         else:
             out[c.name] = np.full(n, MIGRATION_FILL.get(c.name, c.fill),
                                   dtype=object if c.kind == "str" else None)

@@ -24,9 +24,8 @@ from typing import Any
 
 import numpy as np
 
-import floewave
 from sweep.errors import UnstorableError
-from sweep.identity import canonical_json
+from sweep.identity import DIMENSIONS, canonical_json
 from sweep.protocol import Outcome
 from sweep.store.cells import check_profiles, normalise_record
 from sweep.store.journal import encode
@@ -135,7 +134,7 @@ def _row_of(point: Any, out: Outcome, config: dict[str, Any] | None,
             provenance: Callable[[int, str], str] | None) -> dict[str, Any]:
     """The record dict of ``point`` from outcome ``out`` (before normalisation)."""
     row: dict[str, Any] = {name: getattr(point.config, name)
-                           for name in floewave.SWEPT_FIELDS}
+                           for name in DIMENSIONS}
     scalars = out.scalars
     unusable = []
     # the model's declared outputs (floewave.outputs) as the kind declared: those stored
@@ -153,7 +152,7 @@ def _row_of(point: Any, out: Outcome, config: dict[str, Any] | None,
         out = dataclasses.replace(
             out, status="failed", profiles={}, residual_history=np.zeros(0),
             message="the result does not fit the schema: " + ", ".join(unusable))
-        row = {name: getattr(point.config, name) for name in floewave.SWEPT_FIELDS}
+        row = {name: getattr(point.config, name) for name in DIMENSIONS}
     row.update(hash=point.hash, status=out.status, message=out.message,
                host=out.host, rank=int(out.rank), pid=int(out.pid),
                start_time=out.start_time, end_time=out.end_time,

@@ -23,6 +23,7 @@ A point is committed when its row index is below ``/table.attrs["n_rows"]``.
 """
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 from typing import Any
 
@@ -33,10 +34,11 @@ from floewave import outputs
 __all__ = ["SCHEMA_VERSION", "FORMAT", "Column", "OWN_HEAD", "OWN_TAIL", "COLUMNS",
            "RESULT_COLUMNS", "model_columns", "DERIVED", "DERIVED_FROM",
            "PROFILE_VARS", "REPLICA_VARS",
-           "STATUSES", "ADDED_IN", "MIGRATION_FILL", "HISTORY_VAR", "ROOT_ATTRS", "RUN_ATTRS",
+           "STATUSES", "ADDED_IN", "MIGRATION_FILL", "FROM_CONFIG", "config_values",
+           "HISTORY_VAR", "ROOT_ATTRS", "RUN_ATTRS",
            "column", "profile_path"]
 
-SCHEMA_VERSION = 4
+SCHEMA_VERSION = 5
 FORMAT = "sweep-store"
 
 #: Point statuses: the model's three plus sweep's four (``crashed``: its worker died
@@ -71,6 +73,8 @@ OWN_HEAD: tuple[Column, ...] = (
     _C("eps", "float", "1", "nominal restitution coefficient"),
     _C("d_f", "float", "m", "initial floe-floe distance"),
     _C("dispersion", "str", "", "dispersion relation (ep, ml, ow)"),
+    _C("seed", "int", "1", "ensemble seed of the point's replicas (a swept dimension when a"
+       " campaign sweeps it)"),
     _C("status", "str", "", "converged, converged_noisy, not_converged, failed, invalid,"
        " crashed, timeout"),
     _C("message", "str", "", "reason for failed/invalid (traceback with rank and host)"),
@@ -119,10 +123,15 @@ ADDED_IN = {"compact_zone": 2, "compact_end": 2, "ice_extent": 2,
             **{name: 4 for name in ("W_c_gap", "W_c_gap_stderr", "contact_fraction_mean",
                                     "contact_fraction_mean_stderr", "collision_rate",
                                     "collision_rate_stderr", "dissipation_per_collision",
-                                    "dissipation_per_collision_stderr")}}
+                                    "dissipation_per_collision_stderr")},
+            "seed": 5}
 #: Fill value of a column added by a migration, where it differs from the column's fill
 #: (every point stored before schema 3 ran one trajectory; schema 4's columns: NaN).
 MIGRATION_FILL = {"replicas": 1}
+#: Columns added by a migration whose value is the configuration field of the same name,
+#: read from each row's ``config_json`` (schema 5's ``seed``: every point had one): the
+#: migration fills them so, and a reader of an older store reads them so.
+FROM_CONFIG = ("seed",)
 
 #: Per-point profiles (``/profiles/<hh>/<hash>/<name>``): name -> (units, long_name).
 PROFILE_VARS: dict[str, tuple[str, str]] = {o.name: (o.unit, o.long_name)
@@ -155,6 +164,21 @@ ROOT_ATTRS = {
 RUN_ATTRS = ("started", "ended", "host", "mpi_size", "sweep_version", "floewave_version",
              "model_version", "git_commit", "git_dirty", "python", "numpy", "numba",
              "h5py", "mpi4py", "mpi_library", "command", "outcome")
+
+
+def config_values(name: str, config_jsons: Any) -> list[Any]:
+    """Field ``name`` of each row's ``config_json`` (the column's fill where a row has no
+    readable configuration or the configuration lacks the field)."""
+    fill = column(name).fill
+    out = []
+    for cj in config_jsons:
+        try:
+            cfg = json.loads(cj.decode() if isinstance(cj, bytes) else cj)
+            cfg = cfg.get("config", cfg)
+            out.append(cfg.get(name, fill))
+        except (ValueError, AttributeError, TypeError):
+            out.append(fill)
+    return out
 
 
 def column(name: str) -> Column:

@@ -9,9 +9,8 @@ from pathlib import Path
 
 import h5py
 
-import floewave
 from sweep.errors import SchemaVersionError
-from sweep.identity import HASH_LENGTH
+from sweep.identity import DIMENSIONS, HASH_LENGTH
 from sweep.store import reader
 from sweep.store.migrate import migration_steps
 from sweep.store.schema import (
@@ -85,7 +84,7 @@ def validate(path: str | Path) -> list[str]:
         if problems:
             return problems
         table = f["table"]
-        swept_names = tuple(floewave.SWEPT_FIELDS)
+        swept_names = tuple(DIMENSIONS)
         cols = reader.table_columns(f, ("hash", "status", "config_json", "provenance",
                                         *swept_names), n)
         hashes, status = list(cols["hash"]), list(cols["status"])

@@ -389,24 +389,29 @@ def test_a_verdict_across_seeds_stands_only_where_every_seed_gives_it():
 
 
 def test_seeded_campaign_files_differ_only_in_their_seed(tmp_path):
+    """The seeds are swept (the last dimension); everything else is the shipped file's,
+    and the swept seed 0 points are the shipped campaign's points."""
     from sweep.config import load_campaign
     from herman2019.seeds import seeded_configs
 
-    out = seeded_configs(pc.default_configs(), 7, tmp_path / "c")
+    out = seeded_configs(pc.default_configs(), (0, 7), tmp_path / "c")
     for name in claims.PAPER_CAMPAIGNS:
         old = load_campaign(pc.default_configs() / f"{name}.toml")
-        new = load_campaign(out / f"{name}.toml")
-        assert new.base.seed == 7 and old.base.seed == 0
-        assert new.base.replace(seed=0) == old.base and new.sweep == old.sweep
+        new = load_campaign(out[name])
+        assert old.base.seed == 0 and new.base == old.base
+        assert new.sweep == {**old.sweep, "seed": (0, 7)} and new.run == old.run
+        assert {p.hash for p in old.points()} == {p.hash for p in new.points()
+                                                  if p.swept["seed"] == 0}
     bad = tmp_path / "bad"
     bad.mkdir()
     for name in claims.PAPER_CAMPAIGNS:
         (bad / f"{name}.toml").write_text("[base]\n[sweep]\neps = [0.2]\n")
     with pytest.raises(ValueError, match="seed = N"):
-        seeded_configs(bad, 1, tmp_path / "c2")
+        seeded_configs(bad, (1,), tmp_path / "c2")
 
 
-def test_cli_seeds_runs_each_seed_into_its_own_stores(tmp_path, capsys, monkeypatch):
+def test_cli_seeds_runs_the_seeds_swept_into_one_store_per_campaign(tmp_path, capsys,
+                                                                   monkeypatch):
     # the Fig. 4 trace's length is not what this test is about (tests of its own: above
     # and in test_paper_claims_new.py)
     monkeypatch.setattr("herman2019.traces.PERIODS", 4)
@@ -415,9 +420,9 @@ def test_cli_seeds_runs_each_seed_into_its_own_stores(tmp_path, capsys, monkeypa
     assert main(["check", "--stores", str(d), "--run", "--seeds", "0", "1",
                  "--compute", "sweep.testing:fake_point"]) == 0
     table = capsys.readouterr().out
-    for seed in (0, 1):
-        for name in claims.PAPER_CAMPAIGNS:
-            assert (d / f"seed{seed}" / f"{name}.h5").exists()
+    from sweep.analysis.load import load
+    for name in claims.PAPER_CAMPAIGNS:
+        assert set(load(d / f"{name}.h5")["seed"]) == {0, 1}
     lines = table.splitlines()
     assert lines[0].startswith("| # | claim") and "seed 0 | seed 1 | across seeds" in lines[0]
     rows = [ln for ln in lines if ln.startswith("| ") and ln[2].isdigit()]
@@ -428,3 +433,6 @@ def test_cli_seeds_runs_each_seed_into_its_own_stores(tmp_path, capsys, monkeypa
     out = json.loads(capsys.readouterr().out)
     assert set(out["seeds"]) == {"0", "1"} and len(out["across_seeds"]) == len(rows)
     assert main(["check", "--stores", str(d), "--seeds", "3", "3"]) == 2
+    # a plain check never mixes a settling's seeds: each such store is a problem
+    assert main(["check", "--stores", str(d)]) == 3
+    assert "holds 2 seeds" in capsys.readouterr().err

@@ -113,7 +113,7 @@ def test_schema_3_store_migrates_the_new_columns_as_nan(tmp_path):
     assert all(before[c].isna().all() for c in new_cols)
     run_campaign(camp, str(path), compute="sweep.testing:fake_point")    # a writer
     with h5py.File(path, "r") as f:
-        assert int(f.attrs["schema_version"]) == SCHEMA_VERSION == 4
+        assert int(f.attrs["schema_version"]) == SCHEMA_VERSION == 5
         assert all(np.isnan(f["table"][c][:]).all() for c in new_cols)
     assert sweep.validate(path) == []
     after = sweep.load(path)

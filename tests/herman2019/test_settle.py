@@ -19,6 +19,7 @@ from herman2019.points import Check
 from tests.herman2019.test_check import _fig2 as fig2_table
 
 FRACTIONS = (1 / 8, 1 / 4, 1 / 2, 1.0)
+DATA = Path(__file__).resolve().parents[1] / "data"
 
 
 # ---------------------------------------------------------------------- the boundaries
@@ -232,11 +233,11 @@ def test_cli_settle_runs_the_looks_and_reports(tmp_path, capsys, monkeypatch):
     out = json.loads(capsys.readouterr().out)
     assert out["looks"] == [4, 8] and len(out["boundaries"]) == 2
     assert sum(out["counts"].values()) == len(out["rows"])
-    for seed in (0, 1, 2, 3):
-        for name in claims.PAPER_CAMPAIGNS:
-            assert (d / f"seed{seed}" / f"{name}.h5").exists()
+    from sweep.analysis.load import load
+    for name in claims.PAPER_CAMPAIGNS:     # one store per campaign, its seeds swept
+        assert {0, 1, 2, 3} <= set(load(d / f"{name}.h5")["seed"])
     # the second look ran only the campaigns of rows still open after the first
-    second = [r for r in out["runs"] if r["seed"] >= 4]
+    second = [r for r in out["runs"] if max(r["seeds"]) >= 4]
     open_after_1 = {n for r in out["rows"] if r["look"] == 2 and r["extendable"]
                     for n in pooling.campaigns_of(_check(r))}
     assert {n for r in second for n in r["campaigns"]} <= open_after_1 | set()
@@ -251,8 +252,7 @@ def test_cli_settle_runs_the_looks_and_reports(tmp_path, capsys, monkeypatch):
     table = capsys.readouterr().out
     assert "| seeds (look) |" in table and "this run added 0 points" in table
     # a budget beyond the stored seeds, without --run: no row is read past the seeds it
-    # has (seed 8 and up missing, or present but empty), and the audit runs on what is there
-    (d / "seed9").mkdir()
+    # has (seed 8 and up missing), and the audit runs on what is there
     assert main(["check", "--stores", str(d), "--settle", "--max-seeds", "16",
                  "--json"]) == 0
     wide = json.loads(capsys.readouterr().out)
@@ -373,23 +373,56 @@ def test_the_floor_stops_a_row_only_when_asked(tmp_path, monkeypatch):
 
 
 def test_run_seeds_in_processes_stores_what_one_process_stores(tmp_path):
+    """A look's seeds run by ``sweep run`` under mpiexec (2 workers) store what one
+    process stores; a later look extends the campaign by its seeds."""
     from sweep.analysis.load import load
+    from sweep.testing import find_mpiexec
     from herman2019.check import default_configs
+    from herman2019.seeds import run_seeds
 
+    if find_mpiexec() is None:
+        pytest.skip("no mpiexec")
     names = ["spring_soft", "fig2"]
     seeds = (5, 6)
-    one = settle._run_seeds(tmp_path / "one", default_configs(), seeds, names,
-                            "sweep.testing:fake_point", None, 1)
-    two = settle._run_seeds(tmp_path / "two", default_configs(), seeds, names,
-                            "sweep.testing:fake_point", None, 2)
-    assert [r["seed"] for r in two] == list(seeds)
-    assert [r["points"] for r in two] == [r["points"] for r in one] == [9, 9]
-    for s in seeds:
-        for n in names:
-            a = load(tmp_path / "one" / f"seed{s}" / f"{n}.h5").sort_index()
-            b = load(tmp_path / "two" / f"seed{s}" / f"{n}.h5").sort_index()
-            cols = [k for k in a.columns if k.startswith(("a_end", "W_c", "alpha"))]
-            assert cols and a[cols].equals(b[cols])
+    one = run_seeds(tmp_path / "one", default_configs(), seeds, names,
+                    "sweep.testing:seeded_point", None, 1)
+    two = run_seeds(tmp_path / "two", default_configs(), seeds, names,
+                    "sweep.testing:seeded_point", None, 2)
+    assert two["seeds"] == list(seeds) and two["campaigns"] == names
+    assert two["per_seed"] == one["per_seed"] == {5: 9, 6: 9}
+    for n in names:
+        a = load(tmp_path / "one" / f"{n}.h5").set_index("hash").sort_index()
+        b = load(tmp_path / "two" / f"{n}.h5").set_index("hash").sort_index()
+        cols = [k for k in a.columns if k.startswith(("seed", "a_end", "W_c", "alpha"))]
+        assert cols and a[cols].equals(b[cols]) and set(a["seed"]) == set(seeds)
+    more = run_seeds(tmp_path / "one", default_configs(), (5, 6, 7), names[:1],
+                     "sweep.testing:seeded_point", None, 1)
+    assert more["per_seed"] == {5: 0, 6: 0, 7: 1}
+    assert sorted(set(load(tmp_path / "one" / "spring_soft.h5")["seed"])) == [5, 6, 7]
+
+
+@pytest.mark.slow  # 2 looks of 11 paper campaigns on seeded_point (~20 s)
+def test_settled_verdicts_and_numbers_are_those_of_the_seed_stores(tmp_path, capsys,
+                                                                  monkeypatch):
+    """The settling with its seeds swept in one store per campaign gives the table and
+    settled.json (timings apart) that the settling with one store per seed and campaign
+    gave (tests/data/settle_seeded_point.*, made at 8d0a81e with seeds in
+    <stores>/seed<S>/ and a process pool of their own)."""
+    monkeypatch.setattr("herman2019.traces.PERIODS", 4)
+    monkeypatch.setattr("herman2019.traces.SPIN_UP", 1)
+    d = tmp_path / "paper"
+    argv = ["check", "--stores", str(d), "--settle", "--max-seeds", "8"]
+    assert main([*argv, "--run", "--compute", "sweep.testing:seeded_point", "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    got.pop("runs")
+    timing = {"cpu_s", "wall_s", "elapsed_s", "stored_core_s", "stored_core_s_seeds_2_up"}
+    got["cost"] = {k: v for k, v in got["cost"].items() if k not in timing}
+    want = json.loads((DATA / "settle_seeded_point.json").read_text())
+    assert got == want
+    assert main(argv) == 0
+    table = [line for line in capsys.readouterr().out.splitlines()
+             if not line.startswith("Settling's cost")]
+    assert table == (DATA / "settle_seeded_point.md").read_text().splitlines()
 
 
 def test_a_floored_row_says_why_in_numbers():

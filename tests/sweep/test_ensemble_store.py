@@ -100,7 +100,7 @@ def test_schema_2_store_read_as_single_trajectories_and_migrated(store, tmp_path
     assert "replica" not in ds.dims and "W_c_replicas" not in ds
     run_campaign(parse_campaign(TOML, "e.toml"), str(path))      # a writer: migrated
     with h5py.File(path, "r") as f:
-        assert int(f.attrs["schema_version"]) == SCHEMA_VERSION == 4
+        assert int(f.attrs["schema_version"]) == SCHEMA_VERSION == 5
         assert all(name in f["table"] for name in new_cols)
     assert sweep.validate(path) == []
     new = sweep.load(path)
