@@ -14,10 +14,13 @@ from __future__ import annotations
 import io
 import subprocess
 import tarfile
+from collections.abc import Collection
 from pathlib import Path
 
 import h5py
 import numpy as np
+
+from sweep.store.schema import ADDED_IN
 
 #: the git checkout this package lives in
 REPOSITORY = Path(__file__).resolve().parent.parent
@@ -48,16 +51,28 @@ def _table(f: h5py.File) -> dict[str, np.ndarray]:
     return {k: t[k][:n] for k in t}
 
 
-def compare_stores(a: Path, b: Path) -> tuple[list[str], str]:
+def columns_added_since(path: Path) -> frozenset[str]:
+    """The table columns this sweep's schema added after the schema version of the store
+    at ``path`` (:data:`sweep.store.schema.ADDED_IN`)."""
+    with h5py.File(path, "r", locking=False) as f:
+        version = int(f.attrs.get("schema_version", 1))
+    return frozenset(name for name, v in ADDED_IN.items() if v > version)
+
+
+def compare_stores(a: Path, b: Path, added: Collection[str] = ()) -> tuple[list[str], str]:
     """(differences, summary line) of stores ``a`` and ``b``: equal when the list is empty.
 
     Equal means: the same columns and the same set of hashes; per column but
     :data:`RUN_SPECIFIC`, the rows (matched by hash) equal (floats byte for byte, so
     -0.0 is not +0.0 and NaN must be the same NaN); per point the same profile datasets,
-    each byte for byte."""
+    each byte for byte. ``added``: columns that ``b`` may hold and ``a`` not (a later
+    schema's, :func:`columns_added_since`); named in the summary, not compared."""
     problems: list[str] = []
     with h5py.File(a, "r", locking=False) as fa, h5py.File(b, "r", locking=False) as fb:
         ta, tb = _table(fa), _table(fb)
+        extra = sorted(set(tb) - set(ta) & set(added))
+        for k in extra:
+            del tb[k]
         if set(ta) != set(tb):
             problems.append(f"columns differ: {sorted(set(ta) ^ set(tb))}")
         ha, hb = _text(ta["hash"]), _text(tb["hash"])
@@ -89,6 +104,8 @@ def compare_stores(a: Path, b: Path) -> tuple[list[str], str]:
                 if ga[var][()].tobytes() != gb[var][()].tobytes():
                     problems.append(f"profile differs: {h} {var}")
     summary = (f"{len(ha)} rows, {len(ta)} columns ({len(RUN_SPECIFIC & set(ta))}"
-               f" run-specific skipped), {n} profile datasets: "
+               f" run-specific skipped"
+               + (f"; only in the second, of a later schema: {', '.join(extra)}" if extra
+                  else "") + f"), {n} profile datasets: "
                + ("EQUAL" if not problems else f"{len(problems)} DIFFERENCES"))
     return problems, summary

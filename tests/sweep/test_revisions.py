@@ -47,3 +47,23 @@ def test_export_revision_writes_the_committed_files(tmp_path):
                           capture_output=True, check=True).stdout
     tree = export_revision("HEAD", tmp_path / "tree", ("sweep/__init__.py",))
     assert (tree / "sweep" / "__init__.py").read_bytes() == head
+
+
+def test_a_column_of_a_later_schema_is_named_not_a_difference(power_store, tmp_path):
+    """A store of an older schema (here: schema 4, without ``seed``) against this one: the
+    columns added since are named in the summary; any other difference still counts."""
+    from sweep.revisions import columns_added_since
+
+    store = power_store(TOML)
+    old = tmp_path / "old.h5"
+    shutil.copy(store, old)
+    with h5py.File(old, "r+") as f:
+        del f["table"]["seed"]
+        f.attrs["schema_version"] = 4
+    assert "seed" in columns_added_since(old)
+    assert compare_stores(old, store)[0] == ["columns differ: ['seed']"]
+    problems, summary = compare_stores(old, store, columns_added_since(old))
+    assert problems == [] and "later schema: seed" in summary and summary.endswith("EQUAL")
+    with h5py.File(old, "r+") as f:
+        f["table"]["W_c"][0] = f["table"]["W_c"][0] + 1.0
+    assert compare_stores(old, store, columns_added_since(old))[0] == ["column differs: W_c"]
