@@ -210,8 +210,10 @@ def _known_outcomes(todo: list[Point], store: ResultSink, master: Master,
     """The points whose outcome is known without a worker, as ``(point, status,
     message)``: impossible points (``invalid``) and points that killed their worker
     ``limit`` (``[run] max_attempts``) times (``crashed``). Points in flight when an
-    earlier run died become the master's suspects (each computed alone)."""
+    earlier run died become the master's suspects (each computed alone): per worker the
+    one it was running, not those queued behind it (:func:`sweep.store.attempts.running`)."""
     known = []
+    suspects = store.suspects()
     for p in todo:
         if p.invalid:
             known.append((p, "invalid", p.invalid))
@@ -223,6 +225,6 @@ def _known_outcomes(todo: list[Point], store: ResultSink, master: Master,
                           f" point was the only one being computed ({where}); not tried"
                           f" again ([run] max_attempts = {limit}); --retry-failed tries"
                           " it again"))
-        elif store.handouts(p.hash):
+        elif p.hash in suspects:
             master.suspects.add(p.hash)
     return known

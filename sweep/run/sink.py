@@ -17,6 +17,7 @@ from typing import Any, Literal, Protocol
 
 from sweep.config import Point
 from sweep.protocol import Outcome, Packed, unpacked
+from sweep.store.attempts import running
 from sweep.store.record import Record, provenance_json
 from sweep.store.store import Store
 
@@ -66,6 +67,10 @@ class ResultSink(Protocol):
     def status_of(self, h: str) -> str: ...
 
     def handouts(self, h: str) -> list[tuple[int, int, bool]]: ...
+
+    def suspects(self) -> set[str]:
+        """The points that may have been running when an earlier run died
+        (:func:`sweep.store.attempts.running`)."""
 
     # the master's own records (``invalid``, ``crashed``), one group commit
     def add(self, record: Record) -> None: ...
@@ -132,6 +137,9 @@ class InlineSink:
 
     def handouts(self, h: str) -> list[tuple[int, int, bool]]:
         return self.store.handouts(h)
+
+    def suspects(self) -> set[str]:
+        return running(self.store.scan)
 
     def add(self, record: Record) -> None:
         self.store.add(record)
