@@ -116,6 +116,8 @@ class Master:
         #: batch's commit: ``store.waits_for``)
         self.commit_time = math.nan
         self.at_workers = 0  # tasks sent whose results have not arrived
+        #: results handed to the store and not yet reported stored, in order
+        self._unstored: collections.deque[str] = collections.deque()
 
     @property
     def depth(self) -> int:
@@ -162,6 +164,7 @@ class Master:
             w: collections.deque() for w in self.transport.workers}
         self._queues = queues
         self.outstanding = self.at_workers = 0
+        self._unstored.clear()
         stop_at = math.inf
         try:
             while pending or suspects or self.outstanding:
@@ -231,9 +234,11 @@ class Master:
                 " run the same command again")
 
     def release_abandoned(self) -> None:
-        """Journal that the points still handed out were abandoned by a stop (they did
-        not kill their worker: no attempt is counted)."""
-        hashes = [p.hash for q in self._queues.values() for p, _ in q]
+        """Journal that the points still handed out were abandoned by a stop or an error
+        of the master or its store (none of them killed its worker: no attempt is
+        counted): those at the workers, and those whose results the store did not report
+        stored."""
+        hashes = [*self._unstored, *(p.hash for q in self._queues.values() for p, _ in q)]
         self.store.release(hashes)
 
     def _store_batch(self, batch: list[tuple[int, str, Any]],
@@ -260,6 +265,7 @@ class Master:
                 raise WorkerError(f"worker rank {worker} returned {kind} of point"
                                   f" {str(getattr(payload, 'hash', ''))[:12]}, expected the"
                                   f" result of {point.hash[:12]} (protocol error)")
+            self._unstored.append(point.hash)  # before: a submit may find the writer dead
             self.store.submit(point, payload, config)
             results += 1
             wall += float(payload.wall_time)
@@ -274,10 +280,12 @@ class Master:
             self._timed("commit", t0)
         return stored
 
-    @staticmethod
-    def _count(statuses: list[str], progress: Progress, summary: RunSummary) -> int:
-        """Count stored points (their statuses) in the summary and the progress."""
+    def _count(self, statuses: list[str], progress: Progress, summary: RunSummary) -> int:
+        """Count stored points (their statuses, in the order their results were
+        submitted) in the summary and the progress."""
         for status in statuses:
+            if self._unstored:
+                self._unstored.popleft()
             summary.computed += 1
             summary.counts[status] = summary.counts.get(status, 0) + 1
             progress.update(status)

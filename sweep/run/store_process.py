@@ -57,6 +57,7 @@ from sweep.run.pipe import (
 )
 from sweep.run.sink import Provenance
 from sweep.run.store_writer import ORPHANED, serve
+from sweep.store.attempts import release_orphaned
 from sweep.store.store import Store
 
 __all__ = ["StoreProcess", "serve", "ORPHANED", "WRITER_MODES"]
@@ -245,9 +246,17 @@ class StoreProcess:
         self._reply()
 
     def release(self, hashes: list[str]) -> None:
-        if hashes and not self._closed:
+        """Journal that handed-out points were abandoned (no attempt): by the writer, or
+        by the master once the writer has ended without closing the store (it died: the
+        points did not kill it; :func:`sweep.store.attempts.release_orphaned`)."""
+        if not hashes:
+            return
+        if not self._closed:
             with contextlib.suppress(StoreError):
                 self._send(RELEASE, dumps(hashes))
+                return
+        if hasattr(self, "path") and self.proc.poll() is not None:
+            release_orphaned(self.path, hashes)
 
     def take_stored(self) -> list[str]:
         """The statuses of the results committed since the last call (not waiting)."""

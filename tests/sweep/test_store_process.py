@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import signal
+import sys
 import time
 
 import pandas as pd
@@ -148,3 +149,51 @@ def test_a_master_gone_without_closing_leaves_a_closed_store(tmp_path, campaign)
     assert _outcomes(path)[-1] == ORPHANED
     with Store(path, campaign) as st:  # closed cleanly: the lock is free
         assert len(st) == len(results)
+
+
+# ---------------------------------------------------------------- attempts (issue 45)
+_WRITERS: list[StoreProcess] = []
+
+
+def writer_killing_point(cfg):
+    """A good point, during whose computation the store's writer process is killed."""
+    os.kill(_WRITERS[-1].pid, signal.SIGKILL)
+    time.sleep(0.2)
+    return sweep.testing.fake_point(cfg)
+
+
+@pytest.fixture
+def process_writer(monkeypatch):
+    """In-process runs whose store is written by a writer process (as MPI runs' is)."""
+    import sweep.run.launch as launch
+
+    def open_sink(path, campaign, writer, **kw):
+        # the writer keeps descriptors 0-2 only (pytest's capture of sys.stderr is another)
+        with monkeypatch.context() as m:
+            m.setattr(sys, "stderr", sys.__stderr__)
+            _WRITERS.append(StoreProcess(path, campaign, opener=Store, **kw))
+        return _WRITERS[-1]
+
+    monkeypatch.setattr(launch, "_open_sink", open_sink)
+
+
+def test_a_writer_killed_while_a_point_runs_alone_is_no_attempt(tmp_path, campaign,
+                                                                process_writer):
+    """kill -9 of the writer while a suspect point is computed alone: the master knows
+    the writer died (StoreError, exit 3) and journals the point's release; after more
+    such deaths than [run] max_attempts the good point is still computed, not stored
+    ``crashed``."""
+    from sweep import run_campaign
+
+    path = tmp_path / "s.h5"
+    first = next(iter(campaign.points()))
+    with Store(path, campaign) as st:  # a run died while it ran: a suspect
+        st.handout([(first.hash, 1)])
+    for _ in range(campaign.run.max_attempts + 1):
+        with pytest.raises(StoreError, match="was killed by signal 9"):
+            run_campaign(campaign, str(path),
+                         compute="tests.sweep.test_store_process:writer_killing_point")
+    s = run_campaign(campaign, str(path), compute="sweep.testing:fake_point")
+    assert s.counts.get("crashed", 0) == 0 and s.computed == campaign.size
+    assert set(sweep.load(path)["status"]) <= {"converged", "converged_noisy"}
+    assert sweep.validate(path) == []
