@@ -21,7 +21,7 @@ from sweep.provenance import environment
 from sweep.run.compute import DEFAULT_COMPUTE
 from sweep.run.master import Master, RunSummary
 from sweep.run.progress import Progress, log_line
-from sweep.run.signals import GraceExpired, StopSignals
+from sweep.run.signals import GraceExpired, StopSignals, Unanswered
 from sweep.run.sink import InlineSink, ResultSink
 from sweep.run.store_process import StoreProcess
 from sweep.run.transport import InProcessTransport, MPITransport, Transport
@@ -73,9 +73,15 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
         with StopSignals(campaign.run.grace_period, in_process=not mpi) as signals:
             git = {"git_commit": info["git_commit"], "git_dirty": info["git_dirty"],
                    "sweep_version": info["sweep_version"]}
-            store = _open_sink(store_path, campaign, campaign.run.writer if mpi else "inline",
-                               extend=extend, run_info=info, verify=verify,
-                               worker_env=transport.worker_env, git=git)
+            try:
+                store = _open_sink(store_path, campaign,
+                                   campaign.run.writer if mpi else "inline", extend=extend,
+                                   run_info=info, verify=verify,
+                                   worker_env=transport.worker_env, git=git, stop=signals)
+            except Unanswered:  # the writer, stuck while opening, was killed (said so)
+                raise Interrupted(f"campaign stopped by {signals.requested} while the store"
+                                  " was being opened; nothing was lost — the campaign is"
+                                  " resumable: run the same command again") from None
             outcome = "complete"
             try:
                 if signals.requested:
@@ -91,6 +97,11 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
             except Interrupted:
                 outcome = "interrupted (resumable)"
                 raise
+            except Unanswered:  # the writer, stuck after a stop, was killed (said so)
+                outcome = "interrupted (resumable)"
+                raise Interrupted(f"campaign stopped by {signals.requested}: the store's"
+                                  " writer did not answer; the campaign is resumable: run"
+                                  " the same command again") from None
             except BaseException as exc:
                 outcome = f"error: {type(exc).__name__}: {exc}"
                 raise
@@ -114,13 +125,15 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
 
 def _open_sink(store_path: str, campaign: Campaign, writer: str, *, extend: bool,
                run_info: dict[str, Any], verify: bool,
-               worker_env: dict[int, dict[str, Any]], git: dict[str, Any]) -> ResultSink:
+               worker_env: dict[int, dict[str, Any]], git: dict[str, Any],
+               stop: StopSignals | None = None) -> ResultSink:
     """The open store as the master's :class:`sweep.run.sink.ResultSink`: written by a
     writer process (``writer`` "process": the master only schedules) or by the master
     itself ("inline")."""
     if writer == "process":
         return StoreProcess(store_path, campaign, extend=extend, run_info=run_info,
-                            verify=verify, worker_env=worker_env, git=git, opener=Store)
+                            verify=verify, worker_env=worker_env, git=git, opener=Store,
+                            stop=stop)
     return InlineSink(Store(store_path, campaign, extend=extend, run_info=run_info,
                             verify=verify), worker_env, git)
 

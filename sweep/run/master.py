@@ -30,7 +30,7 @@ from sweep.errors import Interrupted, WorkerError
 from sweep.protocol import Kind, Outcome, Task, WorkerFailure
 from sweep.run.compute import DEFAULT_COMPUTE
 from sweep.run.progress import Progress
-from sweep.run.signals import GraceExpired, StopSignals
+from sweep.run.signals import GraceExpired, StopSignals, Unanswered
 from sweep.run.sink import ResultSink
 from sweep.run.transport import Transport
 from sweep.store.record import Record
@@ -221,8 +221,9 @@ class Master:
                         break
                     batch.append(more)
                 self.outstanding -= self._store_batch(batch, queues, progress, summary)
-        except GraceExpired:
-            summary.interrupted = summary.interrupted or "signal"
+        except GraceExpired as exc:  # Unanswered: the writer, killed as stuck after a stop
+            summary.interrupted = summary.interrupted or (
+                signals.requested if isinstance(exc, Unanswered) else "") or "signal"
         if self.outstanding:  # results at a writer process: wait for them
             self.outstanding -= self._count(self.store.sync(), progress, summary)
         if summary.interrupted:

@@ -34,6 +34,7 @@ import os
 import pickle
 import subprocess
 import sys
+import time
 import traceback
 from pathlib import Path
 from typing import Any, Literal
@@ -49,12 +50,14 @@ from sweep.run.pipe import (
     HANDOUT,
     RELEASE,
     RESULT,
+    SLICE,
     STORED,
     Channel,
     Child,
     become_writer,
     dumps,
 )
+from sweep.run.signals import Unanswered
 from sweep.run.sink import Provenance
 from sweep.run.store_writer import ORPHANED, serve
 from sweep.store.attempts import release_orphaned
@@ -68,6 +71,21 @@ WRITER_MODES = ("process", "inline")
 
 #: [s] how long :meth:`StoreProcess.close` waits for the writer to close the store
 CLOSE_WAIT = 600.0
+#: [s] past a stop's grace period, how long the writer may still take to answer (a commit
+#: or the close under way) before it is taken for stuck (a hung write) and killed; a
+#: writer that is stopped (SIGSTOP) is taken for stuck at once
+ANSWER_MARGIN = 5.0
+#: [s] how long a killed writer is waited for (in a hung write it ends when the write does)
+KILL_WAIT = 5.0
+
+
+def _stopped(pid: int) -> bool:
+    """Process ``pid`` is stopped (SIGSTOP) or traced (Linux's /proc; False elsewhere)."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as fh:
+            return fh.read().rpartition(b")")[2].split()[0] in (b"T", b"t")
+    except (OSError, IndexError):
+        return False
 
 
 class StoreProcess:
@@ -92,8 +110,13 @@ class StoreProcess:
     def __init__(self, path: str | Path, campaign: Any, *, extend: bool = False,
                  run_info: dict[str, Any] | None = None, verify: bool = False,
                  worker_env: dict[int, dict[str, Any]] | None = None,
-                 git: dict[str, Any] | None = None, opener: Any = None) -> None:
+                 git: dict[str, Any] | None = None, opener: Any = None,
+                 stop: Any = None) -> None:
         opener = Store if opener is None else opener
+        #: the run's :class:`sweep.run.signals.StopSignals`: after a stop request, every
+        #: wait on the writer ends with its grace period (:meth:`_check_stop`)
+        self.stop = stop
+        self._gave_up = False
         args = {"path": str(path), "campaign": campaign, "extend": extend,
                 "run_info": run_info or {}, "verify": verify,
                 "worker_env": worker_env or {}, "git": git or {}}
@@ -126,6 +149,7 @@ class StoreProcess:
         os.close(to_writer[0])
         os.close(to_master[1])
         self._chan = Channel(to_master[0], to_writer[1], nonblocking_writes=True)
+        self._chan.on_wait = self._check_stop
         #: the master's own records' provenance (the writer builds the workers')
         self.provenance = Provenance(args["worker_env"], args["git"])
         self._stored: list[str] = []
@@ -180,6 +204,32 @@ class StoreProcess:
                           f" {how}; what it committed is stored, and the next run opens the"
                           " store from its journal")
 
+    def _stuck(self) -> bool:
+        """A stop's grace period is over and the writer has not answered: it is stopped,
+        or :data:`ANSWER_MARGIN` more has passed."""
+        stop = self.stop
+        if stop is None or not stop.requested:
+            return False
+        now = time.monotonic()
+        return now >= stop.deadline and (now >= stop.deadline + ANSWER_MARGIN
+                                         or _stopped(self.proc.pid))
+
+    def _check_stop(self) -> None:
+        """Between the slices of every wait on the writer: a stuck writer (:meth:`_stuck`)
+        is killed, said so, and :class:`Unanswered` raised (the run stops, resumable: the
+        journal holds what it committed)."""
+        if not self._stuck():
+            return
+        self._gave_up = self._closed = True
+        self.proc.kill()
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            self.proc.wait(KILL_WAIT)
+        print(f"sweep: {self.label}: the store's writer process (pid {self.proc.pid}) did"
+              f" not answer within the grace period after {self.stop.requested}; it was"
+              " killed: what it committed is stored, and the next run opens the store"
+              " from its journal", file=sys.stderr, flush=True)
+        raise Unanswered(self.stop.requested)
+
     def _send(self, kind: int, payload: bytes = b"") -> None:
         if self._closed:
             raise StoreError(f"{self.label}: the store's writer process has ended")
@@ -218,6 +268,8 @@ class StoreProcess:
 
     def commit(self) -> int:
         """Wait until everything sent so far is committed (group commit in the writer)."""
+        if self._gave_up:  # killed as stuck after a stop: nothing more is committed
+            return 0
         self._send(COMMIT)
         self._reply()
         return 0
@@ -297,6 +349,8 @@ class StoreProcess:
                 self.loop_cpu = float(self._reply() or 0.0)
             except StoreError as exc:
                 print(f"sweep: {exc}", file=sys.stderr, flush=True)
+            except Unanswered:
+                pass  # said so
             except Exception as exc:  # noqa: BLE001 - the writer's error at the close
                 print(f"sweep: {self.label}: closing the store: {exc}", file=sys.stderr,
                       flush=True)
@@ -306,11 +360,15 @@ class StoreProcess:
     def _reap(self) -> None:
         self._closed = True
         self._chan.close()
-        try:
-            self.proc.wait(CLOSE_WAIT)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            self.proc.wait()
+        end = time.monotonic() + CLOSE_WAIT
+        while self.proc.poll() is None:  # up to CLOSE_WAIT, or a stop's grace period
+            if time.monotonic() >= end or self._stuck():
+                self.proc.kill()
+                with contextlib.suppress(subprocess.TimeoutExpired):
+                    self.proc.wait(KILL_WAIT)
+                break
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                self.proc.wait(SLICE)
         self.writer_cpu = self.proc.cpu
 
     def __enter__(self) -> StoreProcess:

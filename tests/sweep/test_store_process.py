@@ -4,6 +4,7 @@ a writer that dies is a StoreError and the store reopens whole; a master that en
 closing leaves the writer to commit what it was given and close the store."""
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import sys
@@ -196,4 +197,47 @@ def test_a_writer_killed_while_a_point_runs_alone_is_no_attempt(tmp_path, campai
     s = run_campaign(campaign, str(path), compute="sweep.testing:fake_point")
     assert s.counts.get("crashed", 0) == 0 and s.computed == campaign.size
     assert set(sweep.load(path)["status"]) <= {"converged", "converged_noisy"}
+    assert sweep.validate(path) == []
+
+
+# ---------------------------------------------------------------- a stuck writer (issue 45)
+class _Stop:
+    """What StoreProcess reads of the run's StopSignals: the request and its deadline."""
+
+    requested = ""
+    deadline = float("inf")
+
+
+def test_a_stopped_writer_cannot_make_the_master_deaf(tmp_path, campaign):
+    """The writer is stopped (SIGSTOP: a hung write) while the master waits for it: once
+    a stop is requested, the wait ends with the grace period (the writer is killed and
+    said so), close() returns at once, and the store reopens with what was committed.
+    The same through mpiexec and SIGTERM/SIGINT/SIGUSR1: test_mpi.py (slow tier)."""
+    from sweep.run.signals import GraceExpired
+
+    results = _packed(campaign)
+    path = tmp_path / "s.h5"
+    stop = _Stop()
+    sp = StoreProcess(path, campaign, stop=stop)
+    sp.handout([(r.hash, 1) for r in results[:2]])
+    for r in results[:2]:
+        sp.forward(r)
+    assert len(sp.sync()) == 2
+    os.kill(sp.pid, signal.SIGSTOP)
+    try:
+        stop.requested, stop.deadline = "SIGTERM", time.monotonic() + 0.5
+        t0 = time.monotonic()
+        with pytest.raises(GraceExpired):
+            sp.handout([(results[2].hash, 1)])  # its answer never comes
+        assert time.monotonic() - t0 < 3
+        t0 = time.monotonic()
+        sp.close("interrupted (resumable)")
+        assert time.monotonic() - t0 < 2
+        assert sp.proc.poll() == -signal.SIGKILL
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(sp.pid, signal.SIGKILL)
+            os.kill(sp.pid, signal.SIGCONT)
+    with Store(path, campaign) as st:  # left unclean: reopened from the journal
+        assert len(st) == 2
     assert sweep.validate(path) == []
