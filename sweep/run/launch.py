@@ -113,7 +113,7 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
                 store.close(outcome)
                 # the writer's CPU once its store was open (opening it, which expands
                 # the grid, is start-up, as for an inline master); else its whole life's
-                summary.writer_cpu = store.store_cpu
+                summary.writer_cpu, summary.writer_wall = store.store_cpu, store.store_wall
     except BaseException as exc:
         if mpi and transport is not None:
             _end_mpi_job(exc, transport, master)

@@ -65,8 +65,9 @@ class RunSummary:
     #: [s] compiling or loading the kernels before the first point (:mod:`sweep.run.warmup`)
     warm_up: float = 0.0
     #: CPU seconds of the store's writer process from its store's open to its close (0: the
-    #: master wrote the store itself)
+    #: master wrote the store itself), and the wall seconds of that span (0: not measured)
     writer_cpu: float = 0.0
+    writer_wall: float = 0.0
 
     @property
     def master_cpu_share(self) -> float:
@@ -82,8 +83,8 @@ class RunSummary:
         if self.in_process:
             return text + " (computed in-process)"
         text += f"; master CPU {100 * self.master_cpu_share:.1f}% of a core"
-        if self.writer_cpu and self.loop_elapsed > 0:
-            text += (f", its store writer {100 * self.writer_cpu / self.loop_elapsed:.1f}%")
+        if self.writer_cpu and self.writer_wall > 0:  # over the span it was measured on
+            text += f", its store writer {100 * self.writer_cpu / self.writer_wall:.1f}%"
         return text
 
 

@@ -110,6 +110,10 @@ class ResultSink(Protocol):
         """[s] CPU of a writer beside the master from its store's open to its close
         (0.0: the master writes the store)."""
 
+    @property
+    def store_wall(self) -> float:
+        """[s] the wall time :attr:`store_cpu` was measured over (0.0: not measured)."""
+
 
 class InlineSink:
     """The master writes the store itself: a result becomes its record when it is
@@ -182,4 +186,8 @@ class InlineSink:
 
     @property
     def store_cpu(self) -> float:
+        return 0.0
+
+    @property
+    def store_wall(self) -> float:
         return 0.0

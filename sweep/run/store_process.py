@@ -156,8 +156,9 @@ class StoreProcess:
         self._closed = False
         #: [s] the writer's CPU, its whole life (open and close in it), once it ended
         self.writer_cpu = 0.0
-        #: [s] the writer's CPU from the store's open to the ``CLOSE`` (its own count)
-        self.loop_cpu = 0.0
+        #: [s] the writer's CPU from the store's open to the ``CLOSE`` (its own count), and
+        #: the wall time of that span
+        self.loop_cpu = self.loop_wall = 0.0
         self.label = str(path)
         try:
             info = self._reply()
@@ -340,13 +341,19 @@ class StoreProcess:
         it did not say)."""
         return self.loop_cpu or self.writer_cpu
 
+    @property
+    def store_wall(self) -> float:
+        """[s] the wall time of the writer's own count (0.0 without it: its whole life's
+        CPU is over no span measured)."""
+        return self.loop_wall if self.loop_cpu else 0.0
+
     def close(self, outcome: str = "complete") -> None:
         """Have the writer commit what it was given, record the run's outcome and close
         the store; wait for it to end. A writer that already ended is only reaped."""
         if not self._closed:
             try:
                 self._send(CLOSE, dumps(outcome))
-                self.loop_cpu = float(self._reply() or 0.0)
+                self.loop_cpu, self.loop_wall = map(float, self._reply() or (0.0, 0.0))
             except StoreError as exc:
                 print(f"sweep: {exc}", file=sys.stderr, flush=True)
             except Unanswered:

@@ -108,7 +108,7 @@ class _Writer:
         in groups: once :data:`GROUP_WINDOW` has passed since the first staged one, or
         :data:`GROUP_MAX` are staged, or the master asks (``COMMIT``, ``CLOSE``);
         hand-outs are journaled and acknowledged as they come, meanwhile."""
-        cpu0 = time.process_time()
+        wall0, cpu0 = time.monotonic(), time.process_time()  # the wall span encloses the CPU's
         first = 0.0  # when the oldest staged result was staged
         while True:
             wait = (None if not self.staged else
@@ -136,7 +136,8 @@ class _Writer:
             if outcome is not None:
                 self.store.close(outcome)
                 if outcome != ORPHANED:
-                    self._tell(OK, dumps(time.process_time() - cpu0))
+                    cpu = time.process_time() - cpu0
+                    self._tell(OK, dumps((cpu, time.monotonic() - wall0)))
                 return
 
     def _fail(self, exc: BaseException) -> None:

@@ -241,3 +241,21 @@ def test_a_stopped_writer_cannot_make_the_master_deaf(tmp_path, campaign):
     with Store(path, campaign) as st:  # left unclean: reopened from the journal
         assert len(st) == 2
     assert sweep.validate(path) == []
+
+
+def test_the_writers_cpu_share_is_over_the_span_it_was_measured_on(tmp_path, campaign):
+    """The writer counts its CPU and wall time over one span (the store open to its
+    close); the summary's share divides the one by the other, not by the master's
+    scheduling loop (a re-run of a finished campaign, whose loop takes no time, printed
+    ``its store writer 13296.1%``)."""
+    from sweep.run.master import RunSummary
+
+    path = tmp_path / "s.h5"
+    sp = StoreProcess(path, campaign)
+    sp.close()
+    assert 0 < sp.store_cpu <= sp.store_wall
+    done = RunSummary(total=6, skipped=6, elapsed=0.3, master_cpu=1e-5, loop_elapsed=1e-5,
+                      writer_cpu=0.133, writer_wall=0.2)
+    assert str(done).endswith("; master CPU 100.0% of a core, its store writer 66.5%")
+    assert "its store writer" not in str(RunSummary(total=6, writer_cpu=0.1,
+                                                    loop_elapsed=1e-5))
