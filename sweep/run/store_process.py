@@ -207,13 +207,14 @@ class StoreProcess:
 
     def _stuck(self) -> bool:
         """A stop's grace period is over and the writer has not answered: it is stopped,
-        or :data:`ANSWER_MARGIN` more has passed."""
+        or :data:`ANSWER_MARGIN` more has passed (not while it opens the store: a stop
+        waits for an open or a rebuild, however long, unless the writer is stopped)."""
         stop = self.stop
         if stop is None or not stop.requested:
             return False
         now = time.monotonic()
-        return now >= stop.deadline and (now >= stop.deadline + ANSWER_MARGIN
-                                         or _stopped(self.proc.pid))
+        late = now >= stop.deadline + ANSWER_MARGIN and hasattr(self, "path")
+        return now >= stop.deadline and (late or _stopped(self.proc.pid))
 
     def _check_stop(self) -> None:
         """Between the slices of every wait on the writer: a stuck writer (:meth:`_stuck`)
