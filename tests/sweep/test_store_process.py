@@ -259,3 +259,34 @@ def test_the_writers_cpu_share_is_over_the_span_it_was_measured_on(tmp_path, cam
     assert str(done).endswith("; master CPU 100.0% of a core, its store writer 66.5%")
     assert "its store writer" not in str(RunSummary(total=6, writer_cpu=0.1,
                                                     loop_elapsed=1e-5))
+
+
+def test_a_full_disk_in_the_writer_charges_no_attempt(tmp_path, campaign, process_writer,
+                                                      monkeypatch):
+    """ENOSPC in the writer process while it commits a suspect point's result (its store
+    broken): the writer still journals the release of the point, which did not kill its
+    worker; after more such runs than [run] max_attempts it is not stored ``crashed``."""
+    import errno
+
+    import sweep.store.journal
+    from sweep import run_campaign
+
+    path = tmp_path / "s.h5"
+    first = next(iter(campaign.points()))
+    with Store(path, campaign) as st:  # a run died while it ran: a suspect
+        st.handout([(first.hash, 1)])
+    real = sweep.store.journal.Journal.append
+
+    def append(self, lines, sync=True):  # records do not fit; hand-outs, releases do
+        if any(line.startswith(b'{"row"') for line in lines):
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return real(self, lines, sync)
+
+    with monkeypatch.context() as m:  # the forked writer inherits it
+        m.setattr(sweep.store.journal.Journal, "append", append)
+        for _ in range(campaign.run.max_attempts + 1):
+            with pytest.raises(StoreError, match="no space left"):
+                run_campaign(campaign, str(path), compute="sweep.testing:fake_point")
+    s = run_campaign(campaign, str(path), compute="sweep.testing:fake_point")
+    assert s.counts.get("crashed", 0) == 0 and s.computed == campaign.size
+    assert sweep.validate(path) == []
