@@ -306,7 +306,7 @@ class StoreProcess:
         if not hashes:
             return
         if not self._closed:
-            with contextlib.suppress(StoreError):
+            with contextlib.suppress(StoreError, Unanswered):  # then it has ended
                 self._send(RELEASE, dumps(hashes))
                 return
         if hasattr(self, "path") and self.proc.poll() is not None:
