@@ -159,6 +159,17 @@ def test_slurm_ntasks_mismatch_refused(tmp_path, tiny, inproc):
     assert not store.exists()
 
 
+def test_a_campaign_rank_0_cannot_read_ends_the_job(tmp_path):
+    """Only rank 0 reads the campaign; when it cannot, it stops the workers (which wait
+    for its first word): the job ends at once with status 2 and one message."""
+    t0 = time.monotonic()
+    proc = mpirun(3, "run", tmp_path / "absent.toml", "--store", tmp_path / "s.h5",
+                  timeout=60)
+    assert proc.returncode == 2 and time.monotonic() - t0 < 30
+    assert proc.stderr.count("cannot read campaign file") == 1, proc.stderr
+    assert not (tmp_path / "s.h5").exists()
+
+
 @pytest.mark.parametrize("sig", [signal.SIGTERM,
                                  pytest.param(signal.SIGUSR1, marks=pytest.mark.slow)])
 # SIGUSR1: slow tier (fast: SIGTERM here; SIGUSR1 in test_store_safety.py's rebuild stops)
