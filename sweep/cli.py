@@ -126,6 +126,7 @@ def _err(message: str | BaseException) -> None:
 def cmd_run(args: argparse.Namespace) -> int:
     from sweep.config import load_campaign  # lazy: after the stop handlers (module docstring)
     from sweep.run.launch import run_campaign  # lazy: as sweep.config
+    from sweep.run.worker import stop_workers, worker_loop  # lazy: as sweep.config
 
     comm = mpi_world()
     rank = comm.Get_rank() if comm is not None else 0
@@ -133,9 +134,17 @@ def cmd_run(args: argparse.Namespace) -> int:
     try:
         if not args.ignore_slurm_ntasks:
             check_launch(size)
-        campaign = load_campaign(args.config)
-        if args.shard:
-            campaign = campaign.shard(*args.shard)
+        if rank != 0:  # a worker computes what rank 0 sends it: no campaign to read
+            worker_loop(comm, args.compute)
+            return EXIT_OK
+        try:
+            campaign = load_campaign(args.config)
+            if args.shard:
+                campaign = campaign.shard(*args.shard)
+        except BaseException:
+            if size > 1:  # the workers wait for rank 0's first word
+                stop_workers(comm)
+            raise
         summary = run_campaign(campaign, str(args.store), compute=args.compute,
                                retry_failed=args.retry_failed, extend=args.extend, comm=comm,
                                progress_bar=False if args.no_bar else None,

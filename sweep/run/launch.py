@@ -21,7 +21,7 @@ from sweep.provenance import environment
 from sweep.run.compute import DEFAULT_COMPUTE
 from sweep.run.master import Master, RunSummary
 from sweep.run.progress import Progress, log_line
-from sweep.run.signals import GraceExpired, StopSignals
+from sweep.run.signals import GraceExpired, StopSignals, Unanswered
 from sweep.run.sink import InlineSink, ResultSink
 from sweep.run.store_process import StoreProcess
 from sweep.run.transport import InProcessTransport, MPITransport, Transport
@@ -73,9 +73,15 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
         with StopSignals(campaign.run.grace_period, in_process=not mpi) as signals:
             git = {"git_commit": info["git_commit"], "git_dirty": info["git_dirty"],
                    "sweep_version": info["sweep_version"]}
-            store = _open_sink(store_path, campaign, campaign.run.writer if mpi else "inline",
-                               extend=extend, run_info=info, verify=verify,
-                               worker_env=transport.worker_env, git=git)
+            try:
+                store = _open_sink(store_path, campaign,
+                                   campaign.run.writer if mpi else "inline", extend=extend,
+                                   run_info=info, verify=verify,
+                                   worker_env=transport.worker_env, git=git, stop=signals)
+            except Unanswered:  # the writer, stuck while opening, was killed (said so)
+                raise Interrupted(f"campaign stopped by {signals.requested} while the store"
+                                  " was being opened; nothing was lost — the campaign is"
+                                  " resumable: run the same command again") from None
             outcome = "complete"
             try:
                 if signals.requested:
@@ -91,6 +97,11 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
             except Interrupted:
                 outcome = "interrupted (resumable)"
                 raise
+            except Unanswered:  # the writer, stuck after a stop, was killed (said so)
+                outcome = "interrupted (resumable)"
+                raise Interrupted(f"campaign stopped by {signals.requested}: the store's"
+                                  " writer did not answer; the campaign is resumable: run"
+                                  " the same command again") from None
             except BaseException as exc:
                 outcome = f"error: {type(exc).__name__}: {exc}"
                 raise
@@ -102,7 +113,7 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
                 store.close(outcome)
                 # the writer's CPU once its store was open (opening it, which expands
                 # the grid, is start-up, as for an inline master); else its whole life's
-                summary.writer_cpu = store.store_cpu
+                summary.writer_cpu, summary.writer_wall = store.store_cpu, store.store_wall
     except BaseException as exc:
         if mpi and transport is not None:
             _end_mpi_job(exc, transport, master)
@@ -114,13 +125,15 @@ def run_campaign(campaign: Campaign, store_path: str, *, compute: str = DEFAULT_
 
 def _open_sink(store_path: str, campaign: Campaign, writer: str, *, extend: bool,
                run_info: dict[str, Any], verify: bool,
-               worker_env: dict[int, dict[str, Any]], git: dict[str, Any]) -> ResultSink:
+               worker_env: dict[int, dict[str, Any]], git: dict[str, Any],
+               stop: StopSignals | None = None) -> ResultSink:
     """The open store as the master's :class:`sweep.run.sink.ResultSink`: written by a
     writer process (``writer`` "process": the master only schedules) or by the master
     itself ("inline")."""
     if writer == "process":
         return StoreProcess(store_path, campaign, extend=extend, run_info=run_info,
-                            verify=verify, worker_env=worker_env, git=git, opener=Store)
+                            verify=verify, worker_env=worker_env, git=git, opener=Store,
+                            stop=stop)
     return InlineSink(Store(store_path, campaign, extend=extend, run_info=run_info,
                             verify=verify), worker_env, git)
 
@@ -210,8 +223,10 @@ def _known_outcomes(todo: list[Point], store: ResultSink, master: Master,
     """The points whose outcome is known without a worker, as ``(point, status,
     message)``: impossible points (``invalid``) and points that killed their worker
     ``limit`` (``[run] max_attempts``) times (``crashed``). Points in flight when an
-    earlier run died become the master's suspects (each computed alone)."""
+    earlier run died become the master's suspects (each computed alone): per worker the
+    one it was running, not those queued behind it (:func:`sweep.store.attempts.running`)."""
     known = []
+    suspects = store.suspects()
     for p in todo:
         if p.invalid:
             known.append((p, "invalid", p.invalid))
@@ -223,6 +238,6 @@ def _known_outcomes(todo: list[Point], store: ResultSink, master: Master,
                           f" point was the only one being computed ({where}); not tried"
                           f" again ([run] max_attempts = {limit}); --retry-failed tries"
                           " it again"))
-        elif store.handouts(p.hash):
+        elif p.hash in suspects:
             master.suspects.add(p.hash)
     return known

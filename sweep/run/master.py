@@ -30,7 +30,7 @@ from sweep.errors import Interrupted, WorkerError
 from sweep.protocol import Kind, Outcome, Task, WorkerFailure
 from sweep.run.compute import DEFAULT_COMPUTE
 from sweep.run.progress import Progress
-from sweep.run.signals import GraceExpired, StopSignals
+from sweep.run.signals import GraceExpired, StopSignals, Unanswered
 from sweep.run.sink import ResultSink
 from sweep.run.transport import Transport
 from sweep.store.record import Record
@@ -65,8 +65,9 @@ class RunSummary:
     #: [s] compiling or loading the kernels before the first point (:mod:`sweep.run.warmup`)
     warm_up: float = 0.0
     #: CPU seconds of the store's writer process from its store's open to its close (0: the
-    #: master wrote the store itself)
+    #: master wrote the store itself), and the wall seconds of that span (0: not measured)
     writer_cpu: float = 0.0
+    writer_wall: float = 0.0
 
     @property
     def master_cpu_share(self) -> float:
@@ -82,8 +83,8 @@ class RunSummary:
         if self.in_process:
             return text + " (computed in-process)"
         text += f"; master CPU {100 * self.master_cpu_share:.1f}% of a core"
-        if self.writer_cpu and self.loop_elapsed > 0:
-            text += (f", its store writer {100 * self.writer_cpu / self.loop_elapsed:.1f}%")
+        if self.writer_cpu and self.writer_wall > 0:  # over the span it was measured on
+            text += f", its store writer {100 * self.writer_cpu / self.writer_wall:.1f}%"
         return text
 
 
@@ -116,6 +117,8 @@ class Master:
         #: batch's commit: ``store.waits_for``)
         self.commit_time = math.nan
         self.at_workers = 0  # tasks sent whose results have not arrived
+        #: results handed to the store and not yet reported stored, in order
+        self._unstored: collections.deque[str] = collections.deque()
 
     @property
     def depth(self) -> int:
@@ -162,6 +165,7 @@ class Master:
             w: collections.deque() for w in self.transport.workers}
         self._queues = queues
         self.outstanding = self.at_workers = 0
+        self._unstored.clear()
         stop_at = math.inf
         try:
             while pending or suspects or self.outstanding:
@@ -218,8 +222,9 @@ class Master:
                         break
                     batch.append(more)
                 self.outstanding -= self._store_batch(batch, queues, progress, summary)
-        except GraceExpired:
-            summary.interrupted = summary.interrupted or "signal"
+        except GraceExpired as exc:  # Unanswered: the writer, killed as stuck after a stop
+            summary.interrupted = summary.interrupted or (
+                signals.requested if isinstance(exc, Unanswered) else "") or "signal"
         if self.outstanding:  # results at a writer process: wait for them
             self.outstanding -= self._count(self.store.sync(), progress, summary)
         if summary.interrupted:
@@ -231,9 +236,11 @@ class Master:
                 " run the same command again")
 
     def release_abandoned(self) -> None:
-        """Journal that the points still handed out were abandoned by a stop (they did
-        not kill their worker: no attempt is counted)."""
-        hashes = [p.hash for q in self._queues.values() for p, _ in q]
+        """Journal that the points still handed out were abandoned by a stop or an error
+        of the master or its store (none of them killed its worker: no attempt is
+        counted): those at the workers, and those whose results the store did not report
+        stored."""
+        hashes = [*self._unstored, *(p.hash for q in self._queues.values() for p, _ in q)]
         self.store.release(hashes)
 
     def _store_batch(self, batch: list[tuple[int, str, Any]],
@@ -260,6 +267,7 @@ class Master:
                 raise WorkerError(f"worker rank {worker} returned {kind} of point"
                                   f" {str(getattr(payload, 'hash', ''))[:12]}, expected the"
                                   f" result of {point.hash[:12]} (protocol error)")
+            self._unstored.append(point.hash)  # before: a submit may find the writer dead
             self.store.submit(point, payload, config)
             results += 1
             wall += float(payload.wall_time)
@@ -274,10 +282,12 @@ class Master:
             self._timed("commit", t0)
         return stored
 
-    @staticmethod
-    def _count(statuses: list[str], progress: Progress, summary: RunSummary) -> int:
-        """Count stored points (their statuses) in the summary and the progress."""
+    def _count(self, statuses: list[str], progress: Progress, summary: RunSummary) -> int:
+        """Count stored points (their statuses, in the order their results were
+        submitted) in the summary and the progress."""
         for status in statuses:
+            if self._unstored:
+                self._unstored.popleft()
             summary.computed += 1
             summary.counts[status] = summary.counts.get(status, 0) + 1
             progress.update(status)

@@ -4,7 +4,9 @@ store's writer process), and the forked writer's pid.
 A frame is a 5-byte header (the payload's length, uint32 little-endian, and a kind byte)
 and a payload: a pickle, or a result's bytes as the worker packed them. The master's side
 never blocks on a full pipe while the writer may be writing to it (its writes are
-non-blocking and read the writer's frames meanwhile), so neither side can deadlock.
+non-blocking and read the writer's frames meanwhile), so neither side can deadlock; and
+it waits in slices of :data:`SLICE`, calling its :attr:`Channel.on_wait` between them (the
+master's stop signals: a writer that does not answer cannot make it deaf).
 """
 from __future__ import annotations
 
@@ -18,6 +20,7 @@ import struct
 import subprocess
 import time
 import traceback
+from collections.abc import Callable
 from typing import Any
 
 from sweep.errors import StoreError, SweepError
@@ -33,6 +36,8 @@ ADD, RESULT, HANDOUT, COMMIT, RELEASE, CLOSE = range(1, 7)
 OK, STORED, FAIL = 10, 11, 12
 _PIPE_SIZE = 1 << 20  # [bytes] asked for both pipes (F_SETPIPE_SZ; Linux, best effort)
 _F_SETPIPE_SZ = 1031
+#: [s] the longest single wait of a channel with an ``on_wait`` check
+SLICE = 0.1
 
 def dumps(obj: Any) -> bytes:
     return pickle.dumps(obj, protocol=pickle.HIGHEST_PROTOCOL)
@@ -46,6 +51,8 @@ class Channel:
         self.buf = bytearray()
         self.eof = False
         self.nonblocking_writes = nonblocking_writes
+        #: called between the slices of a wait (it may raise to end the wait)
+        self.on_wait: Callable[[], None] | None = None
         for fd in (fd_in, fd_out):
             with contextlib.suppress(OSError, AttributeError):
                 fcntl.fcntl(fd, _F_SETPIPE_SZ, _PIPE_SIZE)
@@ -88,9 +95,13 @@ class Channel:
         deadline = None if timeout is None else time.monotonic() + timeout
         while not frames and not self.eof:
             left = None if deadline is None else max(0.0, deadline - time.monotonic())
+            if self.on_wait is not None:
+                left = SLICE if left is None else min(left, SLICE)
             if not self._fill(left):
                 if self.eof or (deadline is not None and time.monotonic() >= deadline):
                     break
+                if self.on_wait is not None:
+                    self.on_wait()
                 continue
             frames = self._frames()
         while self._fill(0.0):  # and whatever else is already there
@@ -104,10 +115,12 @@ class Channel:
         while data:
             if self.nonblocking_writes:
                 rd, wr, _ = select.select([] if self.eof else [self.fd_in], [self.fd_out],
-                                          [], None)
+                                          [], None if self.on_wait is None else SLICE)
                 if rd:
                     self._fill(0.0)
                 if not wr:
+                    if not rd and self.on_wait is not None:
+                        self.on_wait()
                     continue
                 try:
                     n = os.write(self.fd_out, data)

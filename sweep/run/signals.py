@@ -9,6 +9,7 @@ period for the running points and stops. Workers ignore stop signals
 from __future__ import annotations
 
 import contextlib
+import math
 import signal
 import sys
 import time
@@ -16,7 +17,7 @@ from typing import Any
 
 from sweep.system import STOP_SIGNALS, take_start_up_stop
 
-__all__ = ["StopSignals", "GraceExpired", "MAX_TIMER", "REPEAT_WINDOW"]
+__all__ = ["StopSignals", "GraceExpired", "Unanswered", "MAX_TIMER", "REPEAT_WINDOW"]
 
 #: Longest interval [s] given to ``setitimer`` (larger values overflow it).
 MAX_TIMER = 1e7
@@ -35,6 +36,11 @@ class GraceExpired(BaseException):
     """Raised in-process when the grace period after a stop signal runs out."""
 
 
+class Unanswered(GraceExpired):
+    """Raised in the master when the store's writer process did not answer within the
+    grace period after a stop signal (:class:`sweep.run.store_process.StoreProcess`)."""
+
+
 class StopSignals:
     """SIGINT/SIGTERM/SIGUSR1 set ``requested``; in-process, the grace timer raises."""
 
@@ -45,11 +51,19 @@ class StopSignals:
         self.active = True
         self._old: dict[int, Any] = {}
         self._last: tuple[int, float] = (0, -1.0)
+        self._since = math.inf  # [s] time.monotonic() of the first stop request
+
+    @property
+    def deadline(self) -> float:
+        """When the grace period after the first stop request ends (``time.monotonic``;
+        infinity while none came)."""
+        return self._since + self.grace if self.requested else math.inf
 
     def __enter__(self) -> StopSignals:
         self.requested = take_start_up_stop()  # a start-up stop whose exception was lost
         if self.requested:  # the guard's copy of it, if it comes now, is the same request
             self._last = (signal.Signals[self.requested].value, time.monotonic())
+            self._since = time.monotonic()
         for sig in STOP_SIGNALS:
             with contextlib.suppress(ValueError):  # not the main thread
                 self._old[sig] = signal.signal(sig, self._handle)
@@ -71,6 +85,8 @@ class StopSignals:
         last, self._last = self._last, (signum, now)
         if last[0] == signum and now - last[1] < REPEAT_WINDOW:
             return  # the same request delivered twice (group and guard)
+        if not self.requested:
+            self._since = now
         if not self.active:
             self.requested = self.requested or name
             return

@@ -17,6 +17,7 @@ from typing import Any, Literal, Protocol
 
 from sweep.config import Point
 from sweep.protocol import Outcome, Packed, unpacked
+from sweep.store.attempts import running
 from sweep.store.record import Record, provenance_json
 from sweep.store.store import Store
 
@@ -67,6 +68,10 @@ class ResultSink(Protocol):
 
     def handouts(self, h: str) -> list[tuple[int, int, bool]]: ...
 
+    def suspects(self) -> set[str]:
+        """The points that may have been running when an earlier run died
+        (:func:`sweep.store.attempts.running`)."""
+
     # the master's own records (``invalid``, ``crashed``), one group commit
     def add(self, record: Record) -> None: ...
 
@@ -105,6 +110,10 @@ class ResultSink(Protocol):
         """[s] CPU of a writer beside the master from its store's open to its close
         (0.0: the master writes the store)."""
 
+    @property
+    def store_wall(self) -> float:
+        """[s] the wall time :attr:`store_cpu` was measured over (0.0: not measured)."""
+
 
 class InlineSink:
     """The master writes the store itself: a result becomes its record when it is
@@ -132,6 +141,9 @@ class InlineSink:
 
     def handouts(self, h: str) -> list[tuple[int, int, bool]]:
         return self.store.handouts(h)
+
+    def suspects(self) -> set[str]:
+        return running(self.store.scan)
 
     def add(self, record: Record) -> None:
         self.store.add(record)
@@ -174,4 +186,8 @@ class InlineSink:
 
     @property
     def store_cpu(self) -> float:
+        return 0.0
+
+    @property
+    def store_wall(self) -> float:
         return 0.0

@@ -25,7 +25,7 @@ The store's guarantees are kept, across the two processes:
 - a writer that dies: the master's next call raises :class:`StoreError` (exit status 3),
   and the next open rebuilds the store from its journal.
 
-The pipe and its frames: :mod:`sweep.run.pipe`.
+The pipe and its frames: :mod:`sweep.run.pipe`; the writer's side: :mod:`sweep.run.store_writer`.
 """
 from __future__ import annotations
 
@@ -48,22 +48,22 @@ from sweep.run.pipe import (
     COMMIT,
     FAIL,
     HANDOUT,
-    OK,
     RELEASE,
     RESULT,
+    SLICE,
     STORED,
     Channel,
     Child,
     become_writer,
     dumps,
-    error_bytes,
 )
+from sweep.run.signals import Unanswered
 from sweep.run.sink import Provenance
-from sweep.store.cells import text
-from sweep.store.record import Record
+from sweep.run.store_writer import ORPHANED, serve
+from sweep.store.attempts import release_orphaned
 from sweep.store.store import Store
 
-__all__ = ["StoreProcess", "serve", "WRITER_MODES"]
+__all__ = ["StoreProcess", "serve", "ORPHANED", "WRITER_MODES"]
 
 #: ``[run] writer``: "process" (a writer process beside the master, MPI runs) or "inline"
 #: (the master writes the store itself, as an in-process run always does).
@@ -71,139 +71,21 @@ WRITER_MODES = ("process", "inline")
 
 #: [s] how long :meth:`StoreProcess.close` waits for the writer to close the store
 CLOSE_WAIT = 600.0
-#: [s] how long a staged result may wait for others to share its commit (a group commit
-#: costs about 7 ms of CPU, each point in it about 2.5 ms: docs/cluster.md section 4b)
-GROUP_WINDOW = 0.05
-#: results that are committed at once, whatever the window
-GROUP_MAX = 512
-#: the outcome recorded when the master's pipe closed without a ``CLOSE``
-ORPHANED = "error: the master ended without closing the store"
+#: [s] past a stop's grace period, how long the writer may still take to answer (a commit
+#: or the close under way) before it is taken for stuck (a hung write) and killed; a
+#: writer that is stopped (SIGSTOP) is taken for stuck at once
+ANSWER_MARGIN = 5.0
+#: [s] how long a killed writer is waited for (in a hung write it ends when the write does)
+KILL_WAIT = 5.0
 
 
-class _Writer:
-    """The writer process's side: one open store, the campaign's points, provenance."""
-
-    def __init__(self, chan: Channel, store: Any, campaign: Any,
-                 worker_env: dict[int, dict[str, Any]], git: dict[str, Any]) -> None:
-        self.chan = chan
-        self.store = store
-        self.points = {p.hash: p for p in campaign.points()}
-        self.provenance = Provenance(worker_env, git)
-        self.staged: list[str] = []   # statuses of the results staged, in order
-        self.failed = False           # an error was sent: nothing more is stored
-
-    def _tell(self, kind: int, payload: bytes = b"") -> None:
-        """Send the master a frame; a master gone (its pipe closed) is no error here: the
-        end of its pipe ends the loop, after what it sent is stored."""
-        with contextlib.suppress(BrokenPipeError, ConnectionResetError):
-            self.chan.write(kind, payload)
-
-    def commit(self) -> None:
-        if self.failed:
-            return
-        self.store.commit()
-        if self.staged:
-            self._tell(STORED, dumps(self.staged))
-            self.staged = []
-
-    def handle(self, kind: int, body: bytes) -> str | None:
-        """Act on one frame; the run's outcome once it is a ``CLOSE``."""
-        if kind == RESULT:
-            if not self.failed:
-                out: Outcome = pickle.loads(body)
-                point = self.points.get(out.hash)
-                if point is None:
-                    raise StoreError(f"the store's writer process: a result of point"
-                                     f" {out.hash[:12]}, which is not in the campaign"
-                                     " (protocol error)")
-                rec = Record.from_outcome(point, out, None, self.provenance)
-                self.store.add(rec)
-                self.staged.append(rec.status)
-        elif kind == ADD:
-            if not self.failed:
-                self.store.add(pickle.loads(body))
-        elif kind == HANDOUT:
-            pairs, alone = pickle.loads(body)
-            self.store.handout(pairs, alone=alone)
-            self._tell(OK)
-        elif kind == RELEASE:
-            self.store.release(pickle.loads(body))
-        elif kind == COMMIT:
-            self.commit()
-            self._tell(OK)
-        elif kind == CLOSE:
-            return pickle.loads(body)
-        else:
-            raise StoreError(f"the store's writer process: unknown frame kind {kind}")
-        return None
-
-    def loop(self) -> None:
-        """Serve frames until ``CLOSE`` (or the end of the pipe). Results are committed
-        in groups: once :data:`GROUP_WINDOW` has passed since the first staged one, or
-        :data:`GROUP_MAX` are staged, or the master asks (``COMMIT``, ``CLOSE``);
-        hand-outs are journaled and acknowledged as they come, meanwhile."""
-        cpu0 = time.process_time()
-        first = 0.0  # when the oldest staged result was staged
-        while True:
-            wait = (None if not self.staged else
-                    max(0.0, first + GROUP_WINDOW - time.monotonic()))
-            had = len(self.staged)
-            frames = self.chan.read(wait)
-            outcome = None
-            for kind, body in frames:
-                try:
-                    outcome = self.handle(kind, body)
-                except Exception as exc:  # noqa: BLE001 - reported to the master
-                    self._fail(exc)
-                if outcome is not None:
-                    break
-            if outcome is None and self.chan.eof:
-                outcome = ORPHANED
-            if self.staged and not had:
-                first = time.monotonic()
-            if outcome is not None or (self.staged and (
-                    len(self.staged) >= GROUP_MAX or time.monotonic() >= first + GROUP_WINDOW)):
-                try:
-                    self.commit()
-                except Exception as exc:  # noqa: BLE001 - reported to the master
-                    self._fail(exc)
-            if outcome is not None:
-                self.store.close(outcome)
-                if outcome != ORPHANED:
-                    self._tell(OK, dumps(time.process_time() - cpu0))
-                return
-
-    def _fail(self, exc: BaseException) -> None:
-        if not self.failed:
-            self.failed = True
-            self.staged = []
-            with contextlib.suppress(OSError):
-                self._tell(FAIL, error_bytes(exc))
-
-
-def serve(chan: Channel, opener: Any, args: dict[str, Any]) -> int:
-    """The writer process: open the store (``opener(path, campaign, ...)``, as
-    :class:`sweep.store.store.Store`), reply what the master asks of it, serve, close."""
+def _stopped(pid: int) -> bool:
+    """Process ``pid`` is stopped (SIGSTOP) or traced (Linux's /proc; False elsewhere)."""
     try:
-        store = opener(args["path"], args["campaign"], extend=args["extend"],
-                       run_info=args["run_info"], verify=args["verify"])
-    except BaseException as exc:  # noqa: BLE001 - reported to the master
-        chan.write(FAIL, error_bytes(exc))
-        return 1
-    try:
-        column = store.file["table"]["status"][:] if len(store) else []
-        statuses = {h: text(column[i]) for h, i in store.rows.items()}
-        writer = _Writer(chan, store, args["campaign"], args["worker_env"], args["git"])
-        chan.write(OK, dumps({"path": str(store.path), "run_index": store.run_index,
-                               "statuses": statuses, "pid": os.getpid(),
-                               "handouts": dict(store.scan.handouts)}))
-    except BaseException as exc:  # noqa: BLE001 - reported to the master
-        with contextlib.suppress(Exception):
-            chan.write(FAIL, error_bytes(exc))
-        store.close(f"error: {type(exc).__name__}: {exc}")
-        return 1
-    writer.loop()
-    return 0
+        with open(f"/proc/{pid}/stat", "rb") as fh:
+            return fh.read().rpartition(b")")[2].split()[0] in (b"T", b"t")
+    except (OSError, IndexError):
+        return False
 
 
 class StoreProcess:
@@ -228,8 +110,13 @@ class StoreProcess:
     def __init__(self, path: str | Path, campaign: Any, *, extend: bool = False,
                  run_info: dict[str, Any] | None = None, verify: bool = False,
                  worker_env: dict[int, dict[str, Any]] | None = None,
-                 git: dict[str, Any] | None = None, opener: Any = None) -> None:
+                 git: dict[str, Any] | None = None, opener: Any = None,
+                 stop: Any = None) -> None:
         opener = Store if opener is None else opener
+        #: the run's :class:`sweep.run.signals.StopSignals`: after a stop request, every
+        #: wait on the writer ends with its grace period (:meth:`_check_stop`)
+        self.stop = stop
+        self._gave_up = False
         args = {"path": str(path), "campaign": campaign, "extend": extend,
                 "run_info": run_info or {}, "verify": verify,
                 "worker_env": worker_env or {}, "git": git or {}}
@@ -262,14 +149,16 @@ class StoreProcess:
         os.close(to_writer[0])
         os.close(to_master[1])
         self._chan = Channel(to_master[0], to_writer[1], nonblocking_writes=True)
+        self._chan.on_wait = self._check_stop
         #: the master's own records' provenance (the writer builds the workers')
         self.provenance = Provenance(args["worker_env"], args["git"])
         self._stored: list[str] = []
         self._closed = False
         #: [s] the writer's CPU, its whole life (open and close in it), once it ended
         self.writer_cpu = 0.0
-        #: [s] the writer's CPU from the store's open to the ``CLOSE`` (its own count)
-        self.loop_cpu = 0.0
+        #: [s] the writer's CPU from the store's open to the ``CLOSE`` (its own count), and
+        #: the wall time of that span
+        self.loop_cpu = self.loop_wall = 0.0
         self.label = str(path)
         try:
             info = self._reply()
@@ -281,6 +170,7 @@ class StoreProcess:
         self.run_index = info["run_index"]
         self._statuses: dict[str, str] = info["statuses"]
         self._handouts: dict[str, list[tuple[int, int, bool]]] = info["handouts"]
+        self._suspects: set[str] = info["suspects"]
 
     # ------------------------------------------------------------------ queries
     def __contains__(self, h: str) -> bool:
@@ -294,6 +184,9 @@ class StoreProcess:
 
     def handouts(self, h: str) -> list[tuple[int, int, bool]]:
         return self._handouts.get(h, [])
+
+    def suspects(self) -> set[str]:
+        return set(self._suspects)
 
     @property
     def pid(self) -> int:
@@ -311,6 +204,33 @@ class StoreProcess:
         return StoreError(f"{self.label}: the store's writer process (pid {self.proc.pid})"
                           f" {how}; what it committed is stored, and the next run opens the"
                           " store from its journal")
+
+    def _stuck(self) -> bool:
+        """A stop's grace period is over and the writer has not answered: it is stopped,
+        or :data:`ANSWER_MARGIN` more has passed (not while it opens the store: a stop
+        waits for an open or a rebuild, however long, unless the writer is stopped)."""
+        stop = self.stop
+        if stop is None or not stop.requested:
+            return False
+        now = time.monotonic()
+        late = now >= stop.deadline + ANSWER_MARGIN and hasattr(self, "path")
+        return now >= stop.deadline and (late or _stopped(self.proc.pid))
+
+    def _check_stop(self) -> None:
+        """Between the slices of every wait on the writer: a stuck writer (:meth:`_stuck`)
+        is killed, said so, and :class:`Unanswered` raised (the run stops, resumable: the
+        journal holds what it committed)."""
+        if not self._stuck():
+            return
+        self._gave_up = self._closed = True
+        self.proc.kill()
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            self.proc.wait(KILL_WAIT)
+        print(f"sweep: {self.label}: the store's writer process (pid {self.proc.pid}) did"
+              f" not answer within the grace period after {self.stop.requested}; it was"
+              " killed: what it committed is stored, and the next run opens the store"
+              " from its journal", file=sys.stderr, flush=True)
+        raise Unanswered(self.stop.requested)
 
     def _send(self, kind: int, payload: bytes = b"") -> None:
         if self._closed:
@@ -350,6 +270,8 @@ class StoreProcess:
 
     def commit(self) -> int:
         """Wait until everything sent so far is committed (group commit in the writer)."""
+        if self._gave_up:  # killed as stuck after a stop: nothing more is committed
+            return 0
         self._send(COMMIT)
         self._reply()
         return 0
@@ -378,9 +300,17 @@ class StoreProcess:
         self._reply()
 
     def release(self, hashes: list[str]) -> None:
-        if hashes and not self._closed:
-            with contextlib.suppress(StoreError):
+        """Journal that handed-out points were abandoned (no attempt): by the writer, or
+        by the master once the writer has ended without closing the store (it died: the
+        points did not kill it; :func:`sweep.store.attempts.release_orphaned`)."""
+        if not hashes:
+            return
+        if not self._closed:
+            with contextlib.suppress(StoreError, Unanswered):  # then it has ended
                 self._send(RELEASE, dumps(hashes))
+                return
+        if hasattr(self, "path") and self.proc.poll() is not None:
+            release_orphaned(self.path, hashes)
 
     def take_stored(self) -> list[str]:
         """The statuses of the results committed since the last call (not waiting)."""
@@ -412,15 +342,23 @@ class StoreProcess:
         it did not say)."""
         return self.loop_cpu or self.writer_cpu
 
+    @property
+    def store_wall(self) -> float:
+        """[s] the wall time of the writer's own count (0.0 without it: its whole life's
+        CPU is over no span measured)."""
+        return self.loop_wall if self.loop_cpu else 0.0
+
     def close(self, outcome: str = "complete") -> None:
         """Have the writer commit what it was given, record the run's outcome and close
         the store; wait for it to end. A writer that already ended is only reaped."""
         if not self._closed:
             try:
                 self._send(CLOSE, dumps(outcome))
-                self.loop_cpu = float(self._reply() or 0.0)
+                self.loop_cpu, self.loop_wall = map(float, self._reply() or (0.0, 0.0))
             except StoreError as exc:
                 print(f"sweep: {exc}", file=sys.stderr, flush=True)
+            except Unanswered:
+                pass  # said so
             except Exception as exc:  # noqa: BLE001 - the writer's error at the close
                 print(f"sweep: {self.label}: closing the store: {exc}", file=sys.stderr,
                       flush=True)
@@ -430,11 +368,15 @@ class StoreProcess:
     def _reap(self) -> None:
         self._closed = True
         self._chan.close()
-        try:
-            self.proc.wait(CLOSE_WAIT)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            self.proc.wait()
+        end = time.monotonic() + CLOSE_WAIT
+        while self.proc.poll() is None:  # up to CLOSE_WAIT, or a stop's grace period
+            if time.monotonic() >= end or self._stuck():
+                self.proc.kill()
+                with contextlib.suppress(subprocess.TimeoutExpired):
+                    self.proc.wait(KILL_WAIT)
+                break
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                self.proc.wait(SLICE)
         self.writer_cpu = self.proc.cpu
 
     def __enter__(self) -> StoreProcess:

@@ -22,7 +22,7 @@ from sweep.run.transport import send_message, wait_message
 from sweep.run.warmup import warm_up
 from sweep.system import STOP_SIGNALS
 
-__all__ = ["worker_loop"]
+__all__ = ["worker_loop", "stop_workers"]
 
 
 def worker_loop(comm: Any, compute: str = DEFAULT_COMPUTE) -> None:
@@ -58,3 +58,11 @@ def worker_loop(comm: Any, compute: str = DEFAULT_COMPUTE) -> None:
             continue
         send_message(comm, (Kind.RESULT, Packed.of(compute_point(task, fn, rank))), 0,
                      TAG_RESULT)
+
+
+def stop_workers(comm: Any) -> None:
+    """From rank 0 before any task (the campaign could not be read): every worker's
+    :func:`worker_loop` ends (``None``), the job with rank 0's status."""
+    for w in range(1, comm.Get_size()):
+        with contextlib.suppress(Exception):
+            comm.send(None, dest=w, tag=TAG_TASK)

@@ -1,7 +1,6 @@
 """The journal beside a store: ``<store>.journal``, the durable truth of a campaign.
 
-One line per event, appended by the store's writer and ``fsync``-ed before the HDF5 file
-is touched:
+One line per event, appended by the store's writer, ``fsync``-ed before the HDF5 file is:
 
 - a **campaign line** ``{"journal": "sweep-journal", "version": 3, "campaign_hash": ...,
   "campaign_json": ..., "time": ...}`` written when the journal is created and whenever
@@ -14,19 +13,18 @@ is touched:
   included; before, a JSON list of numbers, which is still read. Decoding one is a copy;
   writing one about a sixth of the list's (``benchmarks/store_commit.py``);
 - a **hand-out** ``{"handout": hash, "run": n, "worker": rank, "alone": bool}`` per point
-  given to a worker, and a **release** ``{"release": hash}`` per point abandoned by a
-  clean stop (written, not fsynced: they only count the attempts of points that kill
-  their worker, see ``[run] max_attempts``).
+  given to a worker, and a **release** ``{"release": hash}`` per point abandoned by a stop
+  or whose run's writer died (written, not fsynced: they count the attempts of points
+  that kill their worker, ``[run] max_attempts``: :mod:`sweep.store.attempts`).
 
 Every line ends in a checksum: the JSON object's last member is ``"crc32": "<8 hex>"``,
 the CRC-32 of the line's bytes with that member removed (so the line stays plain JSON).
 A line that fails its checksum, does not parse, lacks a field, or whose ``config_json``
 does not hash to its ``hash`` is *set aside*: appended to ``<store>.journal.rejected``
 with its reason, removed from the journal, reported, and its point recomputed (unless an
-earlier good record of the point exists). Journals written before checksums existed
-(no campaign line before their records) are read without the checksum check; the hash
-re-check still applies. A torn last line (a writer killed inside its write; never
-acknowledged) is cut off on open.
+earlier good record of the point exists). Journals written before checksums existed (no
+campaign line before their records) are read without the checksum check; the hash re-check
+still applies. A torn last line (a writer killed in its write: unacknowledged) is cut off.
 """
 from __future__ import annotations
 
@@ -170,8 +168,10 @@ class JournalScan:
     headers: list[dict[str, Any]] = field(default_factory=list)
     #: per point hash: (seq, byte offset, status) of its last good record
     latest: dict[str, tuple[int, int, str]] = field(default_factory=dict)
-    #: hand-outs per point hash since its last record: [(run, worker, alone), ...]
+    #: hand-outs per point hash since its last record: [(run, worker, alone), ...], and
+    #: the byte offset of each by (hash, run, worker): their order in the journal
     handouts: dict[str, list[tuple[int, int, bool]]] = field(default_factory=dict)
+    handout_at: dict[tuple[str, int, int], int] = field(default_factory=dict)
     #: lines to set aside: (byte offset, length, reason)
     bad: list[tuple[int, int, str]] = field(default_factory=list)
     records: int = 0
@@ -376,6 +376,7 @@ class Journal:
                     out.handouts.setdefault(h, []).append((int(obj.get("run", -1)),
                                                            int(obj.get("worker", -1)),
                                                            bool(obj.get("alone", False))))
+                    out.handout_at[(h, *out.handouts[h][-1][:2])] = offset
                 continue
             reason = check_record(obj, model_version, statuses)
             if reason:

@@ -49,6 +49,7 @@ from sweep.errors import (
     StoreError,
 )
 from sweep.identity import canonical_json
+from sweep.store.attempts import ends_whole
 from sweep.store.campaign_check import check_campaign, check_legacy_journal, grid_hashes
 from sweep.store.cells import text
 from sweep.store.files import H5_ERRORS, MAX_NAME, InodeLock, check_space, inspect_file, oserror
@@ -345,11 +346,13 @@ class Store(JournalRepair):
     def handout(self, hashes: list[tuple[str, int]], alone: bool = False) -> None:
         """Journal that points were handed to workers ``[(hash, worker), ...]`` (written,
         not fsynced: a process kill keeps them, only a machine crash may not); ``alone``:
-        the only point in flight (a death then counts as its attempt)."""
+        the only point in flight (a death then counts as its attempt). Refused while the
+        free space is short: the margin is kept for the releases of the points in flight."""
         if not hashes or self._broken:
             return
         lines = [encode({"handout": h, "run": self.run_index, "worker": worker,
                          "alone": alone}) for h, worker in hashes]
+        check_space(self.path, 2 * sum(map(len, lines)), "handing out points")
         with signals_deferred():
             try:
                 self.journal.append(lines, sync=False)
@@ -358,8 +361,9 @@ class Store(JournalRepair):
                 raise oserror(self.journal.path, exc, "writing the journal") from None
 
     def release(self, hashes: list[str]) -> None:
-        """Journal that handed-out points were abandoned by a clean stop (no attempt)."""
-        if not hashes or self._broken:
+        """Journal that handed-out points were abandoned (no attempt): by a stop, or by a
+        failed write (then if the journal still ends in a whole line)."""
+        if not hashes or (self._broken and not ends_whole(self.journal.path)):
             return
         with signals_deferred(), contextlib.suppress(OSError):
             self.journal.append([encode({"release": h}) for h in hashes], sync=False)

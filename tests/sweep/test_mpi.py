@@ -1,4 +1,5 @@
 """Real mpiexec runs (the mpich wheel's launcher): tiny campaigns with run_point and fakes."""
+import contextlib
 import os
 import signal
 import subprocess
@@ -158,6 +159,17 @@ def test_slurm_ntasks_mismatch_refused(tmp_path, tiny, inproc):
     assert not store.exists()
 
 
+def test_a_campaign_rank_0_cannot_read_ends_the_job(tmp_path):
+    """Only rank 0 reads the campaign; when it cannot, it stops the workers (which wait
+    for its first word): the job ends at once with status 2 and one message."""
+    t0 = time.monotonic()
+    proc = mpirun(3, "run", tmp_path / "absent.toml", "--store", tmp_path / "s.h5",
+                  timeout=60)
+    assert proc.returncode == 2 and time.monotonic() - t0 < 30
+    assert proc.stderr.count("cannot read campaign file") == 1, proc.stderr
+    assert not (tmp_path / "s.h5").exists()
+
+
 @pytest.mark.parametrize("sig", [signal.SIGTERM,
                                  pytest.param(signal.SIGUSR1, marks=pytest.mark.slow)])
 # SIGUSR1: slow tier (fast: SIGTERM here; SIGUSR1 in test_store_safety.py's rebuild stops)
@@ -191,6 +203,48 @@ def test_signal_stops_cleanly_and_resumes(tmp_path, sig):
     assert len(df) == 32 and df["hash"].is_unique
     kept = df.set_index("hash").loc[first["hash"], "seq"]
     assert list(kept) == list(first["seq"]), "points stored before the stop were kept"
+
+
+@pytest.mark.slow  # fast: test_store_process.py::test_a_stopped_writer_cannot_make_the_master_deaf
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT, signal.SIGUSR1])
+def test_a_stopped_writer_does_not_make_the_run_deaf(tmp_path, sig, inproc):
+    """The store's writer process stopped (SIGSTOP: a hung NFS/Lustre write), then a stop
+    signal to mpiexec: the run ends within the grace period (the stuck writer killed and
+    said so), exit status 6, resumable; the resume completes the campaign."""
+    import json
+
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(FAKE_TOML.replace("grace_period = 5.0", "grace_period = 2.0"))
+    store = tmp_path / "s.h5"
+    cmd = [MPIEXEC, "-n", "3", sys.executable, "-m", "sweep", "run", str(cfg), "--store",
+           str(store), "--compute", "sweep.testing:sleepy_point", "--no-bar"]
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         env=_env())
+    journal = tmp_path / "s.h5.journal"
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:  # the first points stored
+        time.sleep(0.2)
+        if journal.exists() and b'{"row":' in journal.read_bytes():
+            break
+    writer = json.loads((tmp_path / "s.h5.lock").read_text())["pid"]  # the lock's holder
+    os.kill(writer, signal.SIGSTOP)
+    try:
+        time.sleep(0.5)
+        t0 = time.monotonic()
+        p.send_signal(sig)
+        out, err = p.communicate(timeout=60)
+        took = time.monotonic() - t0
+    finally:
+        p.kill()
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(writer, signal.SIGKILL)
+            os.kill(writer, signal.SIGCONT)
+    assert p.returncode == 6, err
+    assert took < 2.0 + 5, (took, err)
+    assert "did not answer within the grace period" in err and "resumable" in err, err
+    proc = inproc("run", cfg, "--store", store, "--compute", "sweep.testing:fake_point")
+    assert proc.returncode == 0, proc.stderr
+    assert len(sweep.load(store)) == 32 and sweep.validate(store) == []
 
 
 def test_grace_expiry_aborts_but_store_consistent(tmp_path, inproc):

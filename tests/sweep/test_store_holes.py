@@ -348,6 +348,70 @@ def test_a_resume_on_a_full_disk_is_one_line_and_exit_3(tmp_path, monkeypatch, c
     assert (path.read_bytes(), journal_path(path).read_bytes()) == before
 
 
+def _journal_objects(path):
+    from sweep.store.journal import decode
+
+    return [decode(line)[0] for line in journal_path(path).read_bytes().splitlines(True)]
+
+
+def test_failed_resumes_on_a_full_disk_charge_no_attempt(tmp_path, monkeypatch, capsys):
+    """The disk is full when a suspect point's result is committed (ENOSPC in the
+    journal write: the store is broken): the run ends with exit 3 and the point, computed
+    alone, is released (it did not kill its worker); after more such resumes than
+    [run] max_attempts it is still computed, not stored ``crashed``."""
+    import errno
+
+    import sweep.store.journal
+
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(TOML)
+    campaign = parse_campaign(TOML)
+    path = tmp_path / "s.h5"
+    first = next(iter(campaign.points()))
+    with Store(path, campaign) as st:  # a run died while it ran: a suspect
+        st.handout([(first.hash, 1)])
+    real = sweep.store.journal.Journal.append
+
+    def append(self, lines, sync=True):  # records do not fit; hand-outs, releases do
+        if any(line.startswith(b'{"row"') for line in lines):
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return real(self, lines, sync)
+
+    with monkeypatch.context() as m:
+        m.setattr(sweep.store.journal.Journal, "append", append)
+        for _ in range(campaign.run.max_attempts + 1):
+            assert main(["run", str(cfg), "--store", str(path), "--compute", FAKE,
+                         "--no-bar"]) == 3
+            assert "no space left on the device" in capsys.readouterr().err
+    assert [o["release"] for o in _journal_objects(path) if "release" in o] == \
+        [first.hash] * (campaign.run.max_attempts + 1)
+    assert main(["run", str(cfg), "--store", str(path), "--compute", FAKE, "--no-bar"]) == 0
+    assert "crashed" not in set(sweep.load(path)["status"])
+    assert sweep.validate(path) == []
+
+
+def test_hand_outs_keep_the_free_space_margin(tmp_path, monkeypatch, capsys):
+    """Hand-out lines are refused, like records, when the free space is short (exit 3,
+    one line, no hand-out written): they do not eat the margin the releases need."""
+    from sweep.store import files
+
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(TOML)
+    path = tmp_path / "s.h5"
+    real = os.statvfs
+
+    class Nearly:  # just the reserve free: opening passes, anything more does not fit
+        def __init__(self, st):
+            self.f_frsize, self.f_bavail = 1, files.SPACE_RESERVE + 10
+
+    monkeypatch.setattr(files.os, "statvfs", lambda p: Nearly(real(p)))
+    assert main(["run", str(cfg), "--store", str(path), "--compute", FAKE, "--no-bar"]) == 3
+    err = capsys.readouterr().err
+    assert "no space left on the device for handing out points" in err, err
+    assert "Traceback" not in err
+    assert not [o for o in _journal_objects(path) if "handout" in o]
+
+
 # ---------------------------------------------------------------- 8. bit rot
 def _flip(path, where, byte=3):
     """Flip one byte of dataset ``where``'s first value in the file (bit rot)."""

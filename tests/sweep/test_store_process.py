@@ -4,8 +4,10 @@ a writer that dies is a StoreError and the store reopens whole; a master that en
 closing leaves the writer to commit what it was given and close the store."""
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
+import sys
 import time
 
 import pandas as pd
@@ -148,3 +150,143 @@ def test_a_master_gone_without_closing_leaves_a_closed_store(tmp_path, campaign)
     assert _outcomes(path)[-1] == ORPHANED
     with Store(path, campaign) as st:  # closed cleanly: the lock is free
         assert len(st) == len(results)
+
+
+# ---------------------------------------------------------------- attempts (issue 45)
+_WRITERS: list[StoreProcess] = []
+
+
+def writer_killing_point(cfg):
+    """A good point, during whose computation the store's writer process is killed."""
+    os.kill(_WRITERS[-1].pid, signal.SIGKILL)
+    time.sleep(0.2)
+    return sweep.testing.fake_point(cfg)
+
+
+@pytest.fixture
+def process_writer(monkeypatch):
+    """In-process runs whose store is written by a writer process (as MPI runs' is)."""
+    import sweep.run.launch as launch
+
+    def open_sink(path, campaign, writer, **kw):
+        # the writer keeps descriptors 0-2 only (pytest's capture of sys.stderr is another)
+        with monkeypatch.context() as m:
+            m.setattr(sys, "stderr", sys.__stderr__)
+            _WRITERS.append(StoreProcess(path, campaign, opener=Store, **kw))
+        return _WRITERS[-1]
+
+    monkeypatch.setattr(launch, "_open_sink", open_sink)
+
+
+def test_a_writer_killed_while_a_point_runs_alone_is_no_attempt(tmp_path, campaign,
+                                                                process_writer):
+    """kill -9 of the writer while a suspect point is computed alone: the master knows
+    the writer died (StoreError, exit 3) and journals the point's release; after more
+    such deaths than [run] max_attempts the good point is still computed, not stored
+    ``crashed``."""
+    from sweep import run_campaign
+
+    path = tmp_path / "s.h5"
+    first = next(iter(campaign.points()))
+    with Store(path, campaign) as st:  # a run died while it ran: a suspect
+        st.handout([(first.hash, 1)])
+    for _ in range(campaign.run.max_attempts + 1):
+        with pytest.raises(StoreError, match="was killed by signal 9"):
+            run_campaign(campaign, str(path),
+                         compute="tests.sweep.test_store_process:writer_killing_point")
+    s = run_campaign(campaign, str(path), compute="sweep.testing:fake_point")
+    assert s.counts.get("crashed", 0) == 0 and s.computed == campaign.size
+    assert set(sweep.load(path)["status"]) <= {"converged", "converged_noisy"}
+    assert sweep.validate(path) == []
+
+
+# ---------------------------------------------------------------- a stuck writer (issue 45)
+class _Stop:
+    """What StoreProcess reads of the run's StopSignals: the request and its deadline."""
+
+    requested = ""
+    deadline = float("inf")
+
+
+def test_a_stopped_writer_cannot_make_the_master_deaf(tmp_path, campaign):
+    """The writer is stopped (SIGSTOP: a hung write) while the master waits for it: once
+    a stop is requested, the wait ends with the grace period (the writer is killed and
+    said so), close() returns at once, and the store reopens with what was committed.
+    The same through mpiexec and SIGTERM/SIGINT/SIGUSR1: test_mpi.py (slow tier)."""
+    from sweep.run.signals import GraceExpired
+
+    results = _packed(campaign)
+    path = tmp_path / "s.h5"
+    stop = _Stop()
+    sp = StoreProcess(path, campaign, stop=stop)
+    sp.handout([(r.hash, 1) for r in results[:2]])
+    for r in results[:2]:
+        sp.forward(r)
+    assert len(sp.sync()) == 2
+    os.kill(sp.pid, signal.SIGSTOP)
+    try:
+        stop.requested, stop.deadline = "SIGTERM", time.monotonic() + 0.5
+        t0 = time.monotonic()
+        with pytest.raises(GraceExpired):
+            sp.handout([(results[2].hash, 1)])  # its answer never comes
+        assert time.monotonic() - t0 < 3
+        t0 = time.monotonic()
+        sp.close("interrupted (resumable)")
+        assert time.monotonic() - t0 < 2
+        assert sp.proc.poll() == -signal.SIGKILL
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(sp.pid, signal.SIGKILL)
+            os.kill(sp.pid, signal.SIGCONT)
+    with Store(path, campaign) as st:  # left unclean: reopened from the journal
+        assert len(st) == 2
+    assert sweep.validate(path) == []
+
+
+def test_the_writers_cpu_share_is_over_the_span_it_was_measured_on(tmp_path, campaign):
+    """The writer counts its CPU and wall time over one span (the store open to its
+    close); the summary's share divides the one by the other, not by the master's
+    scheduling loop (a re-run of a finished campaign, whose loop takes no time, printed
+    ``its store writer 13296.1%``)."""
+    from sweep.run.master import RunSummary
+
+    path = tmp_path / "s.h5"
+    sp = StoreProcess(path, campaign)
+    sp.close()
+    assert 0 < sp.store_cpu <= sp.store_wall
+    done = RunSummary(total=6, skipped=6, elapsed=0.3, master_cpu=1e-5, loop_elapsed=1e-5,
+                      writer_cpu=0.133, writer_wall=0.2)
+    assert str(done).endswith("; master CPU 100.0% of a core, its store writer 66.5%")
+    assert "its store writer" not in str(RunSummary(total=6, writer_cpu=0.1,
+                                                    loop_elapsed=1e-5))
+
+
+def test_a_full_disk_in_the_writer_charges_no_attempt(tmp_path, campaign, process_writer,
+                                                      monkeypatch):
+    """ENOSPC in the writer process while it commits a suspect point's result (its store
+    broken): the writer still journals the release of the point, which did not kill its
+    worker; after more such runs than [run] max_attempts it is not stored ``crashed``."""
+    import errno
+
+    import sweep.store.journal
+    from sweep import run_campaign
+
+    path = tmp_path / "s.h5"
+    first = next(iter(campaign.points()))
+    with Store(path, campaign) as st:  # a run died while it ran: a suspect
+        st.handout([(first.hash, 1)])
+    real = sweep.store.journal.Journal.append
+
+    def append(self, lines, sync=True):  # records do not fit; hand-outs, releases do
+        if any(line.startswith(b'{"row"') for line in lines):
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return real(self, lines, sync)
+
+    with monkeypatch.context() as m:  # the forked writer inherits it
+        m.setattr(sweep.store.journal.Journal, "append", append)
+        for _ in range(campaign.run.max_attempts + 1):
+            with pytest.raises(StoreError, match="no space left"):
+                run_campaign(campaign, str(path), compute="sweep.testing:fake_point")
+    s = run_campaign(campaign, str(path), compute="sweep.testing:fake_point")
+    assert s.counts.get("crashed", 0) == 0 and s.computed == campaign.size
+    assert sweep.validate(path) == []

@@ -388,6 +388,30 @@ def test_a_point_that_kills_its_process_is_recorded_crashed(tmp_path):
                                                                     "converged_noisy"}
 
 
+def _handouts(path, run):
+    """The hand-out lines of run ``run`` in the journal of store ``path``, in order."""
+    lines = [decode(line)[0] for line in journal_path(path).read_bytes().splitlines(True)]
+    return [o for o in lines if "handout" in o and o["run"] == run]
+
+
+def test_only_the_running_point_of_each_worker_is_a_suspect_after_a_kill(tmp_path):
+    """A run killed with tasks queued at its workers: on resume only the earliest
+    unfinished hand-out of each worker (the point it was running) is computed alone; the
+    points queued behind it were not started and go out as any point does."""
+    campaign = parse_campaign(TOML)
+    path = tmp_path / "s.h5"
+    pts = list(campaign.points())
+    with Store(path, campaign) as st:  # run 0 dies: 3 tasks at worker 1, 2 at worker 2
+        st.handout([(pts[0].hash, 1), (pts[1].hash, 2), (pts[2].hash, 1)])
+        st.handout([(pts[3].hash, 2), (pts[4].hash, 1)])
+    s = run_campaign(campaign, str(path), compute=FAKE)
+    assert s.computed == len(pts)
+    again = _handouts(path, 1)
+    assert sorted(o["handout"] for o in again if o["alone"]) == sorted(
+        [pts[0].hash, pts[1].hash])
+    assert len(again) == len(pts) and sweep.validate(path) == []
+
+
 def test_point_timeout_records_timeout(tmp_path):
     """[run] point_timeout: a point that loops (Python) or blocks (sleep) is stored as
     ``timeout`` and the campaign goes on; --point-timeout overrides it."""

@@ -70,3 +70,50 @@ def test_in_process_transport_times_out_a_point_that_ignores_its_limit():
     _, kind, out = t.poll(0.0)
     assert kind == Kind.RESULT and out.status == "timeout"
     assert "point_timeout = 0.2 s" in out.message and time.monotonic() - t0 < 20
+
+
+def test_mpi_transport_sends_tasks_without_waiting_for_them(monkeypatch):
+    """The master's task sends are non-blocking (``isend``, tested later: a blocking send
+    took 44 % of its time at 64 ranks, docs/cluster.md); the stop waits for them."""
+    import sys
+    import types
+
+    from sweep.protocol import TAG_TASK, Task
+    from sweep.run.transport import MPITransport
+
+    class Request:
+        def __init__(self):
+            self.tests = 0
+
+        def Test(self):  # completes on its second test
+            self.tests += 1
+            return self.tests >= 2
+
+    class Comm:
+        def __init__(self):
+            self.isent, self.sent = [], []
+
+        def Get_size(self):
+            return 3
+
+        def isend(self, obj, dest, tag):
+            self.isent.append((obj, dest, tag, Request()))
+            return self.isent[-1][-1]
+
+        def send(self, obj, dest, tag):
+            self.sent.append((obj, dest, tag))
+
+    fake = types.ModuleType("mpi4py")
+    fake.MPI = types.SimpleNamespace(Status=lambda: None, ANY_SOURCE=-1)
+    monkeypatch.setitem(sys.modules, "mpi4py", fake)
+    comm = Comm()
+    t = MPITransport(comm)
+    tasks = [Task("a" * 64, {}), Task("b" * 64, {}), Task("c" * 64, {})]
+    for worker, task in zip([1, 2, 1], tasks, strict=True):
+        t.send(worker, task)
+    assert comm.sent == []  # no blocking send
+    assert [(o, d, g) for o, d, g, _ in comm.isent] == [
+        (tasks[0], 1, TAG_TASK), (tasks[1], 2, TAG_TASK), (tasks[2], 1, TAG_TASK)]
+    t.shutdown()
+    assert comm.sent == [(None, 1, TAG_TASK), (None, 2, TAG_TASK)]
+    assert all(r.tests >= 2 for *_, r in comm.isent)  # each seen complete

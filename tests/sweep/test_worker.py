@@ -131,3 +131,52 @@ def test_resolve_compute_says_what_is_wrong():
                       ("sweep.testing:SMALL_REAL_BASE", "not callable")):
         with pytest.raises(ConfigError, match=why):
             resolve_compute(spec)
+
+
+# ---------------------------------------------------------------- start-up (issue 45)
+def test_a_worker_rank_does_not_read_the_campaign(tmp_path, monkeypatch):
+    """Under MPI a worker computes what rank 0 sends it: ``sweep run`` on rank 1 never
+    reads the campaign (each rank parsed the whole grid at start-up: ~3 s for the
+    24k-point grid of configs/herman2019.toml), and ends on rank 0's stop."""
+    import sweep.cli
+    import sweep.config
+
+    comm = FakeComm([None])
+    comm.Get_size = lambda: 3
+    monkeypatch.setattr(sweep.cli, "mpi_world", lambda: comm)
+
+    def never(path):
+        raise AssertionError(f"a worker read the campaign {path}")
+
+    monkeypatch.setattr(sweep.config, "load_campaign", never)
+    assert sweep.cli.main(["run", str(tmp_path / "c.toml"), "--store",
+                           str(tmp_path / "s.h5"), "--compute",
+                           "sweep.testing:fake_point"]) == 0
+    assert [k for k, _ in comm.sent] == [Kind.READY]
+    assert not (tmp_path / "s.h5").exists()
+
+
+def test_rank_0_that_cannot_read_the_campaign_stops_its_workers(tmp_path, monkeypatch,
+                                                               capsys):
+    """Rank 0 alone reads the campaign: when it cannot, it tells every worker to stop
+    (they wait for its first word) and the job ends with its status."""
+    import sweep.cli
+
+    class Rank0:
+        sent = []
+
+        def Get_rank(self):
+            return 0
+
+        def Get_size(self):
+            return 3
+
+        def send(self, obj, dest, tag):
+            self.sent.append((obj, dest, tag))
+
+    comm = Rank0()
+    monkeypatch.setattr(sweep.cli, "mpi_world", lambda: comm)
+    assert sweep.cli.main(["run", str(tmp_path / "absent.toml"), "--store",
+                           str(tmp_path / "s.h5")]) == 2
+    assert comm.sent == [(None, 1, TAG_TASK), (None, 2, TAG_TASK)]
+    assert "absent.toml" in capsys.readouterr().err
