@@ -310,6 +310,8 @@ def test_cli_runs_and_checks_the_paper_campaigns(stores, capsys):
     assert table.startswith("| # | claim") and "hold," in table.splitlines()[-1]
 
 
+@pytest.mark.slow  # fast: tests/sweep/test_report.py::test_an_extra_section_from_outside_and_missing_store
+# (a report with a section from outside) and this module's tables
 def test_report_adds_the_paper_check_table(stores, tmp_path, capsys):
     """``herman2019 report``: sweep's report of a store with the table as its last section
     (moved from ``sweep report --paper-check``)."""

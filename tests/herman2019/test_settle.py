@@ -372,6 +372,8 @@ def test_the_floor_stops_a_row_only_when_asked(tmp_path, monkeypatch):
     assert plain.rows[0].look == 3
 
 
+@pytest.mark.slow  # fast: test_check.py::test_cli_seeds_runs_the_seeds_swept_into_one_store_per_campaign
+# (the seeds swept in one store, in-process) and tests/sweep/test_mpi.py's mpiexec runs
 def test_run_seeds_in_processes_stores_what_one_process_stores(tmp_path):
     """A look's seeds run by ``sweep run`` under mpiexec (2 workers) store what one
     process stores; a later look extends the campaign by its seeds."""

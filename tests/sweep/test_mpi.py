@@ -104,6 +104,9 @@ def test_mpiexec_3_real_points_equal_one_rank(tmp_path, tiny, inproc):
     assert list(after["seq"]) == list(df["seq"])
 
 
+@pytest.mark.slow  # fast: test_store_process.py::test_writer_stores_what_the_inline_master_stores
+# (the same table from both writers) and test_mpiexec_3_real_points_equal_one_rank (the
+# writer process under mpiexec)
 def test_writer_process_and_inline_master_store_the_same(tmp_path):
     """``[run] writer = "process"`` (the default under MPI) and ``"inline"``: the same
     stored table; the summary names the writer's CPU only when there is one; a store
@@ -170,9 +173,9 @@ def test_a_campaign_rank_0_cannot_read_ends_the_job(tmp_path):
     assert not (tmp_path / "s.h5").exists()
 
 
-@pytest.mark.parametrize("sig", [signal.SIGTERM,
-                                 pytest.param(signal.SIGUSR1, marks=pytest.mark.slow)])
-# SIGUSR1: slow tier (fast: SIGTERM here; SIGUSR1 in test_store_safety.py's rebuild stops)
+@pytest.mark.slow  # fast: test_grace_expiry_aborts_but_store_consistent (SIGTERM to an
+# mpiexec run) and test_store_safety.py's stops and resumes in-process (SIGUSR1 among them)
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGUSR1])
 def test_signal_stops_cleanly_and_resumes(tmp_path, sig):
     cfg = tmp_path / "c.toml"
     cfg.write_text(FAKE_TOML)

@@ -635,6 +635,8 @@ def test_a_point_that_closes_stdout_does_not_break_the_summary(tmp_path):
     assert "Traceback" not in p.stderr
 
 
+@pytest.mark.slow  # fast: test_store_safety.py::test_point_timeout_records_timeout and
+# ::test_point_stuck_in_native_code_is_stored_timeout_in_one_run
 def test_a_point_that_swallows_its_timeout_is_timeout_in_one_run(tmp_path):
     """``except BaseException`` in a loop: in-process the point runs in a child process
     killed a margin after point_timeout: ``timeout`` in this run (before: 7 runs of
