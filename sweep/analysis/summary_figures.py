@@ -180,7 +180,7 @@ def collision_stats_figure(df: pd.DataFrame, out: Path) -> list[Path]:
     for ax in (ax1, ax2):
         ax.set_xlabel("restitution coefficient ε [–]")
         ax.grid(alpha=0.3)
-    from matplotlib.lines import Line2D
+    from matplotlib.lines import Line2D  # lazy: matplotlib is the plot extra
 
     absent = [Line2D([], [], ls="none", label=f"{label}: no compact zone (not drawn)")
               for label in empty]
