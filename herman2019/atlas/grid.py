@@ -10,7 +10,7 @@ import numpy as np
 from floewave import ModelConfig
 from floewave.transient import drag_time
 from herman2019.atlas.page import Page
-from herman2019.atlas.stats import PARAMS, decomposition, fmt, marginal, responses
+from herman2019.atlas.stats import PARAMS, axis_label, decomposition, fmt, marginal, responses
 
 __all__ = ["compact_zones", "marginal_effects", "variance", "wc_law"]
 
@@ -35,7 +35,7 @@ def compact_zones(page: Page) -> None:
             cells.append(f"{v}: {s:.3f} ± {math.sqrt(s * (1 - s) / len(g)):.3f}")
         say(f"| {p} | {'; '.join(cells)} |")
     say("")
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4))
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4), constrained_layout=True)
     for ax, (a, b) in zip(axes, (("T", "a0"), ("C_sd", "eps"), ("d_f", "L_x")), strict=True):
         piv = ok.pivot_table(index=a, columns=b, values="compact", aggfunc="mean",
                              observed=True)
@@ -43,8 +43,8 @@ def compact_zones(page: Page) -> None:
                        aspect="auto")
         ax.set_xticks(range(piv.shape[1]), [str(c) for c in piv.columns])
         ax.set_yticks(range(piv.shape[0]), [str(r) for r in piv.index])
-        ax.set_xlabel(b)
-        ax.set_ylabel(a)
+        ax.set_xlabel(axis_label(b))
+        ax.set_ylabel(axis_label(a))
         for i in range(piv.shape[0]):
             for j in range(piv.shape[1]):
                 ax.text(j, i, f"{piv.iat[i, j]:.2f}", ha="center", va="center",
@@ -81,7 +81,7 @@ def marginal_effects(page: Page) -> None:
             ax.errorbar(xs, [t[2] for t in m], yerr=[t[3] for t in m], fmt="o-", ms=4)
             ax.set_xticks(xs, [str(t[0]) for t in m], rotation=45, fontsize=7)
             if r == len(resp) - 1:
-                ax.set_xlabel(p)
+                ax.set_xlabel(axis_label(p))
             if c == 0:
                 ax.set_ylabel(label, fontsize=8)
         say("")

@@ -7,13 +7,22 @@ import math
 import numpy as np
 import pandas as pd
 
+from sweep.store.schema import column
+
 __all__ = ["PARAMS", "GRID_POINTS", "CHANCE", "REVERSAL", "responses", "marginal", "design",
-           "r2", "decomposition", "paired", "where_contra", "verdict", "fmt"]
+           "r2", "decomposition", "paired", "where_contra", "verdict", "fmt", "axis_label"]
 
 #: The grid's seven parameters (configs/herman2019.toml's [sweep]).
 PARAMS = ("L_x", "T", "a0", "C_sd", "eps", "d_f", "dispersion")
 #: The points of the paper's whole grid.
 GRID_POINTS = 24192
+
+
+def axis_label(param: str) -> str:
+    """A parameter's axis label with its unit as the store declares it ("T [s]"; a
+    dimensionless one "[1]"; the dispersion relation has none)."""
+    units = column(param).units
+    return f"{param} [{units}]" if units else param
 
 
 def responses(df: pd.DataFrame) -> dict[str, tuple[pd.Series, pd.Series, str]]:

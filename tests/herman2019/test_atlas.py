@@ -158,3 +158,13 @@ def test_real_reversals_beyond_chance_are_not_a_trend_that_holds():
     assert t["contra"] <= atlas.CHANCE * t["n"]
     assert t["contra"] > atlas.REVERSAL * t["neg"]
     assert atlas.verdict(t) == "holds, with real reversals"
+
+
+def test_the_atlas_axes_name_their_units():
+    """Each parameter axis of the atlas's figures has its unit (issue [harden] 10: the heat
+    maps' axes had none), as the store declares it."""
+    from herman2019.atlas.stats import PARAMS, axis_label
+
+    assert axis_label("T") == "T [s]" and axis_label("C_sd") == "C_sd [1]"
+    assert all(axis_label(p).endswith("]") for p in PARAMS if p != "dispersion")
+    assert axis_label("dispersion") == "dispersion"
