@@ -1,5 +1,6 @@
 """The DEM time loop of an ensemble of floe chains, built from frozen options (private; use
-:mod:`floewave.model`), with its parameters, the confined window and the scratch arrays.
+:mod:`floewave.model`), with its parameters, a chain's whole set-up (:func:`chain_kernel`),
+the confined window and the scratch arrays.
 
 Everything here is nopython, cached, without fast-math (flags and why:
 :mod:`floewave._jit`). The kernels see only numpy arrays and a :class:`KernelParams` named
@@ -99,6 +100,7 @@ from ._layout import (
 )
 from .config import ModelConfig
 from .forces import (
+    cell_offsets,
     effective_modulus,
     froude_krylov_coefficient,
     orbital_velocity_amplitude,
@@ -338,6 +340,34 @@ def make_advance(opts: KernelOptions):
         return istep
 
     return advance
+
+
+class ChainKernel(NamedTuple):
+    """A chain's kernel set up for ``cfg`` and one wavenumber (:func:`chain_kernel`)."""
+
+    P: KernelParams
+    opts: KernelOptions    # the spin-up loop's options (``accumulate`` off)
+    cxi: np.ndarray        # cos(k xi), sin(k xi) at the cell offsets xi (forces.cell_offsets)
+    sxi: np.ndarray
+    mom: tuple             # the tables' moments for the drag mode the loops run
+    spin: object           # make_advance(opts)
+    average: object        # make_advance of the same options with ``accumulate`` on
+
+
+def chain_kernel(cfg: ModelConfig, k: float) -> ChainKernel:
+    """The kernel's whole set-up for a chain of ``cfg`` at wavenumber ``k``: coefficients,
+    options, cell tables and their moments, and the two compiled time loops (spin-up,
+    averaging)."""
+    opts = kernel_options(cfg, False)
+    spin = make_advance(opts)
+    average = make_advance(opts._replace(accumulate=True))
+    P = kernel_params(cfg, k)
+    xi = cell_offsets(cfg)
+    cxi = np.cos(k * xi)
+    sxi = np.sin(k * xi)
+    # the tables' moments for the drag mode the loops run (prefix_sums reads either)
+    mom = exact_tables(P.geom) if opts.drag == DRAG_EXACT else drag_tables(cxi, sxi, P)
+    return ChainKernel(P, opts, cxi, sxi, mom, spin, average)
 
 
 @functools.cache

@@ -1,5 +1,5 @@
 """The 1-D floe chain (docs/model.md §1): its state, or that of R chains in lockstep, and the
-compiled time loop around it (:func:`floewave._kernels.make_advance`). The attenuation
+compiled time loop around it (set up by :func:`floewave._kernels.chain_kernel`). The attenuation
 iteration (:mod:`floewave.iteration`) runs its windows on it."""
 from __future__ import annotations
 
@@ -8,7 +8,6 @@ import numpy as np
 from . import _kernels as K
 from .config import ModelConfig
 from .errors import NumericalError
-from .forces import cell_offsets
 
 __all__ = ["FloeChain"]
 
@@ -25,10 +24,6 @@ class FloeChain:
     def __init__(self, cfg: ModelConfig, k: float, x0: np.ndarray | None = None):
         self.cfg = cfg
         self.k = k
-        self.P = K.kernel_params(cfg, k)
-        xi = cell_offsets(cfg)
-        self.cxi = np.cos(k * xi)
-        self.sxi = np.sin(k * xi)
         n = cfg.n_floes
         # x_1 = L_x / 2, x_{i+1} = x_i + L_x + d_f: the ice edge is x = 0 (uniform
         # placement; an ensemble passes each replica's own arrangement as a row)
@@ -41,13 +36,9 @@ class FloeChain:
         self.n = self.x0.shape[-1]
         self.replicas = self.x0.size // self.n
         self.work = K.new_work(self.x0.size)
-        # the tables' moments for the drag mode the loop runs (prefix_sums reads either)
-        self.opts = K.kernel_options(cfg, False)
-        self.mom = (K.exact_tables(self.P.geom) if self.opts.drag == K.DRAG_EXACT
-                    else K.drag_tables(self.cxi, self.sxi, self.P))
+        (self.P, self.opts, self.cxi, self.sxi, self.mom, self._spin,
+         self._average) = K.chain_kernel(cfg, k)
         self.idx = np.zeros(self.x0.size, np.int64)
-        self._spin = K.make_advance(self.opts)
-        self._average = K.make_advance(K.kernel_options(cfg, True))
         self.reset()
 
     def reset(self) -> None:

@@ -21,7 +21,7 @@ Definitions (``prof`` are the (R, N_f) time means over the averaging windows of 
     record that).
 
 Standard errors (``*_stderr``): the delete-one jackknife over replicas
-(:func:`floewave.results.jackknife_se`; for the two means it is the standard
+(:func:`floewave.errorbars.jackknife_se`; for the two means it is the standard
 error of the mean); NaN with one replica. Fixed floes (``confined``) have no collisions:
 every collision statistic is NaN.
 
@@ -38,7 +38,8 @@ import math
 import numpy as np
 
 from .config import ModelConfig
-from .results import Zones, compact_zones, jackknife_se
+from .errorbars import jackknife_se
+from .results import Zones, compact_zones
 
 __all__ = ["COLLISION_COLUMNS", "GAP_AND_COLLISION_FIELDS", "collision_statistics",
            "replica_collision_records", "gap_zone_width", "gap_rule_widths", "zone_of"]

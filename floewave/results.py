@@ -13,7 +13,7 @@ from . import outputs
 
 __all__ = ["PointResult", "PROFILE_FIELDS", "SCALAR_FIELDS", "REPLICA_FIELDS", "LAYOUTS", "Zones",
            "point_result_type", "compact_zones", "fit_zone", "zone_fits", "fit_inverse",
-           "fit_exponential", "power_law", "power_law_weighted", "jackknife_se"]
+           "fit_exponential", "power_law", "power_law_weighted"]
 
 #: Per-floe (length N_f) or per-pair (length N_f - 1, padded to N_f with NaN) profiles.
 PROFILE_FIELDS = tuple(o.name for o in outputs.profiles())
@@ -323,14 +323,3 @@ def fit_exponential(x: np.ndarray, a: np.ndarray, a0: float) -> tuple[float, flo
     slope, _, fit = _linfit(x[ok], np.log(a[ok]))
     resid = np.sqrt(np.mean((np.exp(fit) - a[ok]) ** 2)) / a0
     return -slope, float(resid)
-
-
-def jackknife_se(loo: np.ndarray) -> np.ndarray:
-    """Delete-one jackknife standard error from the R leave-one-out values (axis 0);
-    NaN where any leave-one-out value is NaN or R < 2 (a 0-d array for 1-D ``loo``: float() it)."""
-    loo = np.asarray(loo, dtype=float)
-    R = loo.shape[0]
-    if R < 2:
-        return np.full(loo.shape[1:], np.nan)
-    d = loo - loo.mean(axis=0)
-    return np.sqrt((R - 1) / R * (d * d).sum(axis=0))

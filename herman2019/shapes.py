@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from floewave import march_coefficients
-from floewave.results import jackknife_se
+from floewave.errorbars import jackknife_se
 from herman2019.points import config_of
 
 __all__ = ["two_segment_break", "break_estimate", "threshold_crossing", "loo_amplitudes",

@@ -22,7 +22,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from floewave.results import jackknife_se
+from floewave.errorbars import jackknife_se
 from herman2019.estimates import Estimate, in_range
 from herman2019.points import INNER_OVER_C, Tables, config_of, make_check, point
 

@@ -1,5 +1,5 @@
 """The point's estimate from the averaged windows of R replicas (docs/model.md §4
-"Ensembles", §6): :func:`estimate_point` and the iteration standard error :func:`stderr`.
+"Ensembles", §6): :func:`estimate_point`, with the error bars of :mod:`floewave.errorbars`.
 
 Error bars (:func:`estimate_point`): every reported quantity is a function of the R
 replicas' records (the dissipation per averaging iteration, the time-mean gaps and
@@ -24,38 +24,18 @@ import numpy as np
 from .._march import march_coefficients, march_rows, mean_coefficients
 from ..collision_stats import collision_statistics, gap_rule_widths
 from ..config import ModelConfig
-from ..results import LAYOUTS, fit_exponential, fit_inverse, fit_zone, jackknife_se, zone_fits
+from ..errorbars import jackknife_se, max_stderr, stderr
+from ..results import LAYOUTS, fit_exponential, fit_inverse, fit_zone, zone_fits
 from .result import ESTIMATED, Estimate
 from .window import FIELDS
 
 __all__ = ["Records", "estimate_point", "windows_estimate", "targets_met", "SE_FLOOR",
-           "samples_records", "precise_enough", "effective_sample_size", "stderr", "max_stderr"]
+           "samples_records", "precise_enough"]
 
 #: the smallest standard error of a reported, as a fraction of a0: below it two runs of a
 #: non-chaotic point (replicas agreeing to rounding) differ by more than their jackknife
 #: says (measured: 1e-9 a0 apart with standard errors of 1e-11 to 1e-10 a0)
 SE_FLOOR = 1e-6
-
-
-def effective_sample_size(samples: np.ndarray) -> float:
-    """n (1 - rho1) / (1 + rho1) with rho1 the lag-1 autocorrelation pooled over floes."""
-    n = samples.shape[0]
-    if n < 3:
-        return float(n)
-    d = samples - samples.mean(axis=0)
-    var = (d * d).sum(axis=0)
-    ok = var > 0
-    if not ok.any():
-        return float(n)
-    rho = float(np.mean((d[1:, ok] * d[:-1, ok]).sum(axis=0) / var[ok]))
-    rho = min(max(rho, 0.0), 0.95)
-    return max(n * (1.0 - rho) / (1.0 + rho), 2.0)
-
-
-def stderr(samples: list[np.ndarray]) -> np.ndarray:
-    """Per-floe standard error of the mean of iteration samples (autocorrelation-corrected)."""
-    S = np.asarray(samples)
-    return S.std(axis=0, ddof=1) / math.sqrt(effective_sample_size(S))
 
 
 @dataclass
@@ -238,11 +218,6 @@ def targets_met(cfg: ModelConfig, est: Estimate) -> bool:
     if cfg.target_W_c_stderr > 0 and est.compact_zone != "none" and est.W_c_n >= 2:
         return bool(np.isfinite(se_w) and se_w <= cfg.target_W_c_stderr)
     return True
-
-
-def max_stderr(samples: list[np.ndarray]) -> float:
-    """max_i of :func:`stderr` [m]."""
-    return float(np.max(stderr(samples)))
 
 
 def samples_records(kept: list[tuple]) -> Records:

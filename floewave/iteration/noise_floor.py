@@ -17,8 +17,9 @@ import numpy as np
 
 from .._march import march_amplitude, march_rows, noise_floor_reached, residual
 from ..config import ModelConfig
+from ..errorbars import stderr
 from ..errors import NumericalError
-from .estimate import estimate_point, precise_enough, samples_records, stderr
+from .estimate import estimate_point, precise_enough, samples_records
 from .result import Estimate, Iteration
 from .window import run_window
 

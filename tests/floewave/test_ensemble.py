@@ -16,8 +16,8 @@ from floewave._march import march_amplitude, march_rows
 from floewave.collision_stats import zone_of
 from floewave.config import ConfigError
 from floewave.ensemble import initial_positions
+from floewave.errorbars import jackknife_se
 from floewave.iteration.estimate import Records, estimate_point
-from floewave.results import jackknife_se
 
 SHORT = dict(L_x=1.5, T=1.2, a0=0.02, eps=0.8, dispersion="ep", n0=2, nT=1,
              max_iterations=4, noise_window=2, n_average=2, n0_warm=0, replicas=1,

@@ -126,3 +126,22 @@ def test_kernel_params_are_the_formulas():
     Ph = kernel_params(cfg.replace(contact="hertz_disk"), k)
     assert K.contact_stiffness(0.0, Ph, K.CONTACT_HERTZ_DISK) == pytest.approx(
         Ph.kn_disk * 0.003324 / 0.03159)
+
+
+@pytest.mark.parametrize("drag", ["quadrature", "exact"])
+def test_chain_kernel_is_the_set_up_of_its_parts(drag):
+    """chain_kernel: the coefficients, the options, the cell tables with their moments and
+    the two loops, each what its part builds alone."""
+    from floewave.forces import cell_offsets
+    cfg = ModelConfig(drag_integration=drag)
+    k, _ = solve_dispersion(cfg)
+    ck = K.chain_kernel(cfg, k)
+    assert ck.P == kernel_params(cfg, k)
+    assert ck.opts == K.kernel_options(cfg, False)
+    assert ck.spin is K.make_advance(K.kernel_options(cfg, False))
+    assert ck.average is K.make_advance(K.kernel_options(cfg, True))
+    xi = cell_offsets(cfg)
+    assert np.array_equal(ck.cxi, np.cos(k * xi)) and np.array_equal(ck.sxi, np.sin(k * xi))
+    mom = (K.exact_tables(ck.P.geom) if drag == "exact"
+           else K.drag_tables(ck.cxi, ck.sxi, ck.P))
+    assert all(np.array_equal(m, n) for m, n in zip(mom, ck.mom, strict=True))
