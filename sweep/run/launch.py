@@ -223,8 +223,8 @@ def _known_outcomes(todo: list[Point], store: ResultSink, master: Master,
     """The points whose outcome is known without a worker, as ``(point, status,
     message)``: impossible points (``invalid``) and points that killed their worker
     ``limit`` (``[run] max_attempts``) times (``crashed``). Points in flight when an
-    earlier run died become the master's suspects (each computed alone): per worker the
-    one it was running, not those queued behind it (:func:`sweep.store.attempts.running`)."""
+    earlier run died become the master's suspects (each computed alone:
+    :func:`sweep.store.attempts.running`)."""
     known = []
     suspects = store.suspects()
     for p in todo:

@@ -1,12 +1,15 @@
 """Which points a run that ended without their results may have been running.
 
 A point's hand-out is journaled before its task goes out (:mod:`sweep.store.journal`);
-a hand-out with no record after it is a point the run did not finish. A worker computes
-its tasks in the order they were sent, so of the unfinished hand-outs of one worker in
-one run only the earliest can have been running when the run died; the ones after it were
-queued behind it, not started, and cannot have caused the death. :func:`running` names
-those points (the master computes each alone, so that a death while it runs is its
-attempt, ``[run] max_attempts``); the others are computed as any point is.
+a hand-out with no record after it is a point the run did not finish. Every such point may
+have been the one running when the run died, and :func:`running` names them all (the
+master computes each alone, so that a death while it runs is its attempt, ``[run]
+max_attempts``). Only the earliest unfinished hand-out of each worker cannot be told
+apart from the rest: a worker computes its tasks in the order they were sent, but results
+are committed in groups, so the tasks before the one that killed the run may have
+finished with their results not yet committed, and look queued (the store torture's
+"exit 0 in a point", tests/sweep/test_store_holes.py: with only the earliest as the
+suspect, the point that exits was never computed alone and the campaign never finished).
 
 A point whose run ended by a failure of the store (a full disk, a write error, its writer
 process killed) did not kill its worker: the master journals its release
@@ -26,15 +29,9 @@ __all__ = ["running", "ends_whole", "release_orphaned"]
 
 
 def running(scan: JournalScan) -> set[str]:
-    """Per run and worker, the point of the earliest hand-out not finished (its result
-    not stored, and not released)."""
-    first: dict[tuple[int, int], tuple[int, str]] = {}
-    for h, tries in scan.handouts.items():
-        for run, worker, _ in tries:
-            at = scan.handout_at.get((h, run, worker), -1)
-            if (run, worker) not in first or at < first[(run, worker)][0]:
-                first[(run, worker)] = (at, h)
-    return {h for _, h in first.values()}
+    """The points that may have been running when a run died: every point with a
+    hand-out not finished (its result not stored, and not released)."""
+    return {h for h, tries in scan.handouts.items() if tries}
 
 
 def ends_whole(path: Path) -> bool:

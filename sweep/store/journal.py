@@ -168,10 +168,8 @@ class JournalScan:
     headers: list[dict[str, Any]] = field(default_factory=list)
     #: per point hash: (seq, byte offset, status) of its last good record
     latest: dict[str, tuple[int, int, str]] = field(default_factory=dict)
-    #: hand-outs per point hash since its last record: [(run, worker, alone), ...], and
-    #: the byte offset of each by (hash, run, worker): their order in the journal
+    #: hand-outs per point hash since its last record: [(run, worker, alone), ...]
     handouts: dict[str, list[tuple[int, int, bool]]] = field(default_factory=dict)
-    handout_at: dict[tuple[str, int, int], int] = field(default_factory=dict)
     #: lines to set aside: (byte offset, length, reason)
     bad: list[tuple[int, int, str]] = field(default_factory=list)
     records: int = 0
@@ -376,7 +374,6 @@ class Journal:
                     out.handouts.setdefault(h, []).append((int(obj.get("run", -1)),
                                                            int(obj.get("worker", -1)),
                                                            bool(obj.get("alone", False))))
-                    out.handout_at[(h, *out.handouts[h][-1][:2])] = offset
                 continue
             reason = check_record(obj, model_version, statuses)
             if reason:

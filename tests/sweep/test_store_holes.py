@@ -691,3 +691,27 @@ def test_help_under_the_guard_exits_0():
                        text=True, timeout=120)
     assert p.returncode == 0, p.stderr
     assert "usage" in p.stdout and "before the campaign finished" not in p.stderr
+
+
+def test_a_point_that_exits_0_behind_uncommitted_results_is_found(tmp_path):
+    """The point that ends the process is queued behind points whose results were
+    computed but not yet committed (one group commit): every unfinished hand-out is a
+    suspect, so it is computed alone, charged, and stored ``crashed``; the campaign ends.
+    (With only each worker's earliest unfinished hand-out as the suspect, a point before
+    it was retried alone at every run and the campaign never finished: the store torture's
+    "exit 0 in a point".)"""
+    eps = ", ".join(repr(round(0.05 + 0.05 * i, 2)) for i in range(12))
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(f"[base]\nL_sheet = 6.0\n[sweep]\neps = [{eps}]\n[run]\nmax_attempts = 1\n")
+    path = tmp_path / "s.h5"
+    codes = []
+    for _ in range(6):
+        p = _sweep("run", cfg, "--store", path, "--compute", "sweep.testing:exiting_point",
+                   "--no-bar")
+        codes.append(p.returncode)
+        if p.returncode == 0:
+            break
+    assert codes[-1] == 0, codes
+    df = sweep.load(path).set_index("eps")
+    assert len(df) == 12 and df.loc[0.4, "status"] == "crashed"
+    assert set(df.drop(index=0.4)["status"]) == {"converged"}
