@@ -25,6 +25,8 @@ def _guard_of_a_child_killed_by(sig: int, err_path) -> int:
             child = os.fork()
             if child == 0:
                 os.close(r)
+                if sig != signal.SIGKILL:  # as a campaign would (nohup may ignore SIGHUP)
+                    signal.signal(sig, signal.SIG_DFL)
                 os.kill(os.getpid(), sig)
                 os._exit(0)  # pragma: no cover - the signal ends it first
             os.close(w)
