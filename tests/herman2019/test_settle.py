@@ -185,7 +185,10 @@ def _settle_draws(mu, sigma, *, draws, rng, zs=None, rule="range", hi=1.0, state
     return np.array(out)
 
 
-@pytest.mark.parametrize("rule", ["range", "pair"])
+@pytest.mark.parametrize("rule", [
+    "range",
+    # slow tier (fast: "range", the same sequential reading and boundaries on a range rule)
+    pytest.param("pair", marks=pytest.mark.slow)])
 def test_sequential_false_verdict_rate_on_synthetic_claims(rule):
     """The truth on the claim's bound (range: mu = hi; pair: no difference): "holds" and
     "fails" are both false verdicts. The looks keep each at most alpha (the seeds'

@@ -162,6 +162,7 @@ def test_slurm_ntasks_mismatch_refused(tmp_path, tiny, inproc):
     assert not store.exists()
 
 
+@pytest.mark.slow  # fast: test_worker.py::test_rank_0_that_cannot_read_the_campaign_stops_its_workers
 def test_a_campaign_rank_0_cannot_read_ends_the_job(tmp_path):
     """Only rank 0 reads the campaign; when it cannot, it stops the workers (which wait
     for its first word): the job ends at once with status 2 and one message."""

@@ -81,7 +81,7 @@ def test_writer_stores_what_the_inline_master_stores(tmp_path, campaign):
     again.close()
 
 
-def test_open_errors_are_the_stores_own(tmp_path, campaign):
+def test_open_errors_are_the_stores_own(tmp_path, campaign, refused_at_once):
     """A store held by another writer, or of another campaign: the writer's exception, as
     Store raises it, and the writer process is gone."""
     path = tmp_path / "s.h5"
