@@ -46,10 +46,12 @@ class Cell:
         k, _ = pkg.solve_dispersion(cfg)
         self.n = cfg.n_floes
         self.chain = model.FloeChain(cfg, k)
-        self.a = np.full(cfg.n_floes, cfg.a0)
-        self.stats = np.zeros((8, cfg.n_floes))
+        kernels = importlib.import_module(pkg.__name__ + "._kernels")
+        shape = np.shape(self.chain.x)               # (R, N_f) since ensembles
+        self.a = np.full(shape, cfg.a0)
+        self.stats = np.zeros((kernels.N_STATS, *shape))
         self.chain.run(self.a, 2 * cfg.n_t)          # compile, spin up
-        self.chain.run(self.a, 10, self.stats)
+        self.chain.run(self.a, 12, self.stats)       # a multiple of drag_every (4)
 
     def window(self, steps: int, acc: bool) -> float:
         t = time.perf_counter()
