@@ -64,3 +64,28 @@ def store_holder(path, toml: str):
                               stdout=subprocess.PIPE, text=True)
     assert holder.stdout.readline().strip() == "locked"
     return holder
+
+
+def suspect_with_a_full_disk(path, campaign, monkeypatch):
+    """Leave the first point of ``campaign`` at ``path`` as a suspect (a run died while it
+    ran alone), and make every journal write of a record fail with ENOSPC from now on
+    (hand-outs and releases still fit: the store's writer, or a forked writer process,
+    breaks at its first commit). Returns that point."""
+    import errno
+    import os
+
+    import sweep.store.journal
+    from sweep.store.store import Store
+
+    first = next(iter(campaign.points()))
+    with Store(path, campaign) as st:
+        st.handout([(first.hash, 1)])
+    real = sweep.store.journal.Journal.append
+
+    def append(self, lines, sync=True):
+        if any(line.startswith(b'{"row"') for line in lines):
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return real(self, lines, sync)
+
+    monkeypatch.setattr(sweep.store.journal.Journal, "append", append)
+    return first

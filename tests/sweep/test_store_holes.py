@@ -359,26 +359,14 @@ def test_failed_resumes_on_a_full_disk_charge_no_attempt(tmp_path, monkeypatch, 
     journal write: the store is broken): the run ends with exit 3 and the point, computed
     alone, is released (it did not kill its worker); after more such resumes than
     [run] max_attempts it is still computed, not stored ``crashed``."""
-    import errno
-
-    import sweep.store.journal
+    from tests.sweep.helpers import suspect_with_a_full_disk
 
     cfg = tmp_path / "c.toml"
     cfg.write_text(TOML)
     campaign = parse_campaign(TOML)
     path = tmp_path / "s.h5"
-    first = next(iter(campaign.points()))
-    with Store(path, campaign) as st:  # a run died while it ran: a suspect
-        st.handout([(first.hash, 1)])
-    real = sweep.store.journal.Journal.append
-
-    def append(self, lines, sync=True):  # records do not fit; hand-outs, releases do
-        if any(line.startswith(b'{"row"') for line in lines):
-            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
-        return real(self, lines, sync)
-
     with monkeypatch.context() as m:
-        m.setattr(sweep.store.journal.Journal, "append", append)
+        first = suspect_with_a_full_disk(path, campaign, m)
         for _ in range(campaign.run.max_attempts + 1):
             assert main(["run", str(cfg), "--store", str(path), "--compute", FAKE,
                          "--no-bar"]) == 3

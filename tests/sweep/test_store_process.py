@@ -266,24 +266,12 @@ def test_a_full_disk_in_the_writer_charges_no_attempt(tmp_path, campaign, proces
     """ENOSPC in the writer process while it commits a suspect point's result (its store
     broken): the writer still journals the release of the point, which did not kill its
     worker; after more such runs than [run] max_attempts it is not stored ``crashed``."""
-    import errno
-
-    import sweep.store.journal
     from sweep import run_campaign
+    from tests.sweep.helpers import suspect_with_a_full_disk
 
     path = tmp_path / "s.h5"
-    first = next(iter(campaign.points()))
-    with Store(path, campaign) as st:  # a run died while it ran: a suspect
-        st.handout([(first.hash, 1)])
-    real = sweep.store.journal.Journal.append
-
-    def append(self, lines, sync=True):  # records do not fit; hand-outs, releases do
-        if any(line.startswith(b'{"row"') for line in lines):
-            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
-        return real(self, lines, sync)
-
     with monkeypatch.context() as m:  # the forked writer inherits it
-        m.setattr(sweep.store.journal.Journal, "append", append)
+        suspect_with_a_full_disk(path, campaign, m)
         for _ in range(campaign.run.max_attempts + 1):
             with pytest.raises(StoreError, match="no space left"):
                 run_campaign(campaign, str(path), compute="sweep.testing:fake_point")
