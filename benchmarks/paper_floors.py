@@ -3,7 +3,7 @@
 The time-mean force profiles (F_w_mean, F_c_mean, F_d_mean) carry no per-replica spread,
 so the SE of a median log10 force ratio over a zone is measured here from two independent
 ensembles (two seeds) of the Fig. 2 campaign: sigma = RMS(difference) / sqrt(2) over the
-points, for each ratio and zone. ``sweep.paper.points.FLOORS["log10_force"]`` states the
+points, for each ratio and zone. ``herman2019.points.FLOORS["log10_force"]`` states the
 result, rounded up.
 
     python benchmarks/paper_floors.py paper --seeds 0 1

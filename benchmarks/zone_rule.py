@@ -1,6 +1,6 @@
 """The measurements behind the compact-zone rule's defaults (floewave.results.compact_zones).
 
-    python benchmarks/docs_numbers.py --out paper     # the paper-figure stores (or any)
+    herman2019 numbers --out paper                    # the paper-figure stores (or any)
     python benchmarks/zone_rule.py paper/fig2.h5 paper/fig5.h5 paper/fig6a.h5 \
         paper/fig6b.h5 paper/periods.h5
 
