@@ -27,3 +27,16 @@ def test_every_readme_figure_names_this_model_version():
         assert (ROOT / image).is_file(), image
         versions = set(re.findall(r"model version (\d+)", caption))
         assert versions == {str(floewave.MODEL_VERSION)}, (image, versions)
+
+
+def test_the_readme_s_measured_blocks_name_this_model_version():
+    """The demo's output and the fast tier's timing are made by docs/make_readme.py and
+    stamped with the model version that made them: a model change fails this until they
+    are made again (issue [harden] 8: they were another machine's and model version's)."""
+    text = (ROOT / "README.md").read_text()
+    blocks = dict(re.findall(r"<!-- ([a-z-]+): (.*?) -->\n.*?<!-- /\1 -->", text, re.S))
+    assert set(blocks) == {"demo-output", "fast-tier"}, blocks
+    for name, stamp in blocks.items():
+        assert stamp.startswith(f"model version {floewave.MODEL_VERSION}, "), (name, stamp)
+    demo = text.split("<!-- demo-output:", 1)[1].split("<!-- /demo-output -->", 1)[0]
+    assert re.search(r"^sweep: 16 grid points: \d+ already stored, 16 stored now", demo, re.M)
