@@ -28,7 +28,7 @@ from herman2019.check import check_stores, format_table
 from herman2019.seeds import across_seeds, check_seeds, format_seed_table
 from herman2019.settle import settle
 from herman2019.settled import format_settled, settled_json
-from sweep.errors import EXIT_INTERNAL, EXIT_OK, EXIT_STORE, ConfigError, Interrupted, SweepError
+from sweep.errors import EXIT_INTERNAL, EXIT_OK, EXIT_STORE, ConfigError, command_status, report
 
 __all__ = ["main", "build_parser"]
 
@@ -122,9 +122,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _err(message: str | BaseException) -> None:
     """Report an error on stderr (``herman2019: error:``; a stop: ``herman2019: stopped:``)."""
-    prefix = "herman2019: stopped:" if isinstance(message, Interrupted) else "herman2019: error:"
-    for line in str(message).splitlines() or [""]:
-        print(f"{prefix} {line}", file=sys.stderr)
+    report(message, "herman2019")
 
 
 # ---------------------------------------------------------------------- commands
@@ -202,13 +200,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         code = exc.code
         return code if isinstance(code, int) else (EXIT_OK if code is None else 2)
     try:
-        return _COMMANDS[args.command](args)
-    except SweepError as exc:  # ConfigError, StoreError, ...: each carries its exit status
-        _err(exc)
-        return exc.exit_status
-    except (KeyError, FileNotFoundError) as exc:
-        _err(str(exc))
-        return EXIT_STORE
+        return command_status(_COMMANDS[args.command], args, "herman2019")
     except Exception:  # noqa: BLE001 - a bug: show it
         traceback.print_exc()
         return EXIT_INTERNAL

@@ -19,7 +19,16 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from sweep.arguments import count, kind_list, plural, positive_number, seconds, shard
-from sweep.errors import EXIT_INTERNAL, EXIT_OK, EXIT_STORE, ConfigError, Interrupted, SweepError
+from sweep.errors import (
+    EXIT_INTERNAL,
+    EXIT_OK,
+    EXIT_STORE,
+    ConfigError,
+    Interrupted,
+    SweepError,
+    command_status,
+    report,
+)
 from sweep.run import guard, startup
 from sweep.run.mpi import check_launch, mpi_world
 from sweep.system import STOP_SIGNALS
@@ -115,11 +124,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _err(message: str | BaseException) -> None:
-    """Report an error on stderr; a requested stop (:class:`Interrupted`) is not an error
-    and says ``sweep: stopped:`` instead."""
-    prefix = "sweep: stopped:" if isinstance(message, Interrupted) else "sweep: error:"
-    for line in str(message).splitlines() or [""]:
-        print(f"{prefix} {line}", file=sys.stderr)
+    """Report an error on stderr (:func:`sweep.errors.report`: ``sweep: error:``, a stop
+    ``sweep: stopped:``)."""
+    report(message)
 
 
 # ---------------------------------------------------------------------- commands
@@ -338,13 +345,7 @@ def _main(argv: Sequence[str] | None) -> int:
             return EXIT_INTERNAL
         raise
     try:
-        return _COMMANDS[args.command](args)
-    except SweepError as exc:  # ConfigError, StoreError, ...: each carries its exit status
-        _err(exc)
-        return exc.exit_status
-    except (KeyError, FileNotFoundError) as exc:
-        _err(str(exc))
-        return EXIT_STORE
+        return command_status(_COMMANDS[args.command], args)
     except BrokenPipeError:  # `sweep status S.h5 | head -1`: the reader has what it wanted
         from floewave.paths import quiet_stdout  # lazy: as floewave (_version)
         quiet_stdout()

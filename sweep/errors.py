@@ -22,12 +22,16 @@ Exit statuses of the ``sweep`` command (documented in ``sweep/README.md``):
 """
 from __future__ import annotations
 
+import sys
+from collections.abc import Callable
+from typing import Any
+
 __all__ = ["SweepError", "ConfigError", "StoreError", "StoreLockedError",
            "SchemaVersionError", "CampaignMismatchError", "LaunchError", "WorkerError",
            "Interrupted", "PointNotFoundError", "StoreCorruptedError", "StoreUnreadableError",
            "UnstorableError", "BadJournalLineError", "NothingToDrawError", "EXIT_OK",
            "EXIT_INTERNAL", "EXIT_CONFIG", "EXIT_STORE", "EXIT_LAUNCH", "EXIT_WORKER",
-           "EXIT_INTERRUPTED"]
+           "EXIT_INTERRUPTED", "report", "command_status"]
 
 EXIT_OK = 0
 EXIT_INTERNAL = 1
@@ -135,3 +139,26 @@ class NothingToDrawError(ConfigError):
     def __init__(self, message: str, reasons: dict[str, str]) -> None:
         super().__init__(message)
         self.reasons = dict(reasons)
+
+
+def report(message: str | BaseException, prog: str = "sweep") -> None:
+    """Report an error on stderr, one ``PROG: error:`` line per line of it; a requested stop
+    (:class:`Interrupted`) is not an error and says ``PROG: stopped:`` instead."""
+    prefix = f"{prog}: stopped:" if isinstance(message, Interrupted) else f"{prog}: error:"
+    for line in str(message).splitlines() or [""]:
+        print(f"{prefix} {line}", file=sys.stderr)
+
+
+def command_status(command: Callable[[Any], int], args: Any, prog: str = "sweep") -> int:
+    """``command(args)``'s exit status, with the errors a command may end by reported
+    (:func:`report`) and mapped to their documented statuses: a :class:`SweepError` to its
+    own, a missing key or file to :data:`EXIT_STORE`. Anything else propagates (the
+    caller's: a bug, or a broken pipe)."""
+    try:
+        return command(args)
+    except SweepError as exc:  # ConfigError, StoreError, ...: each carries its exit status
+        report(exc, prog)
+        return exc.exit_status
+    except (KeyError, FileNotFoundError) as exc:
+        report(str(exc), prog)
+        return EXIT_STORE
