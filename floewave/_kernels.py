@@ -99,13 +99,7 @@ from ._layout import (
     W_VS,
 )
 from .config import ModelConfig
-from .forces import (
-    cell_offsets,
-    effective_modulus,
-    froude_krylov_coefficient,
-    orbital_velocity_amplitude,
-    restitution_beta,
-)
+from .forces import cell_offsets, time_loop_coefficients
 
 
 class KernelParams(NamedTuple):
@@ -132,28 +126,11 @@ class KernelParams(NamedTuple):
 
 
 def kernel_params(cfg: ModelConfig, k: float) -> KernelParams:
-    """Build the kernel's coefficient tuple for ``cfg`` and wavenumber ``k``."""
-    Ystar = effective_modulus(cfg)
-    r = cfg.L_x / 2.0
-    return KernelParams(
-        dt=cfg.dt,
-        n_t=cfg.n_t,
-        k=k,
-        omega=cfg.omega,
-        c_wave=froude_krylov_coefficient(cfg, k),
-        u_amp=orbital_velocity_amplitude(cfg, k),
-        c_drag=cfg.rho_w * cfg.C_sd * cfg.L_y * (cfg.L_x / cfg.n_x),
-        inv_mass=1.0 / ((1.0 + cfg.C_m) * cfg.mass),
-        one_cm=1.0 + cfg.C_m,
-        L_x=cfg.L_x,
-        k_s=cfg.k_s,
-        m_star=cfg.mass / 2.0,
-        beta=restitution_beta(cfg.eps),
-        kn_lin=Ystar * cfg.L_y * cfg.h_i / cfg.L_x,
-        kn_disk=math.pi * Ystar * cfg.h_i,
-        s_scale=(r / 2.0) / (2.0 * cfg.h_i**2),
-        geom=exact_geometry(k * cfg.L_x, float(cfg.n_x)),
-    )
+    """Build the kernel's coefficient tuple for ``cfg`` and wavenumber ``k``: the step, the
+    wave, and eq. 8's coefficients (:func:`floewave.forces.time_loop_coefficients`)."""
+    return KernelParams(dt=cfg.dt, n_t=cfg.n_t, k=k, omega=cfg.omega, L_x=cfg.L_x,
+                        geom=exact_geometry(k * cfg.L_x, float(cfg.n_x)),
+                        **time_loop_coefficients(cfg, k))
 
 
 class KernelOptions(NamedTuple):

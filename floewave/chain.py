@@ -98,6 +98,14 @@ class FloeChain:
                 raise ValueError("stats must be a contiguous (N_STATS, ...) array")
             self._loop(self._average, a, nsteps, flat, False)
 
+    def window(self, a: np.ndarray, n_spin: int, n_average: int, stats: np.ndarray) -> None:
+        """One window of the attenuation iteration (docs/model.md §4 steps 2-3) with
+        amplitudes ``a``: ``n_spin`` steps, then ``n_average`` steps accumulating into
+        ``stats`` (:meth:`run`), then :meth:`check`."""
+        self.run(a, n_spin)
+        self.run(a, n_average, stats)
+        self.check()
+
     def _held_drag(self) -> np.ndarray:
         """The drag sums the time loop holds between evaluations, (R, N_f) view."""
         return self.work[K.W_SC + K.SC_S2, :self.x0.size].reshape(self.x0.shape)

@@ -41,7 +41,8 @@ from .config import ModelConfig
 from .errorbars import jackknife_se
 from .results import Zones, compact_zones
 
-__all__ = ["COLLISION_COLUMNS", "GAP_AND_COLLISION_FIELDS", "collision_statistics",
+__all__ = ["COLLISION_COLUMNS", "GAP_AND_COLLISION_FIELDS", "point_statistics",
+           "collision_statistics",
            "replica_collision_records", "gap_zone_width", "gap_rule_widths", "zone_of"]
 
 #: The point's collision statistics (each with a ``*_stderr``).
@@ -119,3 +120,10 @@ def gap_rule_widths(cfg: ModelConfig, prof: dict[str, np.ndarray]) -> dict[str, 
     :data:`floewave.outputs.W_C_RULES` that this module computes."""
     W, se, _ = gap_zone_width(cfg, prof["x_mean"], prof["gap_mean"])
     return {"W_c_gap": W, "W_c_gap_stderr": se}
+
+
+def point_statistics(cfg: ModelConfig, prof: dict[str, np.ndarray]) -> dict[str, float]:
+    """Every output of this module for a point, :data:`GAP_AND_COLLISION_FIELDS`, from the
+    replicas' time-mean profiles ``prof`` (name -> (R, N_f)): :func:`gap_rule_widths` and
+    :func:`collision_statistics`."""
+    return {**gap_rule_widths(cfg, prof), **collision_statistics(cfg, prof)}

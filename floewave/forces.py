@@ -1,8 +1,8 @@
 """Floe forces of eq. 8 as small formulas (docs/model.md §3); the kernels use their coefficients.
 
-Each function states its equation. This module imports no kernel:
-:func:`floewave._kernels.kernel_params` collects the coefficients the numba time loop
-needs from these formulas.
+Each function states its equation; :func:`time_loop_coefficients` evaluates those the numba
+time loop needs for one point, in one call (:func:`floewave._kernels.kernel_params` adds the
+step and the drag cells' geometry). This module imports no kernel.
 """
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from .config import ModelConfig
 
 __all__ = ["froude_krylov_coefficient", "wave_force", "orbital_velocity_amplitude",
            "effective_modulus", "restitution_beta", "cell_offsets",
-           "slope_force"]
+           "slope_force", "time_loop_coefficients"]
 
 
 def froude_krylov_coefficient(cfg: ModelConfig, k: float) -> float:
@@ -62,3 +62,29 @@ def cell_offsets(cfg: ModelConfig) -> np.ndarray:
     """Midpoints xi_j [m] of the n_x = L_x/dx drag cells, relative to the floe centre."""
     n_x = cfg.n_x
     return (np.arange(n_x) + 0.5) * (cfg.L_x / n_x) - cfg.L_x / 2.0
+
+
+def time_loop_coefficients(cfg: ModelConfig, k: float) -> dict[str, float]:
+    """The coefficients of eq. 8's terms the time loop needs at wavenumber ``k`` [m^-1], by
+    the names of :class:`floewave._kernels.KernelParams`: ``c_wave`` [N m^-1]
+    (:func:`froude_krylov_coefficient`), ``u_amp`` [s^-1]
+    (:func:`orbital_velocity_amplitude`), ``c_drag`` = rho_w C_sd L_y dx [kg m^-2] (eq. 15),
+    ``inv_mass`` = 1 / ((1 + C_m) m) [kg^-1], ``one_cm`` = 1 + C_m, ``k_s`` [N m^-1],
+    ``m_star`` = m / 2 [kg], ``beta`` (:func:`restitution_beta`), ``kn_lin`` = Y* L_y h_i /
+    L_x [N m^-1], ``kn_disk`` = pi Y* h_i [N m^-1] and ``s_scale`` = R* / (2 h_i^2) [m^-1]
+    with R* = r / 2 (docs/model.md §3)."""
+    Ystar = effective_modulus(cfg)
+    r = cfg.L_x / 2.0
+    return dict(
+        c_wave=froude_krylov_coefficient(cfg, k),
+        u_amp=orbital_velocity_amplitude(cfg, k),
+        c_drag=cfg.rho_w * cfg.C_sd * cfg.L_y * (cfg.L_x / cfg.n_x),
+        inv_mass=1.0 / ((1.0 + cfg.C_m) * cfg.mass),
+        one_cm=1.0 + cfg.C_m,
+        k_s=cfg.k_s,
+        m_star=cfg.mass / 2.0,
+        beta=restitution_beta(cfg.eps),
+        kn_lin=Ystar * cfg.L_y * cfg.h_i / cfg.L_x,
+        kn_disk=math.pi * Ystar * cfg.h_i,
+        s_scale=(r / 2.0) / (2.0 * cfg.h_i**2),
+    )

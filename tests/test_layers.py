@@ -317,3 +317,14 @@ if __name__ == "__main__":
         print(f"  private floewave: {line}")
     for name, n in long_modules(PACKAGES):
         print(f"  {n:5d} lines: {name}")
+
+
+@pytest.mark.slow
+def test_following_cfg_through_the_model_returns_to_few_files():
+    """Issue 44: a reader following ``cfg`` from :func:`floewave.run_point` through its calls
+    (tests/cfg_walk.py) came back to a file already left 29 times by this walk before the
+    renovation's last step (25 by the review's own reading); 21 since. A new hop fails."""
+    from tests.cfg_walk import returns, walk
+    files = walk()
+    assert returns(files) <= 21, files
+    assert files[0] == "floewave/model.py"

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._march import march_coefficients, march_rows, mean_coefficients
-from ..collision_stats import collision_statistics, gap_rule_widths
+from ..collision_stats import point_statistics
 from ..config import ModelConfig
 from ..errorbars import jackknife_se, max_stderr, stderr
 from ..results import LAYOUTS, fit_exponential, fit_inverse, fit_zone, zone_fits
@@ -163,8 +163,7 @@ def estimate_point(cfg: ModelConfig, rec: Records, c_g: float, k: float) -> Esti
             out[name + "_stderr"] = float(jackknife_se(np.array([e[name][0] for e in loo])))
     # the same rule on each replica's gaps time-averaged over the whole averaging, and the
     # ice-wide collision statistics (floewave.collision_stats); no effect on the above
-    out.update(gap_rule_widths(cfg, prof))
-    out.update(collision_statistics(cfg, prof))
+    out.update(point_statistics(cfg, prof))
     return _typed(out)
 
 

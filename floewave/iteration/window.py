@@ -67,8 +67,6 @@ def run_window(cfg: ModelConfig, chain, x0s: np.ndarray, a: np.ndarray,
         if not cfg.warm_start:
             chain.reset()
         n0 = cfg.n0 if (first or not cfg.warm_start) else cfg.n0_warm
-        chain.run(a, n0 * n_t)
-        chain.run(a, cfg.nT * n_t, stats)
-        chain.check()
+        chain.window(a, n0 * n_t, cfg.nT * n_t, stats)
     windows = [Window(cfg, stats[:, r, :], cfg.nT * n_t, x0s[r]) for r in range(R)]
     return windows, np.array([dissipation(cfg, w.s3_mean) for w in windows])
