@@ -1,6 +1,7 @@
 """Kernel speed of this checkout against another git revision, measured in the same run.
 
     python benchmarks/bench_vs.py --base 57cc01b [--steps 12000] [--repeat 7]
+        [--modes quadrature exact] [--L_x 0.5 1.5 3.0]
 
 Exports the base revision's ``floewave`` package (``git archive``) into a temporary
 directory as ``floewave_base`` and imports it beside this checkout's ``floewave`` in one
@@ -64,6 +65,10 @@ def main() -> int:
     ap.add_argument("--base", required=True, help="git revision to compare against")
     ap.add_argument("--steps", type=int, default=12000)
     ap.add_argument("--repeat", type=int, default=7)
+    ap.add_argument("--modes", nargs="+", default=["quadrature", "exact"],
+                    choices=["quadrature", "exact"], help="drag modes measured")
+    ap.add_argument("--L_x", nargs="+", type=float, default=[0.5, 1.5, 3.0],
+                    help="floe lengths measured [m]")
     args = ap.parse_args()
     head_rev = subprocess.run(["git", "-C", str(ROOT), "describe", "--always", "--dirty"],
                               capture_output=True, text=True).stdout.strip()
@@ -77,8 +82,8 @@ def main() -> int:
               f"steps, best of {args.repeat}); base {args.base}, head {head_rev}")
         print(f"{'mode':<12}{'L_x':>5}{'N_f':>5}{'base spin':>11}{'head spin':>11}"
               f"{'ratio':>7}{'base avg':>10}{'head avg':>10}{'ratio':>7}", flush=True)
-        for mode in ("quadrature", "exact"):
-            for L_x in (0.5, 1.5, 3.0):
+        for mode in args.modes:
+            for L_x in args.L_x:
                 cells = {"base": Cell(base, mode, L_x), "head": Cell(head, mode, L_x)}
                 best = {}
                 for acc in (False, True):
