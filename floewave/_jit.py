@@ -66,7 +66,7 @@ from numba.core import caching as _caching  # noqa: E402
 #: constants they read (numba freezes a module global into the compiled code). Every file of
 #: floewave that imports this module is one (tests/floewave/test_kernel_sources.py).
 KERNEL_SOURCES = ("_jit.py", "_layout.py", "_contact.py", "_prefix.py", "_drag.py",
-                  "_exact.py", "_exact_pass.py", "_force_terms.py", "_kernels.py",
+                  "_exact.py", "_exact_pass.py", "_force_terms.py", "_kernels.py", "_respa.py",
                   "_march.py")
 _HERE = os.path.dirname(os.path.abspath(__file__))
 

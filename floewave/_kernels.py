@@ -74,6 +74,7 @@ from ._layout import (
     HOLD_MIDPOINT,
     INTEG_HALF_STEP,
     INTEG_PREDICTOR,
+    INTEG_RESPA,
     LANES,
     N_SC,
     N_STATS,
@@ -98,6 +99,7 @@ from ._layout import (
     W_VC,
     W_VS,
 )
+from ._respa import make_advance_respa
 from .config import ModelConfig
 from .forces import cell_offsets, time_loop_coefficients
 
@@ -152,7 +154,8 @@ def kernel_options(cfg: ModelConfig, accumulate: bool) -> KernelOptions:
         contact=CONTACT_HERTZ_DISK if cfg.contact == "hertz_disk" else CONTACT_LINEAR,
         damping=DAMPING_LIGGGHTS if cfg.damping == "liggghts" else DAMPING_EXACT,
         clip=1 if cfg.clip_attraction else 0,
-        integrator=INTEG_PREDICTOR if cfg.integrator == "predictor" else INTEG_HALF_STEP,
+        integrator={"predictor": INTEG_PREDICTOR, "half_step": INTEG_HALF_STEP,
+                    "respa": INTEG_RESPA}[cfg.integrator],
         drag=DRAG_QUADRATURE if cfg.drag_integration == "quadrature" else DRAG_EXACT,
         drag_every=int(cfg.drag_every),
         hold=HOLD_LINEAR if cfg.drag_hold == "linear" else HOLD_MIDPOINT,
@@ -336,8 +339,9 @@ def chain_kernel(cfg: ModelConfig, k: float) -> ChainKernel:
     options, cell tables and their moments, and the two compiled time loops (spin-up,
     averaging)."""
     opts = kernel_options(cfg, False)
-    spin = make_advance(opts)
-    average = make_advance(opts._replace(accumulate=True))
+    make = make_advance_respa if opts.integrator == INTEG_RESPA else make_advance
+    spin = make(opts)
+    average = make(opts._replace(accumulate=True))
     P = kernel_params(cfg, k)
     xi = cell_offsets(cfg)
     cxi = np.cos(k * xi)

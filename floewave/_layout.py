@@ -13,6 +13,7 @@ DAMPING_LIGGGHTS = 0
 DAMPING_EXACT = 1
 INTEG_PREDICTOR = 0
 INTEG_HALF_STEP = 1
+INTEG_RESPA = 2      # contacts on their own clock (floewave._respa)
 DRAG_QUADRATURE = 0
 DRAG_EXACT = 1
 HOLD_MIDPOINT = 0    # drag_hold: a held drag evaluated at the predicted centre of its steps
@@ -57,7 +58,19 @@ W_D0 = W_SKC + 1         # drag_hold "linear": the sums s2 of the last evaluatio
 W_DS = W_D0 + 1          # ... their slope per step from the evaluation before   [m^2 s^-2]
 W_DI = W_DS + 1          # ... the step of the last evaluation (a float)         [-]
 W_SC = W_DI + 1          # then the drag scratch sc (N_SC rows, SC_* above)
-N_WORK = W_SC + N_SC
+# integrator "respa" (floewave._respa) only, after the drag scratch:
+W_AF = W_SC + N_SC       # contact (fast) acceleration, kept from step to step     [m s^-2]
+W_XS = W_AF + 1          # a replica's x, u, af, in_contact at the outer step's start
+W_US = W_XS + 1
+W_AFS = W_US + 1
+W_ICS = W_AFS + 1
+W_ACT = W_ICS + 1        # 1: pair (i, i+1) sub-stepped this outer step (a float)
+W_TX = W_ACT + 1         # the outer step's sums of x, gap, contact steps, onsets and
+W_TGAP = W_TX + 1        # |net contact force| before they join ``stats``
+W_TCON = W_TGAP + 1
+W_TCOLL = W_TCON + 1
+W_TFC = W_TCOLL + 1
+N_WORK = W_TFC + 1
 
 # entries of the cell-table moments of :func:`drag_tables`
 M_N = 0          # number of cells n_x

@@ -124,3 +124,57 @@ def advance(x, u, acc, a, x0, istep, nsteps, P, opts, cxi, sxi, held=None, slope
         acc[:] = F * P.inv_mass
         u[:] = uh + 0.5 * dt * acc
     return istep
+
+
+def advance_respa(x, u, acc, af, in_contact, a, x0, istep, nsteps, P, opts, cxi, sxi,
+                  stats=None):
+    """Numpy twin of the ``integrator = "respa"`` loop (:mod:`floewave._respa`) for one chain:
+    the same splitting, but every floe takes the M = ``opts.drag_every`` inner steps and
+    every pair's contact force is evaluated at each (no clusters: the kernel's choice of
+    which floes to sub-step must not matter). ``acc`` the slow, ``af`` the contact
+    acceleration, ``in_contact`` (int8) as the kernel keeps them; ``stats`` (N_STATS, N_f)
+    gets the sums the kernel's averaging loop keeps (x and gaps step by step, F_w, F_d and
+    the dissipation sum of the slow evaluations with weight M). Returns istep."""
+    M = int(opts.drag_every)
+    dt = P.dt
+    Dt = M * dt
+    m_inv = P.inv_mass
+    for _ in range(nsteps // M):
+        u += 0.5 * Dt * acc
+        for _ in range(M):
+            uh = u + 0.5 * dt * af
+            vs = u + dt * af
+            x += dt * uh
+            Fc = contact_force(x, vs, P, opts)
+            gap = x[1:] - x[:-1] - P.L_x
+            touch = gap < 0.0
+            f = np.zeros_like(x)
+            f[:-1] -= Fc
+            f[1:] += Fc
+            af[:] = f * m_inv
+            u[:] = uh + 0.5 * dt * af
+            if stats is not None:
+                stats[K.ST_X] += x
+                stats[K.ST_GAP, :-1] += gap
+                stats[K.ST_CONTACT, :-1] += touch
+                stats[K.ST_COLL, :-1] += touch & (in_contact[:-1] == 0)
+                stats[K.ST_FC] += np.abs(f)
+            in_contact[:-1] = touch
+        istep += M
+        wt = 2.0 * math.pi / P.n_t * (istep % P.n_t)
+        vs = u + 0.5 * Dt * acc
+        Fw = wave_force(x, a, wt, P)
+        Fd = skin_drag(x, vs, a, wt, P, cxi, sxi)
+        F = P.one_cm * Fw + Fd
+        F[0] += edge_spring(x[0], x0[0], P)
+        F[-1] += edge_spring(x[-1], x0[-1], P)
+        acc[:] = F * m_inv
+        u += 0.5 * Dt * acc
+        if stats is not None:
+            stats[K.ST_FW] += M * np.abs(Fw)
+            stats[K.ST_FD] += M * np.abs(Fd)
+            th = P.k * x - wt
+            ur = (a * P.u_amp)[:, None] * (np.cos(th)[:, None] * cxi[None, :]
+                                           - np.sin(th)[:, None] * sxi[None, :]) - vs[:, None]
+            stats[K.ST_S3] += M * np.sum(np.abs(ur) ** 3, axis=1)
+    return istep

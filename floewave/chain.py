@@ -114,7 +114,7 @@ class FloeChain:
         """Every row of scratch a held drag carries from step to step ((R, N_f) views):
         the sums held, and for ``drag_hold = "linear"`` the last evaluation, its slope and
         its step."""
-        rows = [K.W_SC + K.SC_S2, K.W_D0, K.W_DS, K.W_DI]
+        rows = [K.W_SC + K.SC_S2, K.W_D0, K.W_DS, K.W_DI, K.W_AF]
         return [self.work[r, :self.x0.size].reshape(self.x0.shape) for r in rows]
 
     def check(self) -> None:

@@ -1,0 +1,356 @@
+"""Contacts on their own clock: the time loop of ``integrator = "respa"`` (private; built by
+:func:`make_advance_respa`, run by :class:`floewave.chain.FloeChain` like the loop of
+:func:`floewave._kernels.make_advance`, with the same arguments).
+
+**Why.** A contact must be resolved in about 20 steps (dt = 1e-3 s: the restitution table of
+docs/model.md §3 within 0.01), while the waves, the drag and the edge springs change on
+T / 100 or slower; yet pairs touch in only about a quarter of the floe-steps of the paper's
+grid. So the forces are split by their clock (r-RESPA, Tuckerman, Berne & Martyna 1992,
+J. Chem. Phys. 97, 1990; LAMMPS ``run_style respa``): with M = ``drag_every`` and the outer
+step Dt = M dt, per outer step::
+
+    u += Dt/2 a_slow                                  # slow half-kick
+    M inner steps of dt under the contact force alone  # velocity Verlet, v* predictor
+    a_slow = (eq. 8 without F_c at x(t + Dt), v*) / ((1 + C_m) m)
+    u += Dt/2 a_slow                                  # slow half-kick
+
+The slow force is eq. 8's (1 + C_m) F_w + F_d + F_s (:mod:`floewave._force_terms`), its
+velocity-dependent drag at v* = u + Dt/2 a_slow (the end-of-step velocity predicted, as
+``integrator = "predictor"`` does for every step). The inner steps are those of the
+predictor integrator with F_c alone, so an isolated collision without waves is resolved
+exactly as there.
+
+**Only the pairs that may touch are sub-stepped.** After the slow half-kick every floe
+moves at constant velocity unless it touches a neighbour, so the gap of a pair of free
+floes is linear over the outer step: the pair is *active* if that line reaches 0 (or it
+touches now). Maximal runs of floes joined by active pairs are *clusters*; a cluster's
+floes take the M inner steps, every other floe one drift x += Dt u. A collision inside a
+cluster can push its end floe into a free neighbour within the outer step: each inner step
+checks the gaps to the free neighbours (at their linear positions), and if one closes, that
+pair is made active, the replica's outer step is started again from its saved state, and
+the grown cluster is sub-stepped (the check repeats until no gap to a free floe closes).
+
+**Statistics** (``accumulate``) are those of every step, as the other loop keeps them: the
+sums over the M steps of x and the gaps (exact for free floes and pairs, whose positions
+are linear in time; step by step in the clusters), contact steps, onsets and |net contact
+force| step by step (zero outside the clusters); the wave force, the drag and the
+dissipation sum of eq. 19 are evaluated once per outer step and stand for its M steps.
+"""
+from __future__ import annotations
+
+import functools
+import math
+
+from numba import njit
+
+from ._force_terms import contact_force, edge_spring, skin_drag, skin_drag_sums, wave_force
+from ._jit import JITN
+from ._layout import (
+    LANES,
+    N_STATS,
+    N_WORK,
+    SC_S2,
+    SC_S3,
+    ST_COLL,
+    ST_CONTACT,
+    ST_FC,
+    ST_FD,
+    ST_FW,
+    ST_GAP,
+    ST_S3,
+    ST_X,
+    W_ACT,
+    W_AF,
+    W_AFS,
+    W_CK,
+    W_F,
+    W_FC,
+    W_ICS,
+    W_SC,
+    W_SK,
+    W_TCOLL,
+    W_TCON,
+    W_TFC,
+    W_TGAP,
+    W_TX,
+    W_UH,
+    W_US,
+    W_VS,
+    W_XS,
+)
+
+__all__ = ["make_advance_respa"]
+
+
+@njit(**JITN)
+def slow_forces(x, vs, a, x0, ck, sk, cwt, swt, P, cxi, sxi, mom, accumulate, sc, idx, drag,
+                nf, F, stats, weight):
+    """eq. 8's slow side, (1 + C_m) F_w + F_d + F_s [N], of every floe at positions ``x``
+    (``ck, sk`` = cos, sin(k x)), wave phase ``cwt, swt`` and velocity ``vs`` into ``F``;
+    with ``accumulate`` the dissipation sum, |F_w| and |F_d| of this evaluation added to
+    ``stats`` with the ``weight`` of the steps it stands for."""
+    nt = x.shape[0]
+    skin_drag_sums(ck, sk, cwt, swt, a, vs, P, cxi, sxi, mom, accumulate, sc, idx, drag)
+    for j in range(nt):
+        Fw = wave_force(a[j], sk[j] * cwt - ck[j] * swt, P)
+        Fd = skin_drag(sc[SC_S2, j], P)
+        F[j] = P.one_cm * Fw + Fd
+        if accumulate:
+            stats[ST_S3, j] += weight * sc[SC_S3, j]
+            stats[ST_FW, j] += weight * abs(Fw)
+            stats[ST_FD, j] += weight * abs(Fd)
+    for o in range(0, nt, nf):
+        F[o] += edge_spring(x[o], x0[o], P)
+        F[o + nf - 1] += edge_spring(x[o + nf - 1], x0[o + nf - 1], P)
+
+
+@njit(**JITN)
+def contact_accelerations(x, vs, af, Fc, in_contact, o, nf, P, contact, damping, clip):
+    """The contact (fast) acceleration ``af`` of floes o .. o + nf - 1 at positions ``x``
+    and velocities ``vs`` (a new amplitude profile's first evaluation); ``in_contact`` set
+    from the overlaps."""
+    for j in range(o, o + nf - 1):
+        gap = x[j + 1] - x[j] - P.L_x
+        Fc[j] = contact_force(gap, vs[j + 1] - vs[j], P, contact, damping, clip)
+        in_contact[j] = 1 if gap < 0.0 else 0
+    Fc[o + nf - 1] = 0.0
+    af[o] = -Fc[o] * P.inv_mass
+    for j in range(o + 1, o + nf):
+        af[j] = (Fc[j - 1] - Fc[j]) * P.inv_mass
+
+
+@njit(**JITN)
+def cluster_steps(x, u, af, in_contact, work, cs, ce, o, nf, M, P, contact, damping, clip,
+                  accumulate):
+    """M inner steps of dt under the contact force alone for the cluster of floes cs .. ce
+    (pairs cs .. ce - 1 all active), velocity Verlet with the damping at v* = u + dt af;
+    the outer step's statistics into the ``W_T*`` rows. Returns the pair (i, i + 1) to a
+    free neighbour whose gap closed (then the step must be taken again with it active),
+    else -1. The free neighbours are at their linear positions from ``W_XS``."""
+    dt = P.dt
+    uh = work[W_UH]
+    vs = work[W_VS]
+    Fc = work[W_FC]
+    xs = work[W_XS]
+    tx = work[W_TX]
+    tgap = work[W_TGAP]
+    tcon = work[W_TCON]
+    tcoll = work[W_TCOLL]
+    tfc = work[W_TFC]
+    left = cs > o
+    right = ce < o + nf - 1
+    for s in range(1, M + 1):
+        for j in range(cs, ce + 1):
+            uh[j] = u[j] + 0.5 * dt * af[j]
+            vs[j] = u[j] + dt * af[j]
+            x[j] += dt * uh[j]
+        for j in range(cs, ce):
+            gap = x[j + 1] - x[j] - P.L_x
+            touch = gap < 0.0
+            Fc[j] = contact_force(gap, vs[j + 1] - vs[j], P, contact, damping, clip)
+            if accumulate:
+                tgap[j] += gap
+                if touch:
+                    tcon[j] += 1.0
+                    if in_contact[j] == 0:
+                        tcoll[j] += 1.0
+            in_contact[j] = 1 if touch else 0
+        for j in range(cs, ce + 1):
+            f = 0.0
+            if j > cs:
+                f += Fc[j - 1]
+            if j < ce:
+                f -= Fc[j]
+            af[j] = f * P.inv_mass
+            u[j] = uh[j] + 0.5 * dt * af[j]
+            if accumulate:
+                tx[j] += x[j]
+                tfc[j] += abs(f)
+        # the gaps to the free neighbours, which move on their lines
+        if left:
+            g = x[cs] - (xs[cs - 1] + (s * dt) * u[cs - 1]) - P.L_x
+            if g < 0.0:
+                return cs - 1
+            if accumulate:
+                tgap[cs - 1] += g
+        if right:
+            g = (xs[ce + 1] + (s * dt) * u[ce + 1]) - x[ce] - P.L_x
+            if g < 0.0:
+                return ce
+            if accumulate:
+                tgap[ce] += g
+    return -1
+
+
+@njit(**JITN)
+def replica_step(x, u, af, in_contact, work, o, nf, M, P, contact, damping, clip, accumulate,
+                 stats):
+    """One outer step's contacts and drift of the replica of floes o .. o + nf - 1 (after
+    the slow half-kick): the active pairs, the clusters sub-stepped (again with a pair made
+    active whenever a gap to a free floe closed), every other floe drifted; then its
+    statistics into ``stats``. Returns how many times the step was started again."""
+    Dt = M * P.dt
+    xs = work[W_XS]
+    us = work[W_US]
+    afs = work[W_AFS]
+    ics = work[W_ICS]
+    act = work[W_ACT]
+    tx = work[W_TX]
+    tgap = work[W_TGAP]
+    tcon = work[W_TCON]
+    tcoll = work[W_TCOLL]
+    tfc = work[W_TFC]
+    end = o + nf
+    for j in range(o, end):
+        xs[j] = x[j]
+        us[j] = u[j]
+        afs[j] = af[j]
+        ics[j] = in_contact[j]
+    for j in range(o, end - 1):
+        g0 = x[j + 1] - x[j] - P.L_x
+        g1 = g0 + Dt * (u[j + 1] - u[j])
+        act[j] = 1.0 if (g0 < 0.0 or g1 < 0.0) else 0.0
+    act[end - 1] = 0.0
+    retries = 0
+    while True:
+        # two clusters one pair apart become one: every pair left out then has a free floe
+        for j in range(o + 1, end - 2):
+            if act[j] == 0.0 and act[j - 1] == 1.0 and act[j + 1] == 1.0:
+                act[j] = 1.0
+        if accumulate:
+            for j in range(o, end):
+                tx[j] = 0.0
+                tgap[j] = 0.0
+                tcon[j] = 0.0
+                tcoll[j] = 0.0
+                tfc[j] = 0.0
+        closed = -1
+        j = o
+        while j < end:
+            if j < end - 1 and act[j] == 1.0:
+                ce = j + 1
+                while ce < end - 1 and act[ce] == 1.0:
+                    ce += 1
+                closed = cluster_steps(x, u, af, in_contact, work, j, ce, o, nf, M, P,
+                                       contact, damping, clip, accumulate)
+                if closed >= 0:
+                    break
+                j = ce + 1
+            else:
+                j += 1
+        if closed < 0:
+            break
+        act[closed] = 1.0
+        retries += 1
+        for j in range(o, end):
+            x[j] = xs[j]
+            u[j] = us[j]
+            af[j] = afs[j]
+            in_contact[j] = int(ics[j])
+    # the free floes: one drift (their sums over the M steps exact: x is linear)
+    mm = 0.5 * M * (M + 1) * P.dt
+    for j in range(o, end):
+        free = (j == o or act[j - 1] == 0.0) and (j == end - 1 or act[j] == 0.0)
+        if free:
+            if accumulate:
+                tx[j] = M * x[j] + mm * u[j]
+            x[j] += Dt * u[j]
+            af[j] = 0.0
+    for j in range(o, end - 1):
+        if act[j] == 0.0:
+            in_contact[j] = 0
+            a_free = j == o or act[j - 1] == 0.0
+            b_free = j + 1 == end - 1 or act[j + 1] == 0.0
+            if accumulate and a_free and b_free:
+                tgap[j] = M * (xs[j + 1] - xs[j] - P.L_x) + mm * (u[j + 1] - u[j])
+    if accumulate:
+        for j in range(o, end):
+            stats[ST_X, j] += tx[j]
+            stats[ST_FC, j] += tfc[j]
+        for j in range(o, end - 1):
+            stats[ST_GAP, j] += tgap[j]
+            stats[ST_CONTACT, j] += tcon[j]
+            stats[ST_COLL, j] += tcoll[j]
+    return retries
+
+
+@functools.cache
+def make_advance_respa(opts):
+    """The multiple-time-stepping loop (module docstring) for ``opts``
+    (:class:`floewave._kernels.KernelOptions`; ``drag_every`` is M, the inner steps per
+    outer step), compiled once per process (cached on disk by numba).
+
+    Same arguments and return as the loop of :func:`floewave._kernels.make_advance`;
+    ``acc`` holds the slow acceleration, the scratch row ``W_AF`` the contact acceleration
+    (kept from call to call: a state of the chain), ``nsteps`` and ``istep`` are multiples
+    of M.
+    """
+    contact, damping, clip, _, drag, M, _, accumulate = opts
+    contact = int(contact)
+    damping = int(damping)
+    clip = int(clip)
+    drag = int(drag)
+    M = int(M)
+    accumulate = bool(accumulate)
+
+    @njit(**JITN)
+    def advance(x, u, acc, a, x0, in_contact, istep, nsteps, nf, P, cxi, sxi, mom, stats,
+                work, idx, init):
+        nt = x.shape[0]
+        if (work.shape[0] < N_WORK or work.shape[1] < nt + LANES or idx.shape[0] < nt
+                or nf < 2 or nt % nf != 0):
+            raise ValueError("advance: scratch too small (work needs N_WORK rows and"
+                             " R N_f + LANES columns: new_work) or R N_f not a multiple"
+                             " of N_f >= 2")
+        if init and accumulate:
+            raise ValueError("advance: init only in a loop that does not accumulate")
+        if (u.shape[0] != nt or acc.shape[0] != nt or a.shape[0] != nt or x0.shape[0] != nt
+                or in_contact.shape[0] != nt
+                or (accumulate and (stats.shape[0] < N_STATS or stats.shape[1] != nt))):
+            raise ValueError("advance: x, u, acc, a, x0, in_contact (and stats) must all"
+                             " have R N_f entries (stats: N_STATS rows)")
+        if nsteps % M != 0 or istep % M != 0:
+            raise ValueError("advance (respa): nsteps and istep must be multiples of the"
+                             " inner steps per outer step (drag_every)")
+        Dt = M * P.dt
+        vs = work[W_VS, :nt]
+        F = work[W_F, :nt]
+        ck = work[W_CK, :nt]
+        sk = work[W_SK, :nt]
+        Fc = work[W_FC]
+        af = work[W_AF]
+        sc = work[W_SC:]
+        two_pi_nt = 2.0 * math.pi / P.n_t
+        if init:
+            for j in range(nt):
+                ck[j] = math.cos(P.k * x[j])
+                sk[j] = math.sin(P.k * x[j])
+                vs[j] = u[j]
+            wt = two_pi_nt * (istep % P.n_t)
+            slow_forces(x, vs, a, x0, ck, sk, math.cos(wt), math.sin(wt), P, cxi, sxi, mom,
+                        False, sc, idx, drag, nf, F, stats, 0.0)
+            for j in range(nt):
+                acc[j] = F[j] * P.inv_mass
+            for o in range(0, nt, nf):
+                contact_accelerations(x, u, af, Fc, in_contact, o, nf, P, contact, damping,
+                                      clip)
+        for _ in range(nsteps // M):
+            for j in range(nt):
+                u[j] += 0.5 * Dt * acc[j]
+            for o in range(0, nt, nf):
+                replica_step(x, u, af, in_contact, work, o, nf, M, P, contact, damping,
+                             clip, accumulate, stats)
+            istep += M
+            wt = two_pi_nt * (istep % P.n_t)
+            for j in range(nt):
+                ck[j] = math.cos(P.k * x[j])
+                sk[j] = math.sin(P.k * x[j])
+                vs[j] = u[j] + 0.5 * Dt * acc[j]
+            slow_forces(x, vs, a, x0, ck, sk, math.cos(wt), math.sin(wt), P, cxi, sxi, mom,
+                        accumulate, sc, idx, drag, nf, F, stats, float(M))
+            for j in range(nt):
+                acc[j] = F[j] * P.inv_mass
+                u[j] += 0.5 * Dt * acc[j]
+        return istep
+
+    return advance
