@@ -406,6 +406,29 @@ def test_run_seeds_in_processes_stores_what_one_process_stores(tmp_path):
     assert sorted(set(load(tmp_path / "one" / "spring_soft.h5")["seed"])) == [5, 6, 7]
 
 
+def _same(got, want, rel: float = 1e-12) -> bool:
+    """``got == want`` for JSON values, but floats equal to ``rel``: the last bits of a
+    fitted number are the machine's (seen: a fit's degrees of freedom 30.98852733987941 on
+    an AMD EPYC with AVX2 against 30.988527339879415 where the file was made)."""
+    if isinstance(want, dict):
+        return (isinstance(got, dict) and got.keys() == want.keys()
+                and all(_same(got[k], want[k], rel) for k in want))
+    if isinstance(want, list):
+        return (isinstance(got, list) and len(got) == len(want)
+                and all(_same(g, w, rel) for g, w in zip(got, want, strict=True)))
+    if isinstance(want, float) and isinstance(got, (int, float)) and not isinstance(got, bool):
+        return got == want or math.isclose(got, want, rel_tol=rel, abs_tol=0.0)
+    return type(got) is type(want) and got == want
+
+
+def test_same_is_exact_but_for_the_last_bits_of_floats():
+    assert _same({"a": [1, "x", 30.988527339879415]}, {"a": [1, "x", 30.98852733987941]})
+    assert not _same({"a": [1, "x", 30.98853]}, {"a": [1, "x", 30.98852733987941]})
+    assert not _same({"a": [2, "x", 1.0]}, {"a": [1, "x", 1.0]})
+    assert not _same({"a": "holds"}, {"a": "fails"})
+    assert not _same({"a": 1.0, "b": 2}, {"a": 1.0})
+
+
 @pytest.mark.slow  # 2 looks of 11 paper campaigns on seeded_point (~20 s)
 def test_settled_verdicts_and_numbers_are_those_of_the_seed_stores(tmp_path, capsys,
                                                                   monkeypatch):
@@ -423,7 +446,7 @@ def test_settled_verdicts_and_numbers_are_those_of_the_seed_stores(tmp_path, cap
     timing = {"cpu_s", "wall_s", "elapsed_s", "stored_core_s", "stored_core_s_seeds_2_up"}
     got["cost"] = {k: v for k, v in got["cost"].items() if k not in timing}
     want = json.loads((DATA / "settle_seeded_point.json").read_text())
-    assert got == want
+    assert _same(got, want)
     assert main(argv) == 0
     table = [line for line in capsys.readouterr().out.splitlines()
              if not line.startswith("Settling's cost")]
