@@ -320,11 +320,13 @@ def make_advance_respa(opts):
         Fc = work[W_FC]
         af = work[W_AF]
         sc = work[W_SC:]
+        xs = work[W_XS, :nt]
         two_pi_nt = 2.0 * math.pi / P.n_t
+        for j in range(nt):
+            ck[j] = math.cos(P.k * x[j])
+            sk[j] = math.sin(P.k * x[j])
         if init:
             for j in range(nt):
-                ck[j] = math.cos(P.k * x[j])
-                sk[j] = math.sin(P.k * x[j])
                 vs[j] = u[j]
             wt = two_pi_nt * (istep % P.n_t)
             slow_forces(x, vs, a, x0, ck, sk, math.cos(wt), math.sin(wt), P, cxi, sxi, mom,
@@ -343,8 +345,21 @@ def make_advance_respa(opts):
             istep += M
             wt = two_pi_nt * (istep % P.n_t)
             for j in range(nt):
-                ck[j] = math.cos(P.k * x[j])
-                sk[j] = math.sin(P.k * x[j])
+                # cos, sin(k x) rotated by k dx of this outer step (|k dx| <= 0.1: the
+                # series to (k dx)^8 is exact to rounding; else evaluated afresh)
+                e = P.k * (x[j] - xs[j])
+                if abs(e) > 0.1:
+                    ck[j] = math.cos(P.k * x[j])
+                    sk[j] = math.sin(P.k * x[j])
+                    vs[j] = u[j] + 0.5 * Dt * acc[j]
+                    continue
+                e2 = e * e
+                ce = 1.0 - e2 * (0.5 - e2 * (1.0 / 24.0 - e2 * (1.0 / 720.0
+                                                                - e2 * (1.0 / 40320.0))))
+                se = e * (1.0 - e2 * (1.0 / 6.0 - e2 * (1.0 / 120.0 - e2 * (1.0 / 5040.0))))
+                c_new = ck[j] * ce - sk[j] * se
+                sk[j] = sk[j] * ce + ck[j] * se
+                ck[j] = c_new
                 vs[j] = u[j] + 0.5 * Dt * acc[j]
             slow_forces(x, vs, a, x0, ck, sk, math.cos(wt), math.sin(wt), P, cxi, sxi, mom,
                         accumulate, sc, idx, drag, nf, F, stats, float(M))
