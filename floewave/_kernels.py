@@ -73,6 +73,7 @@ from ._layout import (
     HOLD_LINEAR,
     HOLD_MIDPOINT,
     INTEG_HALF_STEP,
+    INTEG_MTS,
     INTEG_PREDICTOR,
     INTEG_RESPA,
     LANES,
@@ -155,7 +156,7 @@ def kernel_options(cfg: ModelConfig, accumulate: bool) -> KernelOptions:
         damping=DAMPING_LIGGGHTS if cfg.damping == "liggghts" else DAMPING_EXACT,
         clip=1 if cfg.clip_attraction else 0,
         integrator={"predictor": INTEG_PREDICTOR, "half_step": INTEG_HALF_STEP,
-                    "respa": INTEG_RESPA}[cfg.integrator],
+                    "respa": INTEG_RESPA, "mts": INTEG_MTS}[cfg.integrator],
         drag=DRAG_QUADRATURE if cfg.drag_integration == "quadrature" else DRAG_EXACT,
         drag_every=int(cfg.drag_every),
         hold=HOLD_LINEAR if cfg.drag_hold == "linear" else HOLD_MIDPOINT,
@@ -339,7 +340,8 @@ def chain_kernel(cfg: ModelConfig, k: float) -> ChainKernel:
     options, cell tables and their moments, and the two compiled time loops (spin-up,
     averaging)."""
     opts = kernel_options(cfg, False)
-    make = make_advance_respa if opts.integrator == INTEG_RESPA else make_advance
+    make = (make_advance_respa if opts.integrator in (INTEG_RESPA, INTEG_MTS)
+            else make_advance)
     spin = make(opts)
     average = make(opts._replace(accumulate=True))
     P = kernel_params(cfg, k)

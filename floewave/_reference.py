@@ -178,3 +178,54 @@ def advance_respa(x, u, acc, af, in_contact, a, x0, istep, nsteps, P, opts, cxi,
                                            - np.sin(th)[:, None] * sxi[None, :]) - vs[:, None]
             stats[K.ST_S3] += M * np.sum(np.abs(ur) ** 3, axis=1)
     return istep
+
+
+def advance_mts(x, u, acc, af, in_contact, a, x0, istep, nsteps, P, opts, cxi, sxi,
+                stats=None):
+    """Numpy twin of the ``integrator = "mts"`` loop (:mod:`floewave._respa`, held slow
+    force) for one chain: per outer step of M = ``opts.drag_every`` steps the slow force
+    evaluated once at the step's predicted centre and held, every floe taking the M steps
+    under it and the contact force (no clusters). Arguments as :func:`advance_respa`."""
+    M = int(opts.drag_every)
+    dt = P.dt
+    Dt = M * dt
+    m_inv = P.inv_mass
+    for _ in range(nsteps // M):
+        at = acc + af
+        xm = x + 0.5 * Dt * u + 0.125 * Dt * Dt * at
+        vm = u + 0.5 * Dt * at
+        wm = 2.0 * math.pi / P.n_t * ((istep % P.n_t) + 0.5 * M)
+        Fw = wave_force(xm, a, wm, P)
+        Fd = skin_drag(xm, vm, a, wm, P, cxi, sxi)
+        F = P.one_cm * Fw + Fd
+        F[0] += edge_spring(xm[0], x0[0], P)
+        F[-1] += edge_spring(xm[-1], x0[-1], P)
+        acc[:] = F * m_inv
+        if stats is not None:
+            stats[K.ST_FW] += M * np.abs(Fw)
+            stats[K.ST_FD] += M * np.abs(Fd)
+            th = P.k * xm - wm
+            ur = (a * P.u_amp)[:, None] * (np.cos(th)[:, None] * cxi[None, :]
+                                           - np.sin(th)[:, None] * sxi[None, :]) - vm[:, None]
+            stats[K.ST_S3] += M * np.sum(np.abs(ur) ** 3, axis=1)
+        for _ in range(M):
+            uh = u + 0.5 * dt * (af + acc)
+            vs = u + dt * (af + acc)
+            x += dt * uh
+            Fc = contact_force(x, vs, P, opts)
+            gap = x[1:] - x[:-1] - P.L_x
+            touch = gap < 0.0
+            f = np.zeros_like(x)
+            f[:-1] -= Fc
+            f[1:] += Fc
+            af[:] = f * m_inv
+            u[:] = uh + 0.5 * dt * (af + acc)
+            if stats is not None:
+                stats[K.ST_X] += x
+                stats[K.ST_GAP, :-1] += gap
+                stats[K.ST_CONTACT, :-1] += touch
+                stats[K.ST_COLL, :-1] += touch & (in_contact[:-1] == 0)
+                stats[K.ST_FC] += np.abs(f)
+            in_contact[:-1] = touch
+        istep += M
+    return istep

@@ -46,6 +46,7 @@ from numba import njit
 from ._force_terms import contact_force, edge_spring, skin_drag, skin_drag_sums, wave_force
 from ._jit import JITN
 from ._layout import (
+    INTEG_MTS,
     LANES,
     N_STATS,
     N_WORK,
@@ -63,11 +64,13 @@ from ._layout import (
     W_AF,
     W_AFS,
     W_CK,
+    W_CKC,
     W_F,
     W_FC,
     W_ICS,
     W_SC,
     W_SK,
+    W_SKC,
     W_TCOLL,
     W_TCON,
     W_TFC,
@@ -75,6 +78,7 @@ from ._layout import (
     W_TX,
     W_UH,
     W_US,
+    W_VC,
     W_VS,
     W_XS,
 )
@@ -120,8 +124,8 @@ def contact_accelerations(x, vs, af, Fc, in_contact, o, nf, P, contact, damping,
 
 
 @njit(**JITN)
-def cluster_steps(x, u, af, in_contact, work, cs, ce, o, nf, M, P, contact, damping, clip,
-                  accumulate):
+def cluster_steps(x, u, af, acs, in_contact, work, cs, ce, o, nf, M, P, contact, damping,
+                  clip, accumulate, held):
     """M inner steps of dt under the contact force alone for the cluster of floes cs .. ce
     (pairs cs .. ce - 1 all active), velocity Verlet with the damping at v* = u + dt af;
     the outer step's statistics into the ``W_T*`` rows. Returns the pair (i, i + 1) to a
@@ -141,8 +145,9 @@ def cluster_steps(x, u, af, in_contact, work, cs, ce, o, nf, M, P, contact, damp
     right = ce < o + nf - 1
     for s in range(1, M + 1):
         for j in range(cs, ce + 1):
-            uh[j] = u[j] + 0.5 * dt * af[j]
-            vs[j] = u[j] + dt * af[j]
+            aj = af[j] + acs[j] if held else af[j]
+            uh[j] = u[j] + 0.5 * dt * aj
+            vs[j] = u[j] + dt * aj
             x[j] += dt * uh[j]
         for j in range(cs, ce):
             gap = x[j + 1] - x[j] - P.L_x
@@ -162,19 +167,26 @@ def cluster_steps(x, u, af, in_contact, work, cs, ce, o, nf, M, P, contact, damp
             if j < ce:
                 f -= Fc[j]
             af[j] = f * P.inv_mass
-            u[j] = uh[j] + 0.5 * dt * af[j]
+            u[j] = uh[j] + 0.5 * dt * (af[j] + acs[j] if held else af[j])
             if accumulate:
                 tx[j] += x[j]
                 tfc[j] += abs(f)
         # the gaps to the free neighbours, which move on their lines
+        ts = s * dt
         if left:
-            g = x[cs] - (xs[cs - 1] + (s * dt) * u[cs - 1]) - P.L_x
+            nb = xs[cs - 1] + ts * u[cs - 1]
+            if held:
+                nb += 0.5 * ts * ts * acs[cs - 1]
+            g = x[cs] - nb - P.L_x
             if g < 0.0:
                 return cs - 1
             if accumulate:
                 tgap[cs - 1] += g
         if right:
-            g = (xs[ce + 1] + (s * dt) * u[ce + 1]) - x[ce] - P.L_x
+            nb = xs[ce + 1] + ts * u[ce + 1]
+            if held:
+                nb += 0.5 * ts * ts * acs[ce + 1]
+            g = nb - x[ce] - P.L_x
             if g < 0.0:
                 return ce
             if accumulate:
@@ -183,8 +195,8 @@ def cluster_steps(x, u, af, in_contact, work, cs, ce, o, nf, M, P, contact, damp
 
 
 @njit(**JITN)
-def replica_step(x, u, af, in_contact, work, o, nf, M, P, contact, damping, clip, accumulate,
-                 stats):
+def replica_step(x, u, af, acs, in_contact, work, o, nf, M, P, contact, damping, clip,
+                 accumulate, stats, held):
     """One outer step's contacts and drift of the replica of floes o .. o + nf - 1 (after
     the slow half-kick): the active pairs, the clusters sub-stepped (again with a pair made
     active whenever a gap to a free floe closed), every other floe drifted; then its
@@ -208,8 +220,13 @@ def replica_step(x, u, af, in_contact, work, o, nf, M, P, contact, damping, clip
         ics[j] = in_contact[j]
     for j in range(o, end - 1):
         g0 = x[j + 1] - x[j] - P.L_x
-        g1 = g0 + Dt * (u[j + 1] - u[j])
-        act[j] = 1.0 if (g0 < 0.0 or g1 < 0.0) else 0.0
+        vn = u[j + 1] - u[j]
+        an = acs[j + 1] - acs[j] if held else 0.0
+        g1 = g0 + Dt * vn + 0.5 * Dt * Dt * an
+        gmin = min(g0, g1)
+        if an > 0.0 and vn < 0.0 and -vn < an * Dt:       # the gap's minimum inside
+            gmin = min(gmin, g0 - 0.5 * vn * vn / an)
+        act[j] = 1.0 if gmin < 0.0 else 0.0
     act[end - 1] = 0.0
     retries = 0
     while True:
@@ -231,8 +248,8 @@ def replica_step(x, u, af, in_contact, work, o, nf, M, P, contact, damping, clip
                 ce = j + 1
                 while ce < end - 1 and act[ce] == 1.0:
                     ce += 1
-                closed = cluster_steps(x, u, af, in_contact, work, j, ce, o, nf, M, P,
-                                       contact, damping, clip, accumulate)
+                closed = cluster_steps(x, u, af, acs, in_contact, work, j, ce, o, nf, M, P,
+                                       contact, damping, clip, accumulate, held)
                 if closed >= 0:
                     break
                 j = ce + 1
@@ -249,12 +266,17 @@ def replica_step(x, u, af, in_contact, work, o, nf, M, P, contact, damping, clip
             in_contact[j] = int(ics[j])
     # the free floes: one drift (their sums over the M steps exact: x is linear)
     mm = 0.5 * M * (M + 1) * P.dt
+    m2 = M * (M + 1) * (2 * M + 1) / 12.0 * P.dt * P.dt     # sum over s of (s dt)^2 / 2
     for j in range(o, end):
         free = (j == o or act[j - 1] == 0.0) and (j == end - 1 or act[j] == 0.0)
         if free:
             if accumulate:
-                tx[j] = M * x[j] + mm * u[j]
-            x[j] += Dt * u[j]
+                tx[j] = M * x[j] + mm * u[j] + (m2 * acs[j] if held else 0.0)
+            if held:
+                x[j] += Dt * u[j] + 0.5 * Dt * Dt * acs[j]
+                u[j] += Dt * acs[j]
+            else:
+                x[j] += Dt * u[j]
             af[j] = 0.0
     for j in range(o, end - 1):
         if act[j] == 0.0:
@@ -262,7 +284,11 @@ def replica_step(x, u, af, in_contact, work, o, nf, M, P, contact, damping, clip
             a_free = j == o or act[j - 1] == 0.0
             b_free = j + 1 == end - 1 or act[j + 1] == 0.0
             if accumulate and a_free and b_free:
-                tgap[j] = M * (xs[j + 1] - xs[j] - P.L_x) + mm * (u[j + 1] - u[j])
+                # (u of the pair's floes is that of the step's start: both free, their
+                # velocities were set above only after these sums in the held case)
+                tgap[j] = M * (xs[j + 1] - xs[j] - P.L_x) + mm * (us[j + 1] - us[j])
+                if held:
+                    tgap[j] += m2 * (acs[j + 1] - acs[j])
     if accumulate:
         for j in range(o, end):
             stats[ST_X, j] += tx[j]
@@ -285,7 +311,8 @@ def make_advance_respa(opts):
     (kept from call to call: a state of the chain), ``nsteps`` and ``istep`` are multiples
     of M.
     """
-    contact, damping, clip, _, drag, M, _, accumulate = opts
+    contact, damping, clip, integrator, drag, M, _, accumulate = opts
+    held = int(integrator) == INTEG_MTS
     contact = int(contact)
     damping = int(damping)
     clip = int(clip)
@@ -321,6 +348,9 @@ def make_advance_respa(opts):
         af = work[W_AF]
         sc = work[W_SC:]
         xs = work[W_XS, :nt]
+        xm = work[W_VC, :nt]           # (held: the outer step's centre state)
+        cm = work[W_CKC, :nt]
+        sm = work[W_SKC, :nt]
         two_pi_nt = 2.0 * math.pi / P.n_t
         for j in range(nt):
             ck[j] = math.cos(P.k * x[j])
@@ -337,11 +367,30 @@ def make_advance_respa(opts):
                 contact_accelerations(x, u, af, Fc, in_contact, o, nf, P, contact, damping,
                                       clip)
         for _ in range(nsteps // M):
+            if held:
+                # the slow force held over the outer step, evaluated at its centre: the
+                # state moved on by Dt/2 at the current velocity and acceleration
+                for j in range(nt):
+                    at = acc[j] + af[j]
+                    xm[j] = x[j] + 0.5 * Dt * u[j] + 0.125 * Dt * Dt * at
+                    vs[j] = u[j] + 0.5 * Dt * at
+                    cm[j] = math.cos(P.k * xm[j])
+                    sm[j] = math.sin(P.k * xm[j])
+                wm = two_pi_nt * ((istep % P.n_t) + 0.5 * M)
+                slow_forces(xm, vs, a, x0, cm, sm, math.cos(wm), math.sin(wm), P, cxi, sxi,
+                            mom, accumulate, sc, idx, drag, nf, F, stats, float(M))
+                for j in range(nt):
+                    acc[j] = F[j] * P.inv_mass
+                for o in range(0, nt, nf):
+                    replica_step(x, u, af, acc, in_contact, work, o, nf, M, P, contact,
+                                 damping, clip, accumulate, stats, True)
+                istep += M
+                continue
             for j in range(nt):
                 u[j] += 0.5 * Dt * acc[j]
             for o in range(0, nt, nf):
-                replica_step(x, u, af, in_contact, work, o, nf, M, P, contact, damping,
-                             clip, accumulate, stats)
+                replica_step(x, u, af, acc, in_contact, work, o, nf, M, P, contact, damping,
+                             clip, accumulate, stats, False)
             istep += M
             wt = two_pi_nt * (istep % P.n_t)
             for j in range(nt):

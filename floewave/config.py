@@ -42,7 +42,7 @@ DISPERSIONS = ("ep", "ml", "ow")
 CONTACTS = ("hertz_disk", "linear")
 DAMPINGS = ("liggghts", "exact")
 DRAG_INTEGRATIONS = ("quadrature", "exact")
-INTEGRATORS = ("predictor", "half_step", "respa")
+INTEGRATORS = ("predictor", "half_step", "respa", "mts")
 DRAG_HOLDS = ("linear", "midpoint")
 PLACEMENTS = ("uniform", "random")
 COUPLINGS = ("mean", "independent")
@@ -105,7 +105,9 @@ class ModelConfig:
         (forces at the half-step velocity as LIGGGHTS does: first order in the damping)
         or ``"respa"`` (contacts on their own clock: the waves, drag and edge springs as
         impulses every ``drag_every`` steps, the contacts resolved at dt by sub-stepping
-        only the floes in or about to enter contact; :mod:`floewave._respa`)
+        only the floes in or about to enter contact; :mod:`floewave._respa`) or ``"mts"``
+        (the same, but the slow force evaluated at the centre of each outer step and held
+        over it instead of the impulses at its ends)
     protocol : ``"stationary"`` (default: eq. 25 start, self-consistent march update, MSER
         stationarity test, stop at the error-bar targets; :mod:`floewave.iteration.stationary`) or
         ``"noise_floor"`` (the earlier protocol: a = a0 start, relaxed update, averaging

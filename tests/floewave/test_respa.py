@@ -1,4 +1,5 @@
-"""Contacts on their own clock (``integrator = "respa"``, floewave/_respa.py): the kernel
+"""Contacts on their own clock (``integrator = "respa"`` and ``"mts"``, floewave/_respa.py):
+the kernel
 against its numpy twin (which sub-steps every floe, so the kernel's choice of clusters must
 not matter), a collision pushed on into a floe that was free (the outer step taken again),
 the restitution table and an elastic collision's energy at every outer step, and replicas
@@ -23,9 +24,13 @@ def _twin_state(chain):
             chain.work[K.W_AF, :n].copy(), chain.in_contact.ravel().copy())
 
 
+TWINS = {"respa": ref.advance_respa, "mts": ref.advance_mts}
+
+
+@pytest.mark.parametrize("integrator", list(TWINS))
 @pytest.mark.parametrize("M,L_x", [(10, 0.5), (4, 1.5), (20, 3.0)])
-def test_kernel_equals_numpy_twin_with_statistics(M, L_x):
-    cfg = ModelConfig(L_x=L_x, integrator="respa", drag_every=M, a0=0.02, C_sd=0.1)
+def test_kernel_equals_numpy_twin_with_statistics(M, L_x, integrator):
+    cfg = ModelConfig(L_x=L_x, integrator=integrator, drag_every=M, a0=0.02, C_sd=0.1)
     k, _ = solve_dispersion(cfg)
     chain = FloeChain(cfg, k)
     a = cfg.a0 * np.linspace(1.0, 0.6, cfg.n_floes)
@@ -36,7 +41,7 @@ def test_kernel_equals_numpy_twin_with_statistics(M, L_x):
     st = np.zeros((K.N_STATS, cfg.n_floes))
     chain.run(a, n, st)
     st_ref = np.zeros_like(st)
-    ref.advance_respa(x, u, acc, af, ic, a, chain.x0, istep, n, chain.P, chain.opts,
+    TWINS[integrator](x, u, acc, af, ic, a, chain.x0, istep, n, chain.P, chain.opts,
                       chain.cxi, chain.sxi, st_ref)
     assert np.any(st[K.ST_CONTACT] > 0), "no contact exercised"
     assert np.any(st[K.ST_CONTACT, :-1] == 0), "every pair sub-stepped: no free floe"
@@ -52,12 +57,13 @@ def test_kernel_equals_numpy_twin_with_statistics(M, L_x):
                                    atol=1e-9 * np.abs(st_ref[row]).max())
 
 
-def test_a_collision_pushed_on_into_a_free_floe_is_taken_again():
+@pytest.mark.parametrize("integrator", list(TWINS))
+def test_a_collision_pushed_on_into_a_free_floe_is_taken_again(integrator):
     """Floe 1 hits floe 2 at rest, which is pushed into floe 3 within the same outer step:
     pair (2, 3) is free when the step starts (both at rest, its gap open), so the kernel must
     notice the gap closing and sub-step the three together. Against the twin (every floe
     sub-stepped)."""
-    cfg = collision_config(L_sheet=1.5, integrator="respa", drag_every=20, eps=0.8)
+    cfg = collision_config(L_sheet=1.5, integrator=integrator, drag_every=20, eps=0.8)
     chain = FloeChain(cfg, 1.0)
     a = np.zeros(3)
     L = cfg.L_x
@@ -66,34 +72,37 @@ def test_a_collision_pushed_on_into_a_free_floe_is_taken_again():
     chain.run(a, 0)                                   # the first evaluation
     x, u, acc, af, ic = _twin_state(chain)
     chain.run(a, 200)
-    ref.advance_respa(x, u, acc, af, ic, a, chain.x0, 0, 200, chain.P, chain.opts, chain.cxi,
-                      chain.sxi)
+    TWINS[integrator](x, u, acc, af, ic, a, chain.x0, 0, 200, chain.P, chain.opts,
+                      chain.cxi, chain.sxi)
     assert chain.u[2] > 0.05, "the push did not reach floe 3"
     np.testing.assert_allclose(chain.x, x, rtol=0, atol=1e-12)
     np.testing.assert_allclose(chain.u, u, rtol=0, atol=1e-10)
 
 
+@pytest.mark.parametrize("integrator", list(TWINS))
 @pytest.mark.parametrize("M", [4, 10, 20])
-def test_restitution_table_at_every_outer_step(M):
+def test_restitution_table_at_every_outer_step(M, integrator):
     for eps, expected in zip((0.2, 0.4, 0.6, 0.8), TABLE, strict=True):
-        cfg = collision_config(eps=eps, integrator="respa", drag_every=M)
+        cfg = collision_config(eps=eps, integrator=integrator, drag_every=M)
         e, _, _ = two_floe_collision(cfg, chunk=M)
         assert e == pytest.approx(expected, abs=0.01), (M, eps)
 
 
+@pytest.mark.parametrize("integrator", list(TWINS))
 @pytest.mark.parametrize("M", [4, 20])
-def test_elastic_collision_energy_as_the_every_step_integrator(M):
+def test_elastic_collision_energy_as_the_every_step_integrator(M, integrator):
     """eps = 1: the inner steps are the predictor integrator's, so KE after / before is
     that of the every-step loop (1 + 3.0e-4 at dt 1e-3) to rounding."""
     _, ke_step, _ = two_floe_collision(collision_config(eps=1.0), chunk=1)
-    _, ke, _ = two_floe_collision(collision_config(eps=1.0, integrator="respa", drag_every=M),
-                                  chunk=M)
+    _, ke, _ = two_floe_collision(collision_config(eps=1.0, integrator=integrator,
+                                                   drag_every=M), chunk=M)
     assert abs(ke_step - 1.0) < 1e-3
     assert ke == pytest.approx(ke_step, abs=1e-9)
 
 
-def test_replicas_do_not_see_each_other():
-    cfg = ModelConfig(L_x=1.5, integrator="respa", drag_every=10, replicas=3)
+@pytest.mark.parametrize("integrator", list(TWINS))
+def test_replicas_do_not_see_each_other(integrator):
+    cfg = ModelConfig(L_x=1.5, integrator=integrator, drag_every=10, replicas=3)
     k, _ = solve_dispersion(cfg)
     x0 = np.array(initial_positions(cfg))
     a = cfg.a0 * np.linspace(1.0, 0.5, cfg.n_floes)
