@@ -131,7 +131,7 @@ def advance_respa(x, u, acc, af, in_contact, a, x0, istep, nsteps, P, opts, cxi,
     """Numpy twin of the ``integrator = "respa"`` loop (:mod:`floewave._respa`) for one chain:
     the same splitting, but every floe takes the M = ``opts.drag_every`` inner steps and
     every pair's contact force is evaluated at each (no clusters: the kernel's choice of
-    which floes to sub-step must not matter). ``acc`` the slow, ``af`` the contact
+    which floes to sub-step must not matter); the edge springs are fast forces too. ``acc`` the slow, ``af`` the contact
     acceleration, ``in_contact`` (int8) as the kernel keeps them; ``stats`` (N_STATS, N_f)
     gets the sums the kernel's averaging loop keeps (x and gaps step by step, F_w, F_d and
     the dissipation sum of the slow evaluations with weight M). Returns istep."""
@@ -151,7 +151,10 @@ def advance_respa(x, u, acc, af, in_contact, a, x0, istep, nsteps, P, opts, cxi,
             f = np.zeros_like(x)
             f[:-1] -= Fc
             f[1:] += Fc
-            af[:] = f * m_inv
+            fs = np.zeros_like(x)
+            fs[0] = edge_spring(x[0], x0[0], P)
+            fs[-1] = edge_spring(x[-1], x0[-1], P)
+            af[:] = (f + fs) * m_inv
             u[:] = uh + 0.5 * dt * af
             if stats is not None:
                 stats[K.ST_X] += x
@@ -166,8 +169,6 @@ def advance_respa(x, u, acc, af, in_contact, a, x0, istep, nsteps, P, opts, cxi,
         Fw = wave_force(x, a, wt, P)
         Fd = skin_drag(x, vs, a, wt, P, cxi, sxi)
         F = P.one_cm * Fw + Fd
-        F[0] += edge_spring(x[0], x0[0], P)
-        F[-1] += edge_spring(x[-1], x0[-1], P)
         acc[:] = F * m_inv
         u += 0.5 * Dt * acc
         if stats is not None:
@@ -198,8 +199,6 @@ def advance_mts(x, u, acc, af, in_contact, a, x0, istep, nsteps, P, opts, cxi, s
         Fw = wave_force(xm, a, wm, P)
         Fd = skin_drag(xm, vm, a, wm, P, cxi, sxi)
         F = P.one_cm * Fw + Fd
-        F[0] += edge_spring(xm[0], x0[0], P)
-        F[-1] += edge_spring(xm[-1], x0[-1], P)
         acc[:] = F * m_inv
         if stats is not None:
             stats[K.ST_FW] += M * np.abs(Fw)
@@ -218,7 +217,10 @@ def advance_mts(x, u, acc, af, in_contact, a, x0, istep, nsteps, P, opts, cxi, s
             f = np.zeros_like(x)
             f[:-1] -= Fc
             f[1:] += Fc
-            af[:] = f * m_inv
+            fs = np.zeros_like(x)
+            fs[0] = edge_spring(x[0], x0[0], P)
+            fs[-1] = edge_spring(x[-1], x0[-1], P)
+            af[:] = (f + fs) * m_inv
             u[:] = uh + 0.5 * dt * (af + acc)
             if stats is not None:
                 stats[K.ST_X] += x

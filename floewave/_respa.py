@@ -14,11 +14,13 @@ step Dt = M dt, per outer step::
     a_slow = (eq. 8 without F_c at x(t + Dt), v*) / ((1 + C_m) m)
     u += Dt/2 a_slow                                  # slow half-kick
 
-The slow force is eq. 8's (1 + C_m) F_w + F_d + F_s (:mod:`floewave._force_terms`), its
+The slow force is eq. 8's (1 + C_m) F_w + F_d (:mod:`floewave._force_terms`), its
 velocity-dependent drag at v* = u + Dt/2 a_slow (the end-of-step velocity predicted, as
 ``integrator = "predictor"`` does for every step). The inner steps are those of the
-predictor integrator with F_c alone, so an isolated collision without waves is resolved
-exactly as there.
+predictor integrator with F_c and the edge springs F_s (their period, 0.26 s for a lab
+floe of 0.5 m, is only 26 outer steps of 10 ms: as a slow force they biased the far end's
+amplitude against the reference runs), so an isolated collision without waves is resolved
+exactly as there. The first and last floe of a chain are therefore always sub-stepped.
 
 **Only the pairs that may touch are sub-stepped.** After the slow half-kick every floe
 moves at constant velocity unless it touches a neighbour, so the gap of a pair of free
@@ -89,7 +91,7 @@ __all__ = ["make_advance_respa"]
 @njit(**JITN)
 def slow_forces(x, vs, a, x0, ck, sk, cwt, swt, P, cxi, sxi, mom, accumulate, sc, idx, drag,
                 nf, F, stats, weight):
-    """eq. 8's slow side, (1 + C_m) F_w + F_d + F_s [N], of every floe at positions ``x``
+    """eq. 8's slow side, (1 + C_m) F_w + F_d [N], of every floe at positions ``x``
     (``ck, sk`` = cos, sin(k x)), wave phase ``cwt, swt`` and velocity ``vs`` into ``F``;
     with ``accumulate`` the dissipation sum, |F_w| and |F_d| of this evaluation added to
     ``stats`` with the ``weight`` of the steps it stands for."""
@@ -103,29 +105,28 @@ def slow_forces(x, vs, a, x0, ck, sk, cwt, swt, P, cxi, sxi, mom, accumulate, sc
             stats[ST_S3, j] += weight * sc[SC_S3, j]
             stats[ST_FW, j] += weight * abs(Fw)
             stats[ST_FD, j] += weight * abs(Fd)
-    for o in range(0, nt, nf):
-        F[o] += edge_spring(x[o], x0[o], P)
-        F[o + nf - 1] += edge_spring(x[o + nf - 1], x0[o + nf - 1], P)
 
 
 @njit(**JITN)
-def contact_accelerations(x, vs, af, Fc, in_contact, o, nf, P, contact, damping, clip):
-    """The contact (fast) acceleration ``af`` of floes o .. o + nf - 1 at positions ``x``
-    and velocities ``vs`` (a new amplitude profile's first evaluation); ``in_contact`` set
-    from the overlaps."""
+def contact_accelerations(x, x0, vs, af, Fc, in_contact, o, nf, P, contact, damping, clip):
+    """The fast acceleration ``af`` (contacts and edge springs) of floes o .. o + nf - 1 at
+    positions ``x`` and velocities ``vs`` (a new amplitude profile's first evaluation);
+    ``in_contact`` set from the overlaps."""
     for j in range(o, o + nf - 1):
         gap = x[j + 1] - x[j] - P.L_x
         Fc[j] = contact_force(gap, vs[j + 1] - vs[j], P, contact, damping, clip)
         in_contact[j] = 1 if gap < 0.0 else 0
     Fc[o + nf - 1] = 0.0
-    af[o] = -Fc[o] * P.inv_mass
+    af[o] = (-Fc[o] + edge_spring(x[o], x0[o], P)) * P.inv_mass
     for j in range(o + 1, o + nf):
         af[j] = (Fc[j - 1] - Fc[j]) * P.inv_mass
+    e = o + nf - 1
+    af[e] = (Fc[e - 1] - Fc[e] + edge_spring(x[e], x0[e], P)) * P.inv_mass
 
 
 @njit(**JITN)
-def cluster_steps(x, u, af, acs, in_contact, work, cs, ce, o, nf, M, P, contact, damping,
-                  clip, accumulate, held):
+def cluster_steps(x, x0, u, af, acs, in_contact, work, cs, ce, o, nf, M, P, contact,
+                  damping, clip, accumulate, held):
     """M inner steps of dt under the contact force alone for the cluster of floes cs .. ce
     (pairs cs .. ce - 1 all active), velocity Verlet with the damping at v* = u + dt af;
     the outer step's statistics into the ``W_T*`` rows. Returns the pair (i, i + 1) to a
@@ -166,7 +167,10 @@ def cluster_steps(x, u, af, acs, in_contact, work, cs, ce, o, nf, M, P, contact,
                 f += Fc[j - 1]
             if j < ce:
                 f -= Fc[j]
-            af[j] = f * P.inv_mass
+            fs = 0.0
+            if j == o or j == o + nf - 1:       # the edge springs: on this clock too
+                fs = edge_spring(x[j], x0[j], P)
+            af[j] = (f + fs) * P.inv_mass
             u[j] = uh[j] + 0.5 * dt * (af[j] + acs[j] if held else af[j])
             if accumulate:
                 tx[j] += x[j]
@@ -195,7 +199,7 @@ def cluster_steps(x, u, af, acs, in_contact, work, cs, ce, o, nf, M, P, contact,
 
 
 @njit(**JITN)
-def replica_step(x, u, af, acs, in_contact, work, o, nf, M, P, contact, damping, clip,
+def replica_step(x, x0, u, af, acs, in_contact, work, o, nf, M, P, contact, damping, clip,
                  accumulate, stats, held):
     """One outer step's contacts and drift of the replica of floes o .. o + nf - 1 (after
     the slow half-kick): the active pairs, the clusters sub-stepped (again with a pair made
@@ -231,9 +235,13 @@ def replica_step(x, u, af, acs, in_contact, work, o, nf, M, P, contact, damping,
     retries = 0
     while True:
         # two clusters one pair apart become one: every pair left out then has a free floe
-        for j in range(o + 1, end - 2):
-            if act[j] == 0.0 and act[j - 1] == 1.0 and act[j + 1] == 1.0:
-                act[j] = 1.0
+        # (the first and last floe, on their edge springs, are always sub-stepped)
+        for j in range(o, end - 1):
+            if act[j] == 0.0:
+                left_in = j == o or act[j - 1] == 1.0
+                right_in = j + 1 == end - 1 or act[j + 1] == 1.0
+                if left_in and right_in:
+                    act[j] = 1.0
         if accumulate:
             for j in range(o, end):
                 tx[j] = 0.0
@@ -244,12 +252,12 @@ def replica_step(x, u, af, acs, in_contact, work, o, nf, M, P, contact, damping,
         closed = -1
         j = o
         while j < end:
-            if j < end - 1 and act[j] == 1.0:
-                ce = j + 1
+            if (j < end - 1 and act[j] == 1.0) or j == o or j == end - 1:
+                ce = j
                 while ce < end - 1 and act[ce] == 1.0:
                     ce += 1
-                closed = cluster_steps(x, u, af, acs, in_contact, work, j, ce, o, nf, M, P,
-                                       contact, damping, clip, accumulate, held)
+                closed = cluster_steps(x, x0, u, af, acs, in_contact, work, j, ce, o, nf, M,
+                                       P, contact, damping, clip, accumulate, held)
                 if closed >= 0:
                     break
                 j = ce + 1
@@ -268,7 +276,7 @@ def replica_step(x, u, af, acs, in_contact, work, o, nf, M, P, contact, damping,
     mm = 0.5 * M * (M + 1) * P.dt
     m2 = M * (M + 1) * (2 * M + 1) / 12.0 * P.dt * P.dt     # sum over s of (s dt)^2 / 2
     for j in range(o, end):
-        free = (j == o or act[j - 1] == 0.0) and (j == end - 1 or act[j] == 0.0)
+        free = j != o and j != end - 1 and act[j - 1] == 0.0 and act[j] == 0.0
         if free:
             if accumulate:
                 tx[j] = M * x[j] + mm * u[j] + (m2 * acs[j] if held else 0.0)
@@ -281,8 +289,8 @@ def replica_step(x, u, af, acs, in_contact, work, o, nf, M, P, contact, damping,
     for j in range(o, end - 1):
         if act[j] == 0.0:
             in_contact[j] = 0
-            a_free = j == o or act[j - 1] == 0.0
-            b_free = j + 1 == end - 1 or act[j + 1] == 0.0
+            a_free = j != o and act[j - 1] == 0.0
+            b_free = j + 1 != end - 1 and act[j + 1] == 0.0
             if accumulate and a_free and b_free:
                 # (u of the pair's floes is that of the step's start: both free, their
                 # velocities were set above only after these sums in the held case)
@@ -364,8 +372,8 @@ def make_advance_respa(opts):
             for j in range(nt):
                 acc[j] = F[j] * P.inv_mass
             for o in range(0, nt, nf):
-                contact_accelerations(x, u, af, Fc, in_contact, o, nf, P, contact, damping,
-                                      clip)
+                contact_accelerations(x, x0, u, af, Fc, in_contact, o, nf, P, contact,
+                                      damping, clip)
         for _ in range(nsteps // M):
             if held:
                 # the slow force held over the outer step, evaluated at its centre: the
@@ -382,14 +390,14 @@ def make_advance_respa(opts):
                 for j in range(nt):
                     acc[j] = F[j] * P.inv_mass
                 for o in range(0, nt, nf):
-                    replica_step(x, u, af, acc, in_contact, work, o, nf, M, P, contact,
+                    replica_step(x, x0, u, af, acc, in_contact, work, o, nf, M, P, contact,
                                  damping, clip, accumulate, stats, True)
                 istep += M
                 continue
             for j in range(nt):
                 u[j] += 0.5 * Dt * acc[j]
             for o in range(0, nt, nf):
-                replica_step(x, u, af, acc, in_contact, work, o, nf, M, P, contact, damping,
+                replica_step(x, x0, u, af, acc, in_contact, work, o, nf, M, P, contact, damping,
                              clip, accumulate, stats, False)
             istep += M
             wt = two_pi_nt * (istep % P.n_t)
