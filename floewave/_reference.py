@@ -131,10 +131,11 @@ def advance_respa(x, u, acc, af, in_contact, a, x0, istep, nsteps, P, opts, cxi,
     """Numpy twin of the ``integrator = "respa"`` loop (:mod:`floewave._respa`) for one chain:
     the same splitting, but every floe takes the M = ``opts.drag_every`` inner steps and
     every pair's contact force is evaluated at each (no clusters: the kernel's choice of
-    which floes to sub-step must not matter); the edge springs are fast forces too. ``acc`` the slow, ``af`` the contact
-    acceleration, ``in_contact`` (int8) as the kernel keeps them; ``stats`` (N_STATS, N_f)
-    gets the sums the kernel's averaging loop keeps (x and gaps step by step, F_w, F_d and
-    the dissipation sum of the slow evaluations with weight M). Returns istep."""
+    which floes to sub-step must not matter); the edge springs are fast forces too. ``acc``
+    the slow, ``af`` the contact acceleration, ``in_contact`` (int8) as the kernel keeps
+    them; ``stats`` (N_STATS, N_f) gets the sums the kernel's averaging loop keeps (x and
+    gaps step by step, F_w, F_d and the dissipation sum of the slow evaluations with weight
+    M). Returns istep."""
     M = int(opts.drag_every)
     dt = P.dt
     Dt = M * dt
