@@ -126,6 +126,44 @@ def advance(x, u, acc, a, x0, istep, nsteps, P, opts, cxi, sxi, held=None, slope
     return istep
 
 
+def _fast_step(x, u, af, acs, in_contact, x0, P, opts, stats):
+    """One inner step of dt of the contact clock's twins for every floe: velocity Verlet
+    under the contacts and edge springs (``af``, the predictor's v*) plus the held slow
+    acceleration ``acs`` (0 for r-RESPA); the step's sums into ``stats`` if given."""
+    dt = P.dt
+    uh = u + 0.5 * dt * (af + acs)
+    vs = u + dt * (af + acs)
+    x += dt * uh
+    Fc = contact_force(x, vs, P, opts)
+    gap = x[1:] - x[:-1] - P.L_x
+    touch = gap < 0.0
+    f = np.zeros_like(x)
+    f[:-1] -= Fc
+    f[1:] += Fc
+    fs = np.zeros_like(x)
+    fs[0] = edge_spring(x[0], x0[0], P)
+    fs[-1] = edge_spring(x[-1], x0[-1], P)
+    af[:] = (f + fs) * P.inv_mass
+    u[:] = uh + 0.5 * dt * (af + acs)
+    if stats is not None:
+        stats[K.ST_X] += x
+        stats[K.ST_GAP, :-1] += gap
+        stats[K.ST_CONTACT, :-1] += touch
+        stats[K.ST_COLL, :-1] += touch & (in_contact[:-1] == 0)
+        stats[K.ST_FC] += np.abs(f)
+    in_contact[:-1] = touch
+
+
+def _slow_sums(stats, M, x, v, a, wt, Fw, Fd, P, cxi, sxi):
+    """The slow evaluation's |F_w|, |F_d| and dissipation sum (eq. 19) with weight M."""
+    stats[K.ST_FW] += M * np.abs(Fw)
+    stats[K.ST_FD] += M * np.abs(Fd)
+    th = P.k * x - wt
+    ur = (a * P.u_amp)[:, None] * (np.cos(th)[:, None] * cxi[None, :]
+                                   - np.sin(th)[:, None] * sxi[None, :]) - v[:, None]
+    stats[K.ST_S3] += M * np.sum(np.abs(ur) ** 3, axis=1)
+
+
 def advance_respa(x, u, acc, af, in_contact, a, x0, istep, nsteps, P, opts, cxi, sxi,
                   stats=None):
     """Numpy twin of the ``integrator = "respa"`` loop (:mod:`floewave._respa`) for one chain:
@@ -143,27 +181,7 @@ def advance_respa(x, u, acc, af, in_contact, a, x0, istep, nsteps, P, opts, cxi,
     for _ in range(nsteps // M):
         u += 0.5 * Dt * acc
         for _ in range(M):
-            uh = u + 0.5 * dt * af
-            vs = u + dt * af
-            x += dt * uh
-            Fc = contact_force(x, vs, P, opts)
-            gap = x[1:] - x[:-1] - P.L_x
-            touch = gap < 0.0
-            f = np.zeros_like(x)
-            f[:-1] -= Fc
-            f[1:] += Fc
-            fs = np.zeros_like(x)
-            fs[0] = edge_spring(x[0], x0[0], P)
-            fs[-1] = edge_spring(x[-1], x0[-1], P)
-            af[:] = (f + fs) * m_inv
-            u[:] = uh + 0.5 * dt * af
-            if stats is not None:
-                stats[K.ST_X] += x
-                stats[K.ST_GAP, :-1] += gap
-                stats[K.ST_CONTACT, :-1] += touch
-                stats[K.ST_COLL, :-1] += touch & (in_contact[:-1] == 0)
-                stats[K.ST_FC] += np.abs(f)
-            in_contact[:-1] = touch
+            _fast_step(x, u, af, 0.0, in_contact, x0, P, opts, stats)
         istep += M
         wt = 2.0 * math.pi / P.n_t * (istep % P.n_t)
         vs = u + 0.5 * Dt * acc
@@ -173,12 +191,7 @@ def advance_respa(x, u, acc, af, in_contact, a, x0, istep, nsteps, P, opts, cxi,
         acc[:] = F * m_inv
         u += 0.5 * Dt * acc
         if stats is not None:
-            stats[K.ST_FW] += M * np.abs(Fw)
-            stats[K.ST_FD] += M * np.abs(Fd)
-            th = P.k * x - wt
-            ur = (a * P.u_amp)[:, None] * (np.cos(th)[:, None] * cxi[None, :]
-                                           - np.sin(th)[:, None] * sxi[None, :]) - vs[:, None]
-            stats[K.ST_S3] += M * np.sum(np.abs(ur) ** 3, axis=1)
+            _slow_sums(stats, M, x, vs, a, wt, Fw, Fd, P, cxi, sxi)
     return istep
 
 
@@ -202,33 +215,8 @@ def advance_mts(x, u, acc, af, in_contact, a, x0, istep, nsteps, P, opts, cxi, s
         F = P.one_cm * Fw + Fd
         acc[:] = F * m_inv
         if stats is not None:
-            stats[K.ST_FW] += M * np.abs(Fw)
-            stats[K.ST_FD] += M * np.abs(Fd)
-            th = P.k * xm - wm
-            ur = (a * P.u_amp)[:, None] * (np.cos(th)[:, None] * cxi[None, :]
-                                           - np.sin(th)[:, None] * sxi[None, :]) - vm[:, None]
-            stats[K.ST_S3] += M * np.sum(np.abs(ur) ** 3, axis=1)
+            _slow_sums(stats, M, xm, vm, a, wm, Fw, Fd, P, cxi, sxi)
         for _ in range(M):
-            uh = u + 0.5 * dt * (af + acc)
-            vs = u + dt * (af + acc)
-            x += dt * uh
-            Fc = contact_force(x, vs, P, opts)
-            gap = x[1:] - x[:-1] - P.L_x
-            touch = gap < 0.0
-            f = np.zeros_like(x)
-            f[:-1] -= Fc
-            f[1:] += Fc
-            fs = np.zeros_like(x)
-            fs[0] = edge_spring(x[0], x0[0], P)
-            fs[-1] = edge_spring(x[-1], x0[-1], P)
-            af[:] = (f + fs) * m_inv
-            u[:] = uh + 0.5 * dt * (af + acc)
-            if stats is not None:
-                stats[K.ST_X] += x
-                stats[K.ST_GAP, :-1] += gap
-                stats[K.ST_CONTACT, :-1] += touch
-                stats[K.ST_COLL, :-1] += touch & (in_contact[:-1] == 0)
-                stats[K.ST_FC] += np.abs(f)
-            in_contact[:-1] = touch
+            _fast_step(x, u, af, acc, in_contact, x0, P, opts, stats)
         istep += M
     return istep
