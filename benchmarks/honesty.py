@@ -18,6 +18,11 @@ standard error falls as 1/sqrt(iterations averaged)).
     python benchmarks/honesty.py --placements uniform random --random 0   # §4.1's claim
     python benchmarks/honesty.py --set nT=3 --replicas 4 --jobs 2
     python benchmarks/honesty.py --reference --random 24     # against long reference runs
+    python benchmarks/honesty.py --reference --capped 24 --references /tmp/refs.json
+
+``--capped N``: instead of the Fig. 2 and random points, N points drawn (``--grid-seed``)
+from those the shipped grid (``results/herman2019``) ended ``not_converged``, at the cap:
+the points a stopping rule for a stationary noisy state acts on.
 
 ``--reference``: two runs of one protocol share its biases, so the between-seed z cannot see
 them. Each point is also run as a long reference (:data:`REFERENCE`: the stationary protocol
@@ -62,6 +67,17 @@ from floewave.honesty import (
 )
 
 REFERENCE_FILE = Path(__file__).parent / "data" / "references.json"
+
+
+def capped(n: int, seed: int) -> list[dict]:
+    """``n`` grid points drawn (``seed``) from the shipped grid's ``not_converged`` rows."""
+    import pandas as pd
+    shards = sorted((REFERENCE_FILE.parents[2] / "results" / "herman2019").glob("shard-*.csv.gz"))
+    df = pd.concat([pd.read_csv(f) for f in shards])
+    rows = df[df["status"] == "not_converged"].sample(n, random_state=seed)
+    axes = ("L_x", "T", "a0", "C_sd", "eps", "d_f", "dispersion")
+    return [{k: (str(r[k]) if k == "dispersion" else float(r[k])) for k in axes}
+            for _, r in rows.iterrows()]
 
 
 def reference_table(pts: list, ens: list, cache: dict, refs: dict, replicas: int) -> None:
@@ -125,6 +141,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seeds", nargs=2, type=int, default=(1, 2))
     ap.add_argument("--random", type=int, default=8, help="random grid points (>= 8)")
     ap.add_argument("--grid-seed", type=int, default=2019)
+    ap.add_argument("--capped", type=int, default=0,
+                    help="N of the shipped grid's not_converged points instead (docstring)")
     ap.add_argument("--set", action="append", default=[], metavar="FIELD=VALUE")
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--no-single", action="store_true", help="skip the R = 1 baseline")
@@ -141,7 +159,8 @@ def main(argv: list[str] | None = None) -> int:
             extra[k] = json.loads(v)            # numbers, true/false, "quoted" strings
         except json.JSONDecodeError:
             extra[k] = v                        # a bare string (protocol=noise_floor)
-    pts = points(args.random, args.grid_seed)
+    pts = capped(args.capped, args.grid_seed) if args.capped else points(args.random,
+                                                                         args.grid_seed)
     cache_path = Path(args.cache)
     cache = json.loads(cache_path.read_text()) if cache_path.exists() else {}
     ens = []

@@ -25,7 +25,7 @@ __version__ = "0.1.0"
 
 #: Changes only when results can change (not with the package version): part of every
 #: point's identity hash in ``sweep``.
-MODEL_VERSION = "8"
+MODEL_VERSION = "9"
 
 __all__ = ["ModelConfig", "PointResult", "run_point", "march_coefficients",
            "solve_dispersion", "alpha_confined",

@@ -127,6 +127,11 @@ class ModelConfig:
         (adaptive window; status ``not_converged`` if max_iterations comes first)
     target_W_c_stderr : ensembles (R >= 2): if > 0, keep averaging also until the standard
         error of W_c is at most this [m] (points with a compact zone in >= 2 replicas)
+    max_average : the stationary protocol averages at most this many windows for the
+        error-bar targets: a stationary run whose targets are not met by then stops with
+        the estimate and error bars it has, status ``not_converged`` (with ``iterations``
+        below ``max_iterations``; 0: no such bound, the targets are pursued until
+        ``max_iterations``)
     reuse_floor : start the average with the samples of the ``noise_window`` iterations
         whose residuals revealed the noise floor (instead of discarding them)
     transient_min : windows never averaged by the stationary protocol (whatever MSER says)
@@ -214,6 +219,7 @@ class ModelConfig:
     n_average: int = 10
     target_stderr: float = 0.01
     target_W_c_stderr: float = 1.0
+    max_average: int = 30
     n0_warm: int = 0
     transient_min: int = 6
     transient_drag_times: float = 2.0
@@ -260,6 +266,8 @@ class ModelConfig:
         require(self, "max_iterations", self.max_iterations >= 1, "must be >= 1")
         require(self, "noise_window", self.noise_window >= 0, "must be >= 0")
         require(self, "n_average", self.n_average >= 2, "must be >= 2")
+        require(self, "max_average", self.max_average == 0 or self.max_average >= self.n_average,
+                "must be 0 or >= n_average")
         require(self, "n0_warm", self.n0_warm >= 0, "must be >= 0")
         require(self, "transient_min", self.transient_min >= 0, "must be >= 0")
         require(self, "transient_drag_times", 0 <= self.transient_drag_times <= 1000,

@@ -61,17 +61,20 @@ def truncation(cfg: ModelConfig, series: list[np.ndarray], d_min: int) -> tuple[
     """(d, stationary) of the windows whose ``series`` (per window (3, R): the sheet-mean
     and last-floe amplitude each implies, its fraction of compact pairs) is given: the
     windows before d are a transient. ``stationarity =
-    "fixed"``: d = ``transient_min``. ``"mser"``: before ``n_average`` windows only
-    the last counts (d = n - 1, not stationary); then the latest MSER truncation of
-    the series, valid when at most n / 2, raised to at least ``d_min``
-    (:func:`floewave.transient.transient_windows`); stationary when valid and the halves
-    after it agree."""
+    "fixed"``: d = ``transient_min``. ``"mser"``: before ``n_average`` windows, only
+    the last counts (d = n - 1) until the transient's bound ``d_min``
+    (:func:`floewave.transient.transient_windows`) has passed, then the windows after it
+    (d = ``d_min``; model version 9: every window the average will hold but the first
+    runs at a profile marched from a pooled coefficient, not from one window's noise,
+    whose bias the replicas share), not stationary; then the latest MSER truncation of
+    the series, valid when at most n / 2, raised to at least ``d_min``; stationary when
+    valid and the halves after it agree."""
     n = len(series)
     if cfg.stationarity == "fixed":
         d = min(cfg.transient_min, n - 1)
         return d, n > cfg.transient_min
     if n < cfg.n_average:
-        return max(n - 1, 0), False
+        return (d_min if n > d_min else max(n - 1, 0)), False
     Y = np.array(series)                                   # (n, 3, R)
     # MSER on the replica means, rounded to the resolution of a reported amplitude
     # (SE_FLOOR a0): a non-chaotic point's creep by 1e-10 a0 is not a transient (MSER

@@ -11,8 +11,13 @@ at Fig. 2's ``ep`` eps 0.8 point), so it averaged a transient. This protocol:
 2. runs windows of ``nT`` periods; after each it measures every floe's dissipation
    coefficient c = S_sd / a^3 and **updates a by the self-consistent march**
    (:func:`floewave.march_coefficients`, a Newton-like step: exact in one window for
-   fixed floes), at first from the last window's c, from window ``n_average`` on from the
-   mean c of the windows after the current truncation point;
+   fixed floes), at first from the last window's c; once the transient's bound (the
+   windows never averaged, :func:`floewave.transient.transient_windows`) has passed, from
+   the mean c of the windows after it, and from window ``n_average`` on from the mean c of
+   the windows after the current truncation point (model version 9; version 8 marched
+   from the last window's c until window ``n_average``, so the first windows of the
+   average ran at profiles carrying one window's noise, and the estimate a bias the
+   replicas share: docs/convergence.md, "An iteration that settles");
 3. **tests stationarity** with MSER (White 1997, *Simulation* 69, 323; White, Cobb & Spratt
    2000): on replica-mean series of window statistics (the sheet-mean and last-floe
    amplitude implied by the window alone, and the fraction of compact pairs) the truncation
@@ -26,8 +31,13 @@ at Fig. 2's ``ep`` eps 0.8 point), so it averaged a transient. This protocol:
    SE(a) <= ``target_stderr`` a0 and SE(W_c) <= ``target_W_c_stderr`` (status
    ``converged_noisy``); ``converged`` when the update stops changing a (residual <
    ``delta``: the deterministic confined limit) and the targets hold; ``not_converged``
-   at ``max_iterations`` windows, reporting the estimate from the windows after the
-   truncation (or the last half when no stationary stretch was found) with its error bars.
+   when ``max_average`` windows are averaged with the targets still unmet (model version
+   9: a stationary run whose error bars more windows would not bring to their targets in
+   reasonable time, e.g. a zone whose replicas sit in different layouts, reported with the
+   estimate of those windows and the error bars it has, ``iterations`` below
+   ``max_iterations``), or at ``max_iterations`` windows (never stationary, or
+   ``max_average = 0``), reporting the estimate from the windows after the truncation (or
+   the last half when no stationary stretch was found) with its error bars.
 
 The estimate (:func:`floewave.iteration.estimate.estimate_point` with coefficients) is the march of
 the mean coefficient, never a mean of marched, clipped profiles. With ``coupling =
@@ -77,7 +87,7 @@ def iterate_stationary(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g: 
     d_min = transient_windows(cfg, k)
     history: list[float] = []
     status = "not_converged"
-    d, stationary = 0, False
+    d, stationary, bounded = 0, False, False
     est: Estimate | None = None
     for it in range(1, cfg.max_iterations + 1):
         windows, S = run_window(cfg, chain, x0s, a, it == 1)
@@ -107,7 +117,10 @@ def iterate_stationary(cfg: ModelConfig, chain, x0s: np.ndarray, k: float, c_g: 
                 status = "converged" if deterministic else "converged_noisy"
                 d = d_use
                 break
-    if status == "not_converged":
+            if 0 < cfg.max_average <= len(wins) - d_use:   # stationary, targets out of reach
+                d, bounded = d_use, True
+                break
+    if status == "not_converged" and not bounded:
         if not stationary:            # the last half, never inside the transient's bound
             d = max(len(wins) // 2, min(d_min, len(wins) - 1))
         est = windows_estimate(cfg, wins, d, c_g, k, a)

@@ -225,3 +225,44 @@ def test_mean_coupling_under_the_stationary_protocol_shares_one_profile():
     ind = run_point(cfg.replace(coupling="independent"))
     assert r.S_sd_replicas.shape == ind.S_sd_replicas.shape == (3, cfg.n_floes)
     assert not np.array_equal(r.S_sd_replicas, ind.S_sd_replicas)
+
+
+def test_max_average_must_be_at_least_n_average():
+    with pytest.raises(Exception, match="max_average"):
+        ModelConfig(n_average=10, max_average=9)
+    assert ModelConfig(n_average=10, max_average=0).max_average == 0
+
+
+def test_a_stationary_run_that_cannot_meet_its_targets_stops_at_max_average():
+    """An unreachable target (SE(a) <= 1e-9 a0 at a chaotic point): with max_average the
+    run stops once that many stationary windows are averaged, not_converged with the
+    estimate and error bars of those windows, below max_iterations; without, it runs to
+    max_iterations."""
+    base = dict(L_x=3.0, eps=0.6, T=1.4, C_sd=0.2, d_f=0.01, nT=1, n0=1, transient_min=3,
+                n_average=4, target_stderr=1e-9, target_W_c_stderr=0.0, max_iterations=40)
+    cfg = ModelConfig(**base, max_average=6)
+    bounded = run_point(cfg)
+    assert bounded.status == "not_converged"
+    assert 3 + 6 <= bounded.iterations < 40
+    assert np.max(bounded.a_stderr) > 1e-9 * cfg.a0
+    assert np.all(np.isfinite(bounded.a)) and np.all(np.isfinite(bounded.a_stderr))
+    unbounded = run_point(ModelConfig(**base, max_average=0))
+    assert unbounded.status == "not_converged" and unbounded.iterations == 40
+    # a reachable target stops before the bound, converged_noisy
+    easy = run_point(ModelConfig(**{**base, "target_stderr": 0.5}, max_average=6))
+    assert easy.status == "converged_noisy" and easy.iterations < bounded.iterations
+
+def test_past_the_transient_bound_the_update_pools_the_windows_after_it():
+    """Model version 9: before n_average windows the update marches from the last window
+    only until the transient's bound d_min has passed, then from the windows after it
+    (version 8 used the last window until n_average: the first averaged windows ran at
+    one window's noise)."""
+    from floewave.iteration.stationarity import truncation
+    cfg = ModelConfig(n_average=10)
+    series = [np.zeros((3, 4)) for _ in range(9)]
+    assert [truncation(cfg, series[:n], 6) for n in (1, 5, 6, 7, 9)] == [
+        (0, False), (4, False), (5, False), (6, False), (6, False)]
+    # a bound beyond n_average: the last window until then, as before
+    assert truncation(cfg, series[:9], 20) == (8, False)
+    fixed = ModelConfig(n_average=10, stationarity="fixed", transient_min=3)
+    assert truncation(fixed, series[:8], 6) == (3, True)
