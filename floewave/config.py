@@ -266,16 +266,16 @@ class ModelConfig:
         require(self, "max_iterations", self.max_iterations >= 1, "must be >= 1")
         require(self, "noise_window", self.noise_window >= 0, "must be >= 0")
         require(self, "n_average", self.n_average >= 2, "must be >= 2")
-        require(self, "max_average", self.max_average == 0 or self.max_average >= self.n_average,
-                "must be 0 or >= n_average")
         require(self, "n0_warm", self.n0_warm >= 0, "must be >= 0")
         require(self, "transient_min", self.transient_min >= 0, "must be >= 0")
         require(self, "transient_drag_times", 0 <= self.transient_drag_times <= 1000,
                  "must be in [0, 1000]")
         # counts that would make a point run for ever (or overflow the cost): refused here
         for name in ("n0", "nT", "n0_warm", "max_iterations", "noise_window", "n_average",
-                     "transient_min"):
+                     "transient_min", "max_average"):
             require(self, name, getattr(self, name) <= 1_000_000, "must be <= 1000000")
+        require(self, "max_average", self.max_average == 0 or self.max_average >= self.n_average,
+                f"must be 0 or >= n_average ({self.n_average}): set it with n_average")
         require(self, "replicas", 1 <= self.replicas <= 4096, "must be in [1, 4096]")
         require(self, "seed", 0 <= self.seed < 2**63, "must be in [0, 2**63)")
         require(self, "compact_min_pairs", self.compact_min_pairs >= 1, "must be >= 1")

@@ -96,12 +96,12 @@ def test_round_trip_is_exact(L_x, T, a0, eps, disp, confined):
 
 
 @pytest.mark.parametrize("name", ["n0", "nT", "n0_warm", "max_iterations", "noise_window",
-                                  "n_average"])
+                                  "n_average", "max_average"])
 def test_counts_that_would_run_for_ever_are_refused(name):
     """[base] n0 = 1e30 used to pass validation and fail the point (issue 15)."""
     with pytest.raises(ConfigError, match=f"{name} = 10+ must be <= 1000000"):
         ModelConfig(**{name: 10**30})
-    ModelConfig(**{name: 1_000_000})
+    ModelConfig(**{name: 1_000_000, "max_average": 0})
 
 
 def test_replace_validated_is_replace_without_revalidating():

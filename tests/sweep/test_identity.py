@@ -58,8 +58,8 @@ def test_known_hashes(changes, expected):
 
 
 PINNED = {
-    "KNOWN_1": "f8eedc477ef3b138a6f477125e8c27b0b8b531c57f34ba3071ada98c7f4c4e1f",
-    "KNOWN_2": "3ac67dafe9dfc1dabe193a10b9eedd3bfce7549bf643b1e207984978051f4faa",
+    "KNOWN_1": "02ff89e129370d7715c1be06a4e59137740bd91868a7174c0c8d8587fb4e5275",
+    "KNOWN_2": "1012d8b71629d97d2d502b419b722bee78e0c681cfd4552d658a04666f48671c",
 }
 
 
