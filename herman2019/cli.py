@@ -25,6 +25,7 @@ from herman2019 import numbers, record
 from herman2019 import report as study_report
 from herman2019.atlas import make_atlas
 from herman2019.check import check_stores, format_table
+from herman2019.outcomes import classify, format_outcomes
 from herman2019.seeds import across_seeds, check_seeds, format_seed_table
 from herman2019.settle import settle
 from herman2019.settled import format_settled, settled_json
@@ -71,6 +72,11 @@ def build_parser() -> argparse.ArgumentParser:
     pc.add_argument("--floor", type=float, default=None, metavar="M",
                     help="--settle: stop adding seeds to a chain of a/a0 whose undecided"
                     " steps all lie within +-M of a0 (off by default; docs/paper-check.md)")
+    pc.add_argument("--settled", type=Path, default=None, metavar="FILE",
+                    help="read a settled table (check --settle --json, e.g."
+                    " results/paper-settle/settled.json) and print each row against the"
+                    " paper: its sentence, reading, resolution and outcome (holds,"
+                    " contradicted, below the paper's resolution; docs/paper-check.md)")
     pc.add_argument("--jobs", type=int, default=None, metavar="N",
                     help="--settle --run: run a look's seeds with sweep run under mpiexec,"
                     " N workers (default 1: in this process)")
@@ -132,6 +138,12 @@ def cmd_check(args: argparse.Namespace) -> int:
     def log(msg: str) -> None:
         print(f"herman2019: {msg}", file=sys.stderr)
 
+    if args.settled is not None:
+        for flag, on in (("--settle", args.settle), ("--seeds", args.seeds),
+                         ("--run", args.run)):
+            if on:
+                raise ConfigError(f"--settled and {flag}: --settled reads a settled table")
+        return _print_outcomes(args.settled, as_json=args.json)
     if args.settle:
         if args.seeds:
             raise ConfigError("--settle and --seeds: give one (--settle chooses its seeds)")
@@ -178,6 +190,26 @@ def cmd_check(args: argparse.Namespace) -> int:
     for name, problem in problems.items():
         _err(f"{name}: {problem}")
     return EXIT_STORE if problems else EXIT_OK
+
+
+def _print_outcomes(path: Path, *, as_json: bool) -> int:
+    """``check --settled FILE``: the outcomes of :mod:`herman2019.outcomes`."""
+    try:
+        settled = json.loads(path.read_text())
+        found = classify(settled)
+    except FileNotFoundError:
+        raise ConfigError(f"--settled {path}: no such file") from None
+    except (json.JSONDecodeError, KeyError, TypeError) as exc:
+        raise ConfigError(f"--settled {path}: not a settled table ({exc})") from None
+    if as_json:
+        print(json.dumps([{"row": o.row, "claim": o.check.claim, "outcome": o.outcome,
+                           "verdict": o.check.verdict, "note": o.note,
+                           "resolution": o.reading.resolution.value if o.reading else None,
+                           "effects": [vars(e) for e in o.effects]} for o in found],
+                         indent=2))
+    else:
+        print(format_outcomes(found))
+    return EXIT_OK
 
 
 def cmd_atlas(args: argparse.Namespace) -> int:

@@ -33,6 +33,11 @@ probability (t_nu at 97.7 %: 4.5 for nu = 2, 2.5 for nu = 6, 2.4 for nu = 8) ins
   above; combined evidence is Stouffer's z = sum(z_i) / sqrt(n). *Fails* if a pair has
   z <= -z_c or the combined z <= -z_c; *holds* if every pair has the claimed sign and the
   combined z >= z_c; otherwise *inconclusive*.
+- **The same order at two places** (Fig. 6a, T = 1.8 s: the d_f ordering of a/a0 at 5 m
+  is the far end's): each step of the chain at both places; the claim *fails* if a step
+  (or the ends) has opposite signs at the two places, each with |z| >= z_c (a flip); it
+  *holds* if every step has the same sign at both and the ends differ at both with
+  |z| >= z_c; otherwise it is *inconclusive*.
 - **A value in a range** (alpha_inner / alpha_c in [0.8, 1.25], an exponent in [3.5, 4.5]):
   z_lo = (x - lo) / se, z_hi = (hi - x) / se. A point holds if both are >= z_c (the whole
   +-z_c se interval inside the range) and fails if either is <= -z_c (the interval wholly
@@ -57,8 +62,9 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["Estimate", "Z_CRIT", "HOLDS", "FAILS", "INCONCLUSIVE", "z_critical", "ordering",
-           "pairs", "in_range", "power_exponent", "critical", "hooked", "observing", "current_hook"]
+__all__ = ["Estimate", "Diff", "Z_CRIT", "HOLDS", "FAILS", "INCONCLUSIVE", "z_critical",
+           "chain_diffs", "pair_diffs", "ordering", "pairs", "same_order", "in_range",
+           "power_exponent", "critical", "hooked", "observing", "current_hook"]
 
 HOLDS, FAILS, INCONCLUSIVE = "holds", "fails", "inconclusive"
 
@@ -161,10 +167,14 @@ def _z_critical(dof: float, z: float) -> float:
 
 
 @dataclass(frozen=True)
-class _Diff:
+class Diff:
+    """A difference the claim says is positive: ``d`` with its SE, the degrees of freedom
+    of that SE, and which points it joins (``label``)."""
+
     d: float
     se: float
     dof: float
+    label: str = ""
 
     @property
     def z(self) -> float:
@@ -176,12 +186,14 @@ class _Diff:
 
     @property
     def zc(self) -> float:
+        """The critical |z| it is read with (:func:`z_critical` of its dof)."""
         return z_critical(self.dof)
 
 
-def _diff(lo: Estimate, hi: Estimate) -> _Diff:
+def _diff(lo: Estimate, hi: Estimate) -> Diff:
     """hi - lo (the claim is that it is positive) with its combined SE."""
-    return _Diff(hi.value - lo.value, math.hypot(lo.se, hi.se), min(lo.dof, hi.dof))
+    return Diff(hi.value - lo.value, math.hypot(lo.se, hi.se), min(lo.dof, hi.dof),
+                f"{lo.label} -> {hi.label}")
 
 
 def _zs(z: float) -> str:
@@ -199,6 +211,27 @@ def _no_se(estimates: Sequence[Estimate]) -> str:
     return f"; no error bar: {', '.join(missing)}" if missing else ""
 
 
+def chain_diffs(points: Sequence[Estimate], *, increasing: bool
+                ) -> tuple[list[Diff], Diff]:
+    """The consecutive steps and the end-to-end difference of a chain (points with a
+    value, at least two), each signed so that the claim ("increases" when ``increasing``,
+    else "decreases") says it is positive."""
+    sign = 1.0 if increasing else -1.0
+
+    def claimed(a: Estimate, b: Estimate) -> Diff:
+        raw = _diff(a, b)
+        return Diff(sign * raw.d, raw.se, raw.dof, raw.label)
+
+    steps = [claimed(a, b) for a, b in zip(points[:-1], points[1:], strict=True)]
+    return steps, claimed(points[0], points[-1])
+
+
+def pair_diffs(pair_list: Sequence[tuple[Estimate, Estimate]]) -> list[Diff]:
+    """Second minus first of each pair with both values (the claim: positive)."""
+    return [_diff(a, b) for a, b in pair_list
+            if math.isfinite(a.value) and math.isfinite(b.value)]
+
+
 # ---------------------------------------------------------------------- the rules
 def ordering(estimates: Sequence[Estimate], *, increasing: bool) -> tuple[str, str]:
     """Verdict and evidence for "the value increases (``increasing``) / decreases along
@@ -206,14 +239,7 @@ def ordering(estimates: Sequence[Estimate], *, increasing: bool) -> tuple[str, s
     pts, gone = _valued(hooked(estimates))
     if len(pts) < 2:
         return INCONCLUSIVE, f"fewer than 2 points with a value{gone}"
-    sign = 1.0 if increasing else -1.0
-
-    def claimed(a: Estimate, b: Estimate) -> _Diff:
-        raw = _diff(a, b)
-        return _Diff(sign * raw.d, raw.se, raw.dof)
-
-    steps = [claimed(a, b) for a, b in zip(pts[:-1], pts[1:], strict=True)]
-    ends = claimed(pts[0], pts[-1])
+    steps, ends = chain_diffs(pts, increasing=increasing)
     zc = ends.zc
     evidence = (f"steps z = {', '.join(_zs(s.z) for s in steps)}; ends z = {_zs(ends.z)}"
                 f" (z_c {zc:.2g}){gone}{_no_se(pts)}")
@@ -236,7 +262,7 @@ def pairs(pair_list: Sequence[tuple[Estimate, Estimate]]) -> tuple[str, str]:
     gone_txt = f"; left out (no value): {', '.join(gone)}" if gone else ""
     if not valid:
         return INCONCLUSIVE, f"no pair with values{gone_txt}"
-    diffs = [_diff(a, b) for a, b in valid]
+    diffs = pair_diffs(valid)
     zs = [d.z for d in diffs]
     # an exact pair (SE 0) has z = +-inf; inf - inf (or a missing SE) leaves no combined z
     comb = sum(zs) / math.sqrt(len(zs)) if not any(math.isnan(z) for z in zs) else math.nan
@@ -247,6 +273,44 @@ def pairs(pair_list: Sequence[tuple[Estimate, Estimate]]) -> tuple[str, str]:
     if any(d.z <= -d.zc for d in diffs) or comb <= -zc:
         return FAILS, evidence
     if all(d.d > 0 for d in diffs) and comb >= zc:
+        return HOLDS, evidence
+    return INCONCLUSIVE, evidence
+
+
+def same_order(near: Sequence[Estimate], far: Sequence[Estimate]) -> tuple[str, str]:
+    """Verdict and evidence for "the points are in the same order at both places": the
+    same chain (``near[i]`` and ``far[i]`` the same point) read at two places, e.g. a/a0 at
+    5 m and at the far end along d_f. Step i *flips* when its differences at the two
+    places have opposite signs, each with |z| >= z_c. The claim *fails* if a step or the
+    ends flip; it *holds* if every step has the same sign at both places and the ends
+    differ at both with |z| >= z_c, the same sign; otherwise it is *inconclusive*. Points
+    without a value at either place are left out."""
+    both = hooked([*near, *far])
+    near, far = both[:len(near)], both[len(near):]
+    kept = [(a, b) for a, b in zip(near, far, strict=True)
+            if math.isfinite(a.value) and math.isfinite(b.value)]
+    gone = [a.label for a, b in zip(near, far, strict=True)
+            if not (math.isfinite(a.value) and math.isfinite(b.value))]
+    gone_txt = f"; left out (no value): {', '.join(gone)}" if gone else ""
+    if len(kept) < 2:
+        return INCONCLUSIVE, f"fewer than 2 points with a value at both places{gone_txt}"
+    n_steps, n_ends = chain_diffs([a for a, _ in kept], increasing=True)
+    f_steps, f_ends = chain_diffs([b for _, b in kept], increasing=True)
+    pairs_ = list(zip([*n_steps, n_ends], [*f_steps, f_ends], strict=True))
+
+    def flips(n: Diff, f: Diff) -> bool:
+        return n.d * f.d < 0 and abs(n.z) >= n.zc and abs(f.z) >= f.zc
+
+    zc = min(n_ends.zc, f_ends.zc)
+    steps = ", ".join(f"{_zs(n.z)} / {_zs(f.z)}" for n, f in pairs_[:-1])
+    evidence = (f"steps z (near / far) = {steps};"
+                f" ends z = {_zs(n_ends.z)} / {_zs(f_ends.z)} (z_c {zc:.2g}){gone_txt}"
+                f"{_no_se([e for p in kept for e in p])}")
+    flipped = [n.label for n, f in pairs_ if flips(n, f)]
+    if flipped:
+        return FAILS, evidence + f"; flips: {', '.join(flipped)}"
+    if all(n.d * f.d > 0 for n, f in pairs_[:-1]) and n_ends.d * f_ends.d > 0 \
+            and abs(n_ends.z) >= n_ends.zc and abs(f_ends.z) >= f_ends.zc:
         return HOLDS, evidence
     return INCONCLUSIVE, evidence
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
@@ -21,7 +22,8 @@ from herman2019.estimates import INCONCLUSIVE, Estimate, current_hook, hooked
 __all__ = ["FLOORS", "X_NEAR", "Check", "Profile", "point", "col", "label_of",
            "a_end", "a_near", "w_c", "inner_over_c", "force_decades", "make_check",
            "sorted_values", "M_OW", "INNER_OVER_C", "FORCE_DECADES", "M_CLOSE",
-           "NO_EFFECT", "Tables", "difference", "exact", "config_of", "sheet_length"]
+           "NO_EFFECT", "A_RESOLUTION", "range_bounds", "Tables", "difference", "exact",
+           "config_of", "sheet_length"]
 
 #: Standard errors assumed where a store gives none (see the module docstring):
 #:
@@ -57,10 +59,20 @@ M_CLOSE = 0.5
 INNER_OVER_C = (0.8, 1.25)
 #: "Roughly two orders of magnitude": log10(F_w / F_d) within half a decade of 2.
 FORCE_DECADES = (1.5, 2.5)
-#: "No visible effect" / "no influence" on a/a0: a difference within 0.01 (1 % of a0): the
-#: resolution the campaigns are run to (ModelConfig's default ``target_stderr``, the SE of
-#: a/a0 at which a point stops); a smaller effect is below what a campaign resolves.
+#: "No influence" on a/a0 (random initial locations, §4.1): a difference within 0.01 (1 %
+#: of a0): the resolution the campaigns are run to (ModelConfig's default
+#: ``target_stderr``, the SE of a/a0 at which a point stops); a smaller effect is below
+#: what a campaign resolves.
 NO_EFFECT = 0.01
+#: The smallest difference of a/a0 [a0] the paper's figures of a/a0 against x (Figs. 2, 5,
+#: 6a, 6b) could show. The text gives their captions, not their axes, but each panel must
+#: hold its curves: from 1 at the edge down to 0.55-0.75 (Fig. 2a), 0.75-0.93 (Fig. 5),
+#: 0.42-0.98 (Fig. 6a, both periods in one panel), so its a/a0 axis spans at least about
+#: half of a0. On a journal panel 5-7 cm tall that is at least 0.007-0.01 of a0 per mm;
+#: curves drawn about 0.3 mm wide are told apart, and their order read, only about two
+#: line widths (0.5-0.6 mm) apart: 0.004-0.006 of a0. Chosen: 0.005. "No visible
+#: effect" (the edge spring, §4.1) is read as a difference within it.
+A_RESOLUTION = 0.005
 
 
 # ---------------------------------------------------------------------- checks
@@ -250,6 +262,21 @@ def created(check: Check) -> Check:
 def sorted_values(df: pd.DataFrame, key: str, **fixed: Any) -> list[Any]:
     """The sorted distinct values of ``key`` among the rows with these ``fixed`` values."""
     return sorted(df.loc[_where(df, fixed), key].unique().tolist())
+
+
+_BOUNDS = re.compile(r"in \[(log10 )?(-?[\d.]+), (log10 )?(-?[\d.]+)\]")
+_BELOW = re.compile(r"< (-?[\d.]+)(?:\s|$)")
+
+
+def range_bounds(quantity: str) -> tuple[float, float] | None:
+    """The bounds a range row states in its quantity: ``in [lo, hi]`` (``log10 x`` taken
+    as log10(x)) or ``< hi`` (lo = -inf); None if it states neither."""
+    m = _BOUNDS.search(quantity)
+    if m:
+        lo, hi = float(m.group(2)), float(m.group(4))
+        return (math.log10(lo) if m.group(1) else lo, math.log10(hi) if m.group(3) else hi)
+    m = _BELOW.search(quantity)
+    return (-math.inf, float(m.group(1))) if m else None
 
 
 def difference(lo: Estimate, hi: Estimate, label: str) -> Estimate:

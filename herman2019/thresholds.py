@@ -6,9 +6,9 @@ Three thresholds are readings of the paper's text, not its numbers:
 - **"close to", "like confined ice", "reaches the compact zone's"**: a ratio within
   [1 / b, b] with b = 1.25 (:data:`herman2019.points.INNER_OVER_C`; the log-symmetric
   half-width of "~"); curve over b (:data:`CLOSE_BOUNDS`).
-- **"no visible effect", "no influence"** on a/a0: a difference within +-m with m = 1 %
-  of a0 (:data:`herman2019.points.NO_EFFECT`: the resolution a campaign is run to);
-  curve over m (:data:`MARGINS`).
+- **"no visible effect", "no influence"** on a/a0: a difference within +-m, m the row's
+  own (1 % of a0 for "no influence", :data:`herman2019.points.NO_EFFECT`; 0.5 % for "no
+  visible", :data:`herman2019.points.A_RESOLUTION`); curve over m (:data:`MARGINS`).
 - **a "spike"** of |S_sd| near the edge (Fig. 4): an excursion above f times its median,
   f = 3 (:data:`herman2019.traces.SPIKE`); curve over f
   (:data:`herman2019.traces.OTHER_SPIKES`), the rate read against [0.8, 1.25].
@@ -25,7 +25,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from herman2019.estimates import INCONCLUSIVE, Estimate, critical, in_range
-from herman2019.points import INNER_OVER_C, NO_EFFECT
+from herman2019.points import INNER_OVER_C, NO_EFFECT, range_bounds
 from herman2019.settle import Settled, SettleReport
 from herman2019.traces import OTHER_SPIKES, SPIKE
 
@@ -65,7 +65,8 @@ def curves(report: SettleReport) -> list[dict[str, Any]]:
                 kind, used = "spike threshold f (x median)", SPIKE
             elif c.rule.startswith("range (equivalence)"):
                 pts = [(m, in_range(est, -m, m)[0]) for m in MARGINS]
-                kind, used = "no-effect margin m (a0)", NO_EFFECT
+                kind, used = "no-effect margin m (a0)", (range_bounds(c.quantity)
+                                                         or (0.0, NO_EFFECT))[1]
             elif _LOG_Q in c.quantity:
                 pts = [(b, in_range(est, math.log10(1 / b), math.log10(b))[0])
                        for b in CLOSE_BOUNDS]
@@ -149,7 +150,7 @@ def _short(label: str) -> str:
 def _bounds(row: Settled) -> tuple[float, float] | None:
     c = row.check
     if c.rule.startswith("range (equivalence)"):
-        return -NO_EFFECT, NO_EFFECT
+        return range_bounds(c.quantity) or (-NO_EFFECT, NO_EFFECT)
     if _LOG_Q in c.quantity:
         return math.log10(INNER_OVER_C[0]), math.log10(INNER_OVER_C[1])
     if _CLOSE_Q in c.quantity:

@@ -32,6 +32,24 @@ def test_ordering_fails_on_one_significant_wrong_step():
     assert "+7.1, -4.2, +25.5" in evidence
 
 
+def test_same_order_reads_each_step_at_both_places():
+    near = [E(0.988, 0.0001), E(0.9865, 0.0001), E(0.990, 0.0001), E(0.996, 0.0001)]
+    # v8's T 1.8 s: the 5 -> 10 mm step falls at both places, the others rise at both
+    far = [E(0.854, 0.0002), E(0.844, 0.0005), E(0.918, 0.0006), E(0.975, 0.0003)]
+    verdict, evidence = estimates.same_order(near, far)
+    assert verdict == HOLDS, evidence
+    # T 1.2 s's reversal: rising near the edge, falling far downwave: every step flips
+    rev = [E(0.65, 0.001), E(0.57, 0.001), E(0.47, 0.001), E(0.43, 0.001)]
+    verdict, evidence = estimates.same_order(near, rev)
+    assert verdict == FAILS and "flips" in evidence, evidence
+    # one flipped step whose far difference is within its error bar: not a flip
+    far2 = [E(0.854, 0.0002), E(0.8545, 0.001), E(0.918, 0.0006), E(0.975, 0.0003)]
+    assert estimates.same_order(near, far2)[0] == INCONCLUSIVE
+    # ends that do not differ at one place cannot show the same order
+    flat = [E(0.9, 0.01)] * 4
+    assert estimates.same_order(near, flat)[0] == INCONCLUSIVE
+
+
 def test_ordering_fails_when_the_ends_are_significantly_reversed():
     # every step slightly wrong (|z| < 2), the ends clearly wrong
     steps = [E(0.80 + 0.015 * i) for i in range(5)]

@@ -97,28 +97,36 @@ def _fig2_zone(W_c, xb_frac, fc_over_fw=1.0, crossing=None):
     return pd.DataFrame(rows), prof
 
 
-def test_the_rate_changes_at_W_c_holds_when_the_knot_is_at_W_c_and_fails_well_before():
+def test_the_change_of_slope_is_read_once_where_the_rate_reaches_the_compact_zones():
     W = [25.0, 20.0, 17.0, 14.0]
     t, prof = _fig2_zone(W, 1.0)
     checks = claims.paper_checks({"fig2": t}, lambda n, h: prof[h], trace=False)
-    at = _by(checks, "the rate changes at W_c (ml)")
+    at = _by(checks, "the rate reaches the compact zone's at W_c (ml)")
     assert at.verdict == HOLDS, at.evidence
-    assert [e.value for e in at.estimates] == pytest.approx([1.0] * 4, abs=0.01)
+    # the slope has fallen to 1.25 alpha_inner at the knot, or a floe or two after it
+    assert all(0.98 <= e.value <= 1.1 for e in at.estimates), at.estimates
+    # one reading of the sentence: the two-line knot is in the evidence, not a row of its own
+    assert not [c for c in checks if c.claim.startswith("the rate changes at W_c")]
+    assert "x_b 25.0" in at.evidence and "not the reading" in at.evidence
     assert _by(checks, "attenuation steep near the edge, flatter downwave (ml)").verdict == HOLDS
     t, prof = _fig2_zone(W, 0.6)
     before = _by(claims.paper_checks({"fig2": t}, lambda n, h: prof[h], trace=False),
-                 "the rate changes at W_c (ml)")
+                 "the rate reaches the compact zone's at W_c (ml)")
     assert before.verdict == FAILS and "x_b 15.0" in before.evidence
 
 
-def test_contact_forces_balance_the_wave_force_in_the_compact_zone():
+def test_contact_forces_balance_the_wave_force_within_an_order_of_magnitude():
     W = [25.0, 20.0, 17.0, 14.0]
-    for ratio, verdict in ((1.0, HOLDS), (2.0, FAILS), (1.2, INCONCLUSIVE)):
+    # 0.5 decade either way (the sentence's scale: "roughly 2 orders" is 2 +- 0.5);
+    # the floor SE 0.02 decade: 10**0.49 sits on the bound
+    for ratio, verdict in ((1.0, HOLDS), (1.26, HOLDS), (2.0, HOLDS), (0.5, HOLDS),
+                           (5.0, FAILS), (0.1, FAILS), (10 ** 0.49, INCONCLUSIVE)):
         t, prof = _fig2_zone(W, 1.0, fc_over_fw=ratio)
         c = _by(claims.paper_checks({"fig2": t}, lambda n, h, p=prof: p[h], trace=False),
-                "Fig. 3: in the compact zone the wave force is balanced")
+                "Fig. 3: in the compact zone the contact forces balance the wave force")
         assert c.verdict == verdict, (ratio, c.evidence)
         assert c.estimates[0].value == pytest.approx(math.log10(ratio))
+        assert f"F_c/F_w = {ratio:.3g}" in c.evidence
 
 
 def test_a_zone_at_the_far_end_is_marginal_and_left_out():
@@ -187,9 +195,9 @@ def test_exact_pairs_combine():
 
 
 # ---------------------------------------------------------------------- variants
-def _variant_tables(diff, drift):
+def _variant_tables(diff, drift, se=2.5e-5):
     def row(h, a_end):
-        return _base(hash=h, a_end=a_end, a_end_stderr=2.5e-5, ice_extent=42.4)
+        return _base(hash=h, a_end=a_end, a_end_stderr=se, ice_extent=42.4)
     base = 0.66 * 0.0125
     tables = {"fig2": pd.DataFrame([row("ref", base)]),
               "uniform": pd.DataFrame([row("uni", base + diff * 0.0125)]),
@@ -204,18 +212,29 @@ def _variant_tables(diff, drift):
 
 
 def test_placement_and_spring_no_effect_is_an_equivalence_test():
-    tables, prof = _variant_tables(0.0, -5.0)
+    tables, prof = _variant_tables(0.0, -5.0, se=1e-5)
     checks = claims.paper_checks(tables, prof)
     assert _by(checks, "random initial locations have no influence").verdict == HOLDS
-    assert _by(checks, "the edge spring constant has no visible effect (k_s x 10)").verdict \
-        == HOLDS
-    tables, prof = _variant_tables(0.05, -5.0)           # 5 % of a0: visible
+    assert _by(checks, variants.spring_claim("k_s x 10")).verdict == HOLDS
+    tables, prof = _variant_tables(0.05, -5.0, se=1e-5)  # 5 % of a0: visible
     checks = claims.paper_checks(tables, prof)
     assert _by(checks, "random initial locations have no influence").verdict == FAILS
-    assert _by(checks, "the edge spring constant has no visible effect (k_s x 10)").verdict \
-        == FAILS
-    assert _by(checks, "the edge spring constant has no visible effect (k_s / 10)").verdict \
-        == HOLDS
+    assert _by(checks, variants.spring_claim("k_s x 10")).verdict == FAILS
+    assert _by(checks, variants.spring_claim("k_s / 10")).verdict == HOLDS
+
+
+def test_no_influence_and_no_visible_effect_have_their_own_margins():
+    # 0.75 % of a0, resolved (SE 0.01 %): within the campaigns' 1 % ("no influence") but
+    # beyond what a figure of a/a0 could show, 0.5 % ("no visible effect")
+    tables, prof = _variant_tables(0.0075, -5.0, se=1e-6)
+    checks = claims.paper_checks(tables, prof)
+    uni = _by(checks, "random initial locations have no influence")
+    stiff = _by(checks, variants.spring_claim("k_s x 10"))
+    assert uni.verdict == HOLDS and "[-0.01, 0.01]" in uni.quantity
+    assert stiff.verdict == FAILS and "[-0.005, 0.005]" in stiff.quantity
+    tables, prof = _variant_tables(0.004, -5.0, se=1e-6)
+    assert _by(claims.paper_checks(tables, prof),
+               variants.spring_claim("k_s x 10")).verdict == HOLDS
 
 
 def test_without_the_spring_the_first_floe_must_drift_upwave():
