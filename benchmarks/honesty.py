@@ -21,8 +21,9 @@ standard error falls as 1/sqrt(iterations averaged)).
     python benchmarks/honesty.py --reference --capped 24 --references /tmp/refs.json
 
 ``--capped N``: instead of the Fig. 2 and random points, N points drawn (``--grid-seed``)
-from those the shipped grid (``results/herman2019``) ended ``not_converged``, at the cap:
-the points a stopping rule for a stationary noisy state acts on.
+from those the shipped grid (``results/herman2019``) ended ``not_converged`` (model
+version 8's grid: all at the cap of 100 windows): the points a stopping rule for a
+stationary noisy state acts on.
 
 ``--reference``: two runs of one protocol share its biases, so the between-seed z cannot see
 them. Each point is also run as a long reference (:data:`REFERENCE`: the stationary protocol

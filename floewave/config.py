@@ -124,7 +124,8 @@ class ModelConfig:
     n_average : iterations averaged once the noise floor is reached (the minimum when
         ``target_stderr`` > 0)
     target_stderr : if > 0, keep averaging until max_i a_stderr_i / a0 <= target_stderr
-        (adaptive window; status ``not_converged`` if max_iterations comes first)
+        (adaptive window; status ``not_converged`` if ``max_average`` windows averaged or
+        ``max_iterations`` come first)
     target_W_c_stderr : ensembles (R >= 2): if > 0, keep averaging also until the standard
         error of W_c is at most this [m] (points with a compact zone in >= 2 replicas)
     max_average : the stationary protocol averages at most this many windows for the

@@ -60,8 +60,8 @@ def parse_log(path: Path) -> dict:
 
 def problems(store: Path, df, out: Path) -> dict:
     """Every point that is not ``converged``/``converged_noisy``, with why, into ``out``
-    (CSV): a ``not_converged`` point reached ``max_iterations`` windows with an error bar
-    still above its target (max_i SE(a_i) / a0 against ``target_stderr``, SE(W_c) against
+    (CSV): a ``not_converged`` point stopped (at ``max_average`` windows averaged, or at
+    ``max_iterations``) with an error bar still above its target (max_i SE(a_i) / a0 against ``target_stderr``, SE(W_c) against
     ``target_W_c_stderr``, from the store's profiles) or without a stationary stretch; a
     ``failed``/``invalid``/``crashed``/``timeout`` point carries its message. Returns the
     counts per reason."""

@@ -210,7 +210,8 @@ def _status(df: pd.DataFrame, dims: Sequence[str], total: int, journaled: int | 
     for _, r in bad.sort_values(["status", *dims]).iterrows():
         status = str(r["status"])
         if status == "not_converged":
-            reason = (f"max_iterations reached after {int(r['iterations'])} iterations, "
+            reason = (f"error bars above their targets or no stationary stretch after "
+                      f"{int(r['iterations'])} iterations, "
                       f"residual {float(r['residual']):.3g} (its estimate so far is stored,"
                       " with its error bars)")
         else:

@@ -65,7 +65,7 @@ def truncation(cfg: ModelConfig, series: list[np.ndarray], d_min: int) -> tuple[
     the last counts (d = n - 1) until the transient's bound ``d_min``
     (:func:`floewave.transient.transient_windows`) has passed, then the windows after it
     (d = ``d_min``; model version 9: every window the average will hold but the first
-    runs at a profile marched from a pooled coefficient, not from one window's noise,
+    two runs at a profile marched from a pooled coefficient, not from one window's noise,
     whose bias the replicas share), not stationary; then the latest MSER truncation of
     the series, valid when at most n / 2, raised to at least ``d_min``; stationary when
     valid and the halves after it agree."""

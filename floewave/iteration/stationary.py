@@ -37,7 +37,9 @@ at Fig. 2's ``ep`` eps 0.8 point), so it averaged a transient. This protocol:
    estimate of those windows and the error bars it has, ``iterations`` below
    ``max_iterations``), or at ``max_iterations`` windows (never stationary, or
    ``max_average = 0``), reporting the estimate from the windows after the truncation (or
-   the last half when no stationary stretch was found) with its error bars.
+   the last half when no stationary stretch was found) with its error bars. (A run with
+   ``max_iterations`` below its transient plus ``max_average`` windows, e.g.
+   configs/demo.toml's 30, can reach ``max_iterations`` while stationary, too.)
 
 The estimate (:func:`floewave.iteration.estimate.estimate_point` with coefficients) is the march of
 the mean coefficient, never a mean of marched, clipped profiles. With ``coupling =

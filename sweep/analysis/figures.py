@@ -32,7 +32,7 @@ that seed's points alone: figures neither pool nor average seeds (pool them with
 :func:`sweep.collision_stats` or :func:`sweep.alpha_omega` with a ``by`` without ``seed``).
 
 Status is marked in every figure and explained in its legend: a ``not_converged`` curve
-(``max_iterations`` reached; the mean so far) carries crosses, a ``not_converged`` point (or a
+(error bars above their targets, or never stationary; the estimate so far) carries crosses, a ``not_converged`` point (or a
 pooled group holding one) an open square. Curves differ in colour and marker by the swept
 parameters that differ between them (:func:`sweep.analysis.plotting.curve_styles`). A
 figure the grid does not allow is named with the reason (:data:`WHY`); when none of the

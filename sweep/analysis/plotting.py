@@ -98,10 +98,10 @@ MARKERS = ("o", "s", "^", "D", "v", "P", "*", "X", "<", ">")
 RULE_MARKERS = ("D", "s", "^", "v", "P")
 #: The legend entry of the crosses on a not-converged curve (its handle shows the cross:
 #: the text does not repeat it).
-NOT_CONVERGED = "not converged (max_iterations reached; the estimate so far)"
+NOT_CONVERGED = "not converged (error bars above target, or not stationary; the estimate so far)"
 #: The legend entry of the open square around a not-converged point (or a pooled group
 #: holding one).
-NOT_CONVERGED_RING = "not converged (max_iterations reached), or a group holding one"
+NOT_CONVERGED_RING = "not converged, or a group holding one"
 
 
 def not_converged_mask(df: pd.DataFrame) -> pd.Series:
@@ -169,7 +169,8 @@ def draw_amplitude(ax, row: pd.Series, prof: dict[str, np.ndarray], colour, styl
                label: str | None = None, band: bool = True, zone: bool = False) -> None:
     """a/a0 versus x (with SE band); with ``zone``: the W_c dot and compact-ice line.
 
-    A ``not_converged`` point (``max_iterations`` reached: the mean so far) is drawn with
+    A ``not_converged`` point (its error bars above their targets, or never stationary: the
+    estimate so far) is drawn with
     crosses (explained by the figure's legend entry :data:`NOT_CONVERGED`; the curve's own
     label stays that of its parameter value, so that one legend serves several panels).
     """

@@ -157,7 +157,8 @@ def collision_stats(df: pd.DataFrame, by: str | Sequence[str] | None = None, *,
                     converged_only: bool = False) -> pd.DataFrame:
     """Collision-zone statistics of a campaign, one row per group of ``by``.
 
-    By default ``not_converged`` points (``max_iterations`` reached; their stored profile
+    By default ``not_converged`` points (error bars above their targets, or never
+    stationary; their stored profile
     is the mean so far, with its standard error) enter the statistics: ``n_not_converged``
     counts them per group, and ``converged_only=True`` leaves them out.
 
@@ -173,8 +174,8 @@ def collision_stats(df: pd.DataFrame, by: str | Sequence[str] | None = None, *,
     -------
     DataFrame with the ``by`` columns and
 
-    - ``n_points``, ``n_not_converged``: points in the group, and how many of them hit
-      ``max_iterations`` without converging;
+    - ``n_points``, ``n_not_converged``: points in the group, and how many of them ended
+      ``not_converged``;
     - ``n_edge``, ``n_compact``, ``n_inverted``, ``n_patchy``, ``n_no_compact``: points
       per compact-zone layout (:func:`floewave.results.compact_zones`),
       ``frac_no_compact_zone``; ``n_legacy``: points of stores written before model

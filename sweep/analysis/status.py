@@ -106,8 +106,8 @@ def status_text(rep: dict[str, Any]) -> str:
             out.append(f"  {f['hash']} {f['status']:8s} {swept_text(f['swept'])}:"
                        f" {f['message']}")
     if rep["not_converged"]:
-        out.append("not converged (max_iterations reached; the estimate so far is stored, with"
-                   " its error bars):")
+        out.append("not converged (error bars above their targets, or not stationary; the"
+                   " estimate so far is stored, with its error bars):")
         for f in rep["not_converged"]:
             out.append(f"  {f['hash']} {swept_text(f['swept'])}: {f['iterations']} iterations,"
                        f" residual {f['residual']:.3g}")

@@ -101,7 +101,7 @@ def test_counts_that_would_run_for_ever_are_refused(name):
     """[base] n0 = 1e30 used to pass validation and fail the point (issue 15)."""
     with pytest.raises(ConfigError, match=f"{name} = 10+ must be <= 1000000"):
         ModelConfig(**{name: 10**30})
-    ModelConfig(**{name: 1_000_000, "max_average": 0})
+    ModelConfig(**{"max_average": 0, name: 1_000_000, "n_average": 2})
 
 
 def test_replace_validated_is_replace_without_revalidating():

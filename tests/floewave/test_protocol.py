@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from floewave import InvalidPointError, ModelConfig, march_coefficients, run_point
+from floewave import ConfigError, InvalidPointError, ModelConfig, march_coefficients, run_point
 from floewave._march import coefficients, march_amplitude, mean_coefficients
 from floewave.iteration.stationary import confined_profile
 from floewave.iteration.stationarity import halves_z, mser_truncation
@@ -228,7 +228,7 @@ def test_mean_coupling_under_the_stationary_protocol_shares_one_profile():
 
 
 def test_max_average_must_be_at_least_n_average():
-    with pytest.raises(Exception, match=r"max_average = 30 must be 0 or >= n_average \(40\)"):
+    with pytest.raises(ConfigError, match=r"max_average = 30 must be 0 or >= n_average \(40\)"):
         ModelConfig(n_average=40)
     assert ModelConfig(n_average=10, max_average=0).max_average == 0
 

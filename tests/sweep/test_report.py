@@ -62,7 +62,7 @@ def test_status_counts_and_every_problem_point_with_its_values(page):
                for r in failed)
     assert {"ep", "ml"} == {re.search(r"<td>(ep|ml)</td>", r).group(1) for r in failed}
     not_conv = _rows(html, "not_converged")
-    assert len(not_conv) == 4 and all("max_iterations reached" in r for r in not_conv)
+    assert len(not_conv) == 4 and all("error bars above their targets" in r for r in not_conv)
     assert "Points that did not converge or have no result (6)" in html
 
 

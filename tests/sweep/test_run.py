@@ -321,7 +321,7 @@ def test_status_lists_not_converged_points(tmp_path, capsys):
     capsys.readouterr()
     assert main(["status", str(store)]) == 0
     out = capsys.readouterr().out
-    block = out.split("not converged (max_iterations reached")[1].split("slowest:")[0]
+    block = out.split("not converged (error bars above their targets")[1].split("slowest:")[0]
     assert block.count("eps=0.8") == 4 and "eps=0.2" not in block
 
 
