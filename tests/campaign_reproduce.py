@@ -11,7 +11,9 @@ runs :func:`floewave.run_point` in this process and compares every scalar the ta
 with the recomputed one, bit for bit (NaN equal to NaN). On the machine that made the table
 every point must agree (docs/reproducibility.md: one configuration, one result, whatever
 the rank count, resume or JIT cache); on another CPU they agree within their error bars.
-Exit status 0 when every compared value is equal, 1 otherwise.
+Exit status 0 when every compared value is equal, 1 otherwise. Run it from a checkout of
+the model version that made the table (``results/herman2019`` is model version 8's: the
+commit in its ``provenance.json``); another version gives other draws.
 """
 from __future__ import annotations
 
