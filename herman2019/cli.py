@@ -7,7 +7,9 @@ Shen (2019) on floewave campaigns run by sweep.
 - ``report``: ``sweep report`` of a store with the paper-check table of a directory of stores;
 - ``atlas``: docs/atlas.md and its figures from the shipped table ``results/herman2019``;
 - ``numbers``: the record of every number the docs quote (docs/numbers.txt);
-- ``record``: one shard's table and provenance into ``results/herman2019``.
+- ``record``: one shard's table and provenance into ``results/herman2019``;
+- ``calibrate``: the error bars calibrated on the grid's own points over several seeds
+  (:mod:`herman2019.calibration`).
 
 Exit statuses are those of :mod:`sweep.errors` (0 ok, 1 internal error, 2 bad input,
 3 store problem, 6 interrupted but resumable); a claim's verdict never sets it.
@@ -21,7 +23,7 @@ import traceback
 from collections.abc import Sequence
 from pathlib import Path
 
-from herman2019 import numbers, record
+from herman2019 import calibration, numbers, record
 from herman2019 import report as study_report
 from herman2019.atlas import make_atlas
 from herman2019.check import check_stores, format_table
@@ -112,6 +114,22 @@ def build_parser() -> argparse.ArgumentParser:
                     " table (check --settle on the seed stores; ~25 min more)")
     nu.add_argument("--settle-only", action="store_true", help="print only the settled"
                     " table's section, on --out's seed stores (to append to a record)")
+
+    ca = sub.add_parser("calibrate", help="the error bars calibrated on the grid: a"
+                        " stratified sample of its points on several seeds, RMS z per"
+                        " quantity and stratum (docs/convergence.md)")
+    ca.add_argument("--out", type=Path, default=ROOT / "results" / "calibration",
+                    help="the runs' directory, OUT/runs.csv.gz (default: results/calibration)")
+    ca.add_argument("--table", action="store_true", help="only the table of the stored runs")
+    ca.add_argument("--grid", default=str(ROOT / "results" / "herman2019"),
+                    help="the table the sample is drawn from (default: results/herman2019)")
+    ca.add_argument("--n-zone", type=int, default=200, help="points with a compact zone")
+    ca.add_argument("--n-none", type=int, default=100, help="points without one")
+    ca.add_argument("--n-nc", type=int, default=40, help="points the table ended"
+                    " not_converged")
+    ca.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3])
+    ca.add_argument("--sample-seed", type=int, default=47)
+    ca.add_argument("--jobs", type=int, default=1, help="processes (default 1)")
 
     rc = sub.add_parser("record", help="ship a campaign shard's result without its store:"
                         " its table and provenance")
@@ -221,7 +239,8 @@ def cmd_atlas(args: argparse.Namespace) -> int:
 
 
 _COMMANDS = {"check": cmd_check, "report": study_report.command, "atlas": cmd_atlas,
-             "numbers": numbers.command, "record": record.command}
+             "numbers": numbers.command, "record": record.command,
+             "calibrate": calibration.command}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

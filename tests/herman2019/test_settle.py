@@ -432,10 +432,12 @@ def test_same_is_exact_but_for_the_last_bits_of_floats():
 @pytest.mark.slow  # 2 looks of 11 paper campaigns on seeded_point (~20 s)
 def test_settled_verdicts_and_numbers_are_those_of_the_seed_stores(tmp_path, capsys,
                                                                   monkeypatch):
-    """The settling with its seeds swept in one store per campaign gives the table and
-    settled.json (timings apart) that the settling with one store per seed and campaign
-    gave (tests/data/settle_seeded_point.*, made at 8d0a81e with seeds in
-    <stores>/seed<S>/ and a process pool of their own)."""
+    """The settling of the paper campaigns on seeded_point gives the table and
+    settled.json (timings apart) of tests/data/settle_seeded_point.*: made at 8d0a81e
+    with seeds in <stores>/seed<S>/ and a process pool of their own, which the settling
+    with its seeds swept in one store per campaign reproduced; remade by these same calls
+    on 2026-12-07 at model version 9 (new hashes, so seeded_point's values are new) with
+    the rows' readings of herman2019/readings.py (41 rows)."""
     monkeypatch.setattr("herman2019.traces.PERIODS", 4)
     monkeypatch.setattr("herman2019.traces.SPIN_UP", 1)
     d = tmp_path / "paper"
