@@ -72,9 +72,8 @@ REFERENCE_FILE = Path(__file__).parent / "data" / "references.json"
 
 def capped(n: int, seed: int) -> list[dict]:
     """``n`` grid points drawn (``seed``) from the shipped grid's ``not_converged`` rows."""
-    import pandas as pd
-    shards = sorted((REFERENCE_FILE.parents[2] / "results" / "herman2019").glob("shard-*.csv.gz"))
-    df = pd.concat([pd.read_csv(f) for f in shards])
+    import sweep
+    df = sweep.load(REFERENCE_FILE.parents[2] / "results" / "herman2019")
     rows = df[df["status"] == "not_converged"].sample(n, random_state=seed)
     axes = ("L_x", "T", "a0", "C_sd", "eps", "d_f", "dispersion")
     return [{k: (str(r[k]) if k == "dispersion" else float(r[k])) for k in axes}
