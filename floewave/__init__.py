@@ -21,7 +21,7 @@ from .dispersion import alpha_confined, solve_dispersion
 from .errors import ConfigError, DispersionError, FloewaveError, InvalidPointError, NumericalError
 from .results import PointResult
 
-__version__ = "0.1.0"
+__version__ = "1.0.0"
 
 #: Changes only when results can change (not with the package version): part of every
 #: point's identity hash in ``sweep``.

@@ -37,7 +37,7 @@ __all__ = ["main", "build_parser"]
 
 
 def _version() -> str:
-    """``sweep (floewave 0.1.0, model version 3, store schema 2)``."""
+    """``sweep (floewave 1.0.0, model version 9, store schema 5)``."""
     import floewave  # lazy: 0.1 s (numpy), after the stop handlers
     from sweep.store.schema import SCHEMA_VERSION  # lazy: as floewave
 

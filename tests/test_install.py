@@ -68,3 +68,18 @@ def test_a_clone_folder_beside_a_script_does_not_shadow_the_install(tmp_path):
                          capture_output=True, text=True, timeout=120)
     assert run.returncode == 0, run.stderr[-2000:]
     assert str(venv) in run.stdout, run.stdout  # the installed copy, not the clone's
+
+
+def test_one_version_everywhere():
+    """The release's version is the same in pyproject.toml, ``floewave.__version__`` and
+    CITATION.cff, and docs/changelog.md has an entry for it (a release tags all four)."""
+    import tomllib
+
+    import floewave
+
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["version"]
+    cff = re.search(r"^version:\s*(\S+)", (ROOT / "CITATION.cff").read_text(), re.M).group(1)
+    assert project == floewave.__version__ == cff.strip("\"'"), (project, floewave.__version__,
+                                                                 cff)
+    changelog = (ROOT / "docs" / "changelog.md").read_text()
+    assert re.search(rf"^## Release {re.escape(project)}\b", changelog, re.M), project

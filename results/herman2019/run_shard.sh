@@ -1,13 +1,26 @@
 #!/bin/bash
-# Run (or resume) shard K of 8 of the paper's grid into its own store, outside the
-# repository (STORES, default /work/campaign), as this table's shards were made:
-#     results/herman2019/run_shard.sh K > LOG 2>&1
-# then  herman2019 record STORES/herman2019-sKof8.h5 --shard K/8 --log LOG
-# A stop (SIGTERM or Ctrl-C to mpiexec) ends the run cleanly; the same command resumes it.
-# bash's time reports the CPU of every rank (mpiexec waits for them).
+# Run (or resume) shard K of N of the paper's grid into its own store, outside the
+# repository (STORES, default /work/campaign), with the code of the checkout this script
+# is in (its floewave, sweep and herman2019 come first on PYTHONPATH, so a release
+# worktree runs its own tagged code whatever else is installed):
+#     results/herman2019/run_shard.sh K N > LOG 2>&1
+# then, from any checkout:
+#     herman2019 record STORES/herman2019-sKofN.h5 --shard K/N --log LOG
+# Refuses (exit 2) when the checkout's tracked files differ from its commit: a shipped
+# run records one commit and git_dirty false. A stop (SIGTERM or Ctrl-C to mpiexec) ends
+# the run cleanly; the same command resumes it. bash's time reports the CPU of every rank
+# (mpiexec waits for them).
 K=$1
+N=${2:-16}
 STORES=${STORES:-/work/campaign}
-cd "$(dirname "$0")/../.."
+ROOT="$(cd "$(dirname "$0")/../.." && pwd)"
+cd "$ROOT"
+if [ -n "$(git status --porcelain --untracked-files=no)" ]; then
+    echo "run_shard.sh: $ROOT has uncommitted changes to tracked files; commit them first" >&2
+    exit 2
+fi
+mkdir -p "$STORES"
+export PYTHONPATH="$ROOT${PYTHONPATH:+:$PYTHONPATH}"
 TIMEFORMAT="[time] real %R s, user %U s, sys %S s (all ranks)"
-time nice -n 5 mpiexec -n 3 sweep run configs/herman2019.toml \
-    --store "$STORES/herman2019-s${K}of8.h5" --shard "${K}/8" --no-bar
+time nice -n 5 mpiexec -n 3 python -m sweep run configs/herman2019.toml \
+    --store "$STORES/herman2019-s${K}of${N}.h5" --shard "${K}/${N}" --no-bar
