@@ -46,6 +46,7 @@ def _cell(text: str) -> str:
 
 
 def render() -> str:
+    from sweep.analysis.profiles_file import PROFILE_FILE_VARS
     from sweep.store.schema import (
         COLUMNS,
         DERIVED,
@@ -134,7 +135,27 @@ def render() -> str:
         " The store's full layout (root and run attributes, journal, lock, migrations) is"
         f" `results_schema/schema_v{SCHEMA_VERSION}.json`.",
         "",
+        "## Profiles in a netCDF file",
+        "",
+        "`sweep export store --profiles p.nc` (with or without `--out t.csv`) writes every"
+        " point's profiles that have results to one netCDF-4 file with CF-1.10 attributes"
+        " (`units`, `long_name`), dimensions `point` (in the table's order) and `floe` (the"
+        " longest sheet's; a shorter sheet's tail is NaN, `n_floes` says where it ends);"
+        " the swept parameters, `hash` and `status` are coordinates along `point`. Values"
+        " are float32 (relative rounding 6e-8, far below every standard error). The shipped"
+        " grid's profiles are such files, one per shard (`results/herman2019/profiles/`)."
+        " `xarray.open_dataset(\"p.nc\")` reads one without sweep (with h5netcdf or"
+        " netCDF4 installed); `sweep.load_profiles(\"p.nc\")` or"
+        " `sweep.load_profiles(folder, L_x=3.0, dispersion=\"ml\")` reads one file or"
+        " every file of a folder as one Dataset, selecting points by value.",
+        "",
+        "| variable | units | shape | meaning |",
+        "|---|---|---|---|",
+        "| `x` (coordinate) | m | point × floe | time-mean floe centre from the ice edge |",
     ]
+    for n, (u, ln) in PROFILE_FILE_VARS.items():
+        out.append(f"| `{n}` | {u or '—'} | point × floe | {_cell(ln)} |")
+    out += ["| `n_floes` | 1 | point | floes in the sheet (profile length) |", ""]
     return "\n".join(out)
 
 

@@ -4,7 +4,10 @@
 
 Writes ``OUT/shard-K-of-N.csv.gz`` (``sweep export``: every scalar with its standard
 error, hash, status, parameters, config_json and provenance per point; floats as their
-shortest round-trip text, so ``sweep.load(OUT)`` reads the stored values bit for bit) and
+shortest round-trip text, so ``sweep.load(OUT)`` reads the stored values bit for bit),
+``OUT/profiles/profiles-K-of-N.nc`` (``sweep export --profiles``: a/a0 and its SE, x, mean
+gap and contact fraction along the ice for every point with results; netCDF-4 with CF
+attributes, ``sweep.load_profiles(OUT)`` or xarray alone reads it) and
 updates ``OUT/provenance.json`` with this shard's entry: model version, commit, machine,
 every ``sweep run`` on the store (start, end, outcome, ranks) with, from its log (a
 ``sweep run`` under bash's ``time``, as ``results/herman2019/run_shard.sh`` starts it), the
@@ -26,7 +29,7 @@ import pandas as pd
 
 import sweep
 from herman2019.numbers import machine
-from sweep.analysis.export import export_table
+from sweep.analysis.export import export_profiles, export_table
 from sweep.analysis.load import load_profile, store_attrs, store_runs
 from sweep.errors import ConfigError
 
@@ -61,8 +64,9 @@ def parse_log(path: Path) -> dict:
 def problems(store: Path, df, out: Path) -> dict:
     """Every point that is not ``converged``/``converged_noisy``, with why, into ``out``
     (CSV): a ``not_converged`` point stopped (at ``max_average`` windows averaged, or at
-    ``max_iterations``) with an error bar still above its target (max_i SE(a_i) / a0 against ``target_stderr``, SE(W_c) against
-    ``target_W_c_stderr``, from the store's profiles) or without a stationary stretch; a
+    ``max_iterations``) with an error bar still above its target (max_i SE(a_i) / a0
+    against ``target_stderr``, SE(W_c) against ``target_W_c_stderr``, from the store's
+    profiles) or without a stationary stretch; a
     ``failed``/``invalid``/``crashed``/``timeout`` point carries its message. Returns the
     counts per reason."""
     rows = []
@@ -127,7 +131,12 @@ def command(args: Any) -> int:
                           if os.path.exists(str(args.store) + ".journal") else None),
         "table_bytes": os.path.getsize(table),
     }
-    (args.out / "problems").mkdir(exist_ok=True)     # not a table of points: beside them
+    (args.out / "profiles").mkdir(exist_ok=True)     # not tables of points: beside them
+    profiles = args.out / "profiles" / f"profiles-{k}-of-{n}.nc"
+    entry["profiles"] = {"file": f"profiles/{profiles.name}",
+                         "points": export_profiles(args.store, profiles, df),
+                         "bytes": os.path.getsize(profiles)}
+    (args.out / "problems").mkdir(exist_ok=True)
     entry["problems"] = problems(args.store, df,
                                  args.out / "problems" / f"problems-{k}-of-{n}.csv")
     prov_path = args.out / "provenance.json"
@@ -138,6 +147,7 @@ def command(args: Any) -> int:
     prov_path.write_text(json.dumps(prov, indent=1, sort_keys=True, default=_plain) + "\n")
     print(f"{table}: {rows} points, {entry['table_bytes'] / 1e6:.2f} MB; status"
           f" {entry['status']}; runs {len(runs)}; CPU of all ranks {entry['cpu_s_all_ranks']}"
-          f" s; store {entry['store_bytes'] / 1e6:.0f} MB + journal"
+          f" s; profiles {entry['profiles']['bytes'] / 1e6:.2f} MB;"
+          f" store {entry['store_bytes'] / 1e6:.0f} MB + journal"
           f" {(entry['journal_bytes'] or 0) / 1e6:.0f} MB")
     return 0

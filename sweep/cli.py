@@ -86,11 +86,17 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--json", action="store_true", help="machine-readable output")
     s.add_argument("--slowest", type=count, default=5, metavar="N")
 
-    e = sub.add_parser("export", help="write the per-point table as CSV or Parquet")
+    e = sub.add_parser("export", help="write the per-point table as CSV or Parquet, and"
+                       " the profiles as netCDF")
     e.add_argument("store", type=Path)
-    e.add_argument("--output", "--out", "-o", type=Path, required=True, dest="output",
+    e.add_argument("--output", "--out", "-o", type=Path, dest="output",
                    help="file ending in .csv, .csv.gz or .parquet (Parquet needs the"
                    " 'parquet' extra); sweep.load reads it back, bit for bit")
+    e.add_argument("--profiles", type=Path, metavar="FILE.nc",
+                   help="also (or only) write every point's profiles along the ice (a/a0"
+                   " and its SE, x, mean gap, contact fraction; float32, CF attributes) to"
+                   " this netCDF-4 file: xarray.open_dataset reads it without sweep,"
+                   " sweep.load_profiles(FILE.nc) too")
 
     v = sub.add_parser("validate", help="check a store against results_schema")
     v.add_argument("store", type=Path)
@@ -216,9 +222,20 @@ def cmd_status(args: argparse.Namespace) -> int:
 
 def cmd_export(args: argparse.Namespace) -> int:
     from sweep.analysis.export import export_table  # lazy: 0.25 s (pandas)
+    from sweep.analysis.export import export_profiles  # lazy: as export_table
+    from sweep.analysis.profiles_file import check_profiles_output
 
-    n = export_table(args.store, args.output)
-    print(f"sweep: wrote {plural(n, 'row')} to {args.output}")
+    if args.output is None and args.profiles is None:
+        raise ConfigError("sweep export: give --output FILE (the table), --profiles FILE.nc,"
+                          " or both")
+    if args.profiles is not None:       # before anything is written
+        check_profiles_output(args.profiles)
+    if args.output is not None:
+        n = export_table(args.store, args.output)
+        print(f"sweep: wrote {plural(n, 'row')} to {args.output}")
+    if args.profiles is not None:
+        n = export_profiles(args.store, args.profiles)
+        print(f"sweep: wrote the profiles of {plural(n, 'point')} to {args.profiles}")
     return EXIT_OK
 
 

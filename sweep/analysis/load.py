@@ -39,7 +39,8 @@ from sweep.store.schema import (
     column,
 )
 
-__all__ = ["load", "load_table", "load_xarray", "load_profile", "load_profiles", "store_attrs",
+__all__ = ["load", "load_table", "load_xarray", "load_profile", "load_profiles", "read_profiles",
+           "store_attrs",
            "store_runs",
            "resolve_hash", "journal_points", "STATUS_ORDER", "PROFILE_LEADING_DIMS"]
 
@@ -285,6 +286,22 @@ def load_profile(path: str | Path, hash: str) -> xr.Dataset:
     return ds
 
 
+def read_profiles(path: str | Path, hashes: list[str],
+                  names: tuple[str, ...]) -> dict[str, dict[str, np.ndarray]]:
+    """The profiles ``names`` of the points ``hashes`` that have all of them (hash ->
+    name -> array), read in one open of the store."""
+    def read() -> dict[str, dict[str, np.ndarray]]:
+        out = {}
+        with _open(path) as f:
+            for h in hashes:
+                got = reader.profile_group(f, h, names, history=False)
+                if got is not None and all(k in got[0] for k in names):
+                    out[h] = got[0]
+        return out
+
+    return _retried(read)
+
+
 def _selected(df: pd.DataFrame, dims: list[str], selectors: dict[str, Any],
               path: str | Path) -> pd.DataFrame:
     """Rows of ``df`` whose swept values match ``selectors`` (a value or a list; floats
@@ -321,11 +338,19 @@ def load_profiles(path: str | Path, **selectors: Any) -> xr.Dataset:
     ``x`` (the time-mean floe centre, a coordinate) come along, so
     ``ds.a.sel(L_x=0.5).plot(x="x", hue="eps")`` works.
 
+    ``path`` may also be a profiles file ``sweep export --profiles`` wrote (``.nc``) or a
+    directory of them (a campaign's shards, e.g. ``results/herman2019``): then the
+    Dataset has dimensions (point, floe) as the file has
+    (:func:`sweep.analysis.profiles_file.load_profiles_file`).
+
     Raises
     ------
     PointNotFoundError
         A selector names a parameter that is not swept, or no point matches.
     """
+    if Path(path).is_dir() or Path(path).suffix == ".nc":
+        from sweep.analysis.profiles_file import load_profiles_file  # lazy: cycle
+        return load_profiles_file(path, **selectors)
     df = load(path)
     attrs = store_attrs(path)
     campaign = json.loads(attrs["campaign_json"])
