@@ -121,6 +121,9 @@ def build_parser() -> argparse.ArgumentParser:
     ca.add_argument("--out", type=Path, default=ROOT / "results" / "calibration",
                     help="the runs' directory, OUT/runs.csv.gz (default: results/calibration)")
     ca.add_argument("--table", action="store_true", help="only the table of the stored runs")
+    ca.add_argument("--factors", action="store_true", help="fit the calibrated standard"
+                    " errors' factors to the stored runs, write OUT/factors.csv and print"
+                    " them with their cross-validated check")
     ca.add_argument("--grid", default=str(ROOT / "results" / "herman2019"),
                     help="the table the sample is drawn from (default: results/herman2019)")
     ca.add_argument("--n-zone", type=int, default=200, help="points with a compact zone")
