@@ -40,9 +40,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-__all__ = ["QUANTITIES", "ZONE_QUANTITIES", "AXES", "FEATURES", "draw", "run_sample", "rms_z",
+__all__ = ["QUANTITIES", "ZONE_QUANTITIES", "AXES", "FEATURES", "draw", "run_sample",
+           "rms_z",
            "calibration_table", "format_table", "point_chi", "fit_factors", "factors_of",
-           "with_calibrated_stderr", "calibrated", "cross_validated", "format_check",
+           "with_calibrated_stderr", "calibrated", "calibrated_factors", "CALIBRATED_VERSION",
+           "cross_validated", "format_check",
            "format_factors", "command"]
 
 #: The swept axes of the paper's grid (a point's identity in the shipped table).
@@ -72,7 +74,8 @@ def draw(table: pd.DataFrame, n_zone: int, n_none: int, n_nc: int,
         rows = groups[name]
         if n > len(rows):
             raise ValueError(f"{name}: {n} points asked, the table has {len(rows)}")
-        cells = [idx for _, idx in rows.groupby(["C_sd", "L_x", "d_f", "dispersion"]).groups.items()]
+        cells = [idx for _, idx in
+                 rows.groupby(["C_sd", "L_x", "d_f", "dispersion"]).groups.items()]
         order = rng.permutation(len(cells))
         taken: set = set()
         k = 0
@@ -201,6 +204,9 @@ FEATURES = ("L_x", "C_sd", "d_f", "dispersion", "not_converged")
 FACTORS = "factors.csv"
 #: The shipped calibration (runs and factors).
 SHIPPED = Path(__file__).resolve().parents[1] / "results" / "calibration"
+#: The model version the shipped calibration's runs were made at: its factors apply to a
+#: table of this version only.
+CALIBRATED_VERSION = "9"
 #: Honest jackknife errors of 8 replicas give RMS z about this (Student-t, 7 dof).
 HONEST = math.sqrt(7 / 5)
 #: A point's chi^2 / dof counts at most this in the fit (|z| = 4): the factor describes the
@@ -320,14 +326,19 @@ def with_calibrated_stderr(df: pd.DataFrame, factors: pd.DataFrame) -> pd.DataFr
     return out
 
 
+def calibrated_factors(path: str | Path | None = None) -> pd.DataFrame:
+    """The factors' table of ``path`` (default the shipped ``results/calibration/factors.csv``)."""
+    return pd.read_csv(SHIPPED / FACTORS if path is None else path, dtype={"level": str},
+                       keep_default_na=False)
+
+
 def calibrated(df: pd.DataFrame, factors: str | Path | pd.DataFrame | None = None
                ) -> pd.DataFrame:
     """``df`` (a table of the grid, ``sweep.load("results/herman2019")``) with the
     calibrated standard errors ``q_stderr_cal`` of the shipped factors
     (``results/calibration/factors.csv``, or ``factors``: a file or its table)."""
     if not isinstance(factors, pd.DataFrame):
-        factors = pd.read_csv(SHIPPED / FACTORS if factors is None else factors,
-                              dtype={"level": str}, keep_default_na=False)
+        factors = calibrated_factors(factors)
     return with_calibrated_stderr(df, factors)
 
 
@@ -407,9 +418,8 @@ def format_factors(factors: pd.DataFrame) -> str:
 
 def command(args) -> int:
     """``herman2019 calibrate``: status 0; 2 for a bad argument, 3 for a missing table."""
-    from sweep.errors import EXIT_OK, ConfigError
-
     import sweep
+    from sweep.errors import EXIT_OK, ConfigError
     out = Path(args.out)
     if getattr(args, "factors", False):
         path = out / "runs.csv.gz"

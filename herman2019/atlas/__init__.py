@@ -6,8 +6,15 @@ Reads the per-point table (``sweep.load`` of ``results/herman2019``: the shards 
 and writes ``OUT/atlas.md`` with its figures in ``OUT/atlas/``:
 
 - headlines, computed from what follows;
+- the points read: the converged ones (``not_converged`` counted and left out), their
+  standard errors calibrated (:func:`herman2019.calibration.calibrated`) when the table is
+  of the calibration's model version;
 - where a compact zone forms: the share of points whose layout is not ``none`` by each
   parameter, over the pairs T x a0, C_sd x eps and d_f x L_x, and the layouts;
+- the collisional zone under both rules (layout and gap), and W_c over every point (the
+  ice extent where no compact zone forms), :mod:`.edge`;
+- near the edge: a(x)/a0 at 2, 5 and 10 m from the profiles beside the table
+  (``profiles/*.nc``), :mod:`.edge`;
 - W_c, alpha_inner / alpha_c, alpha_all and a_end / a0: the marginal mean over the grid at
   each value of each of the 7 parameters, and a variance decomposition (the share of the
   variance over the grid that the 7 main effects explain, and what each pairwise
@@ -33,6 +40,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from herman2019.atlas.edge import near_edge, zone_rules
 from herman2019.atlas.grid import compact_zones, marginal_effects, variance, wc_law
 from herman2019.atlas.page import start_page
 from herman2019.atlas.stats import CHANCE, REVERSAL, paired, verdict, where_contra
@@ -45,8 +53,8 @@ __all__ = ["make_atlas", "COMMAND", "paired", "verdict", "where_contra", "CHANCE
 COMMAND = "herman2019 atlas"
 
 #: The sections in the page's order (each reads what the earlier ones left on the page).
-SECTIONS = (compact_zones, marginal_effects, variance, wc_law, trend_statements, cost,
-            dispersions, headlines)
+SECTIONS = (compact_zones, zone_rules, marginal_effects, variance, wc_law, near_edge,
+            trend_statements, cost, dispersions, headlines)
 
 
 def make_atlas(table: str | Path, out: str | Path, *, bootstrap: int = 200,
@@ -62,9 +70,13 @@ def make_atlas(table: str | Path, out: str | Path, *, bootstrap: int = 200,
 
     out = Path(out)
     df = sweep.load(table)
+    profiles = None
+    folder = Path(table) / "profiles"
+    if folder.is_dir() and any(folder.glob("*.nc")):
+        profiles = sweep.load_profiles(folder)
     figdir = out / "atlas"
     figdir.mkdir(parents=True, exist_ok=True)
-    page = start_page(df, figdir, bootstrap, plt, command=command)
+    page = start_page(df, figdir, bootstrap, plt, command=command, profiles=profiles)
     for section in SECTIONS:
         section(page)
     text = "\n".join(page.lines)

@@ -15,7 +15,9 @@ __all__ = ["cost", "dispersions", "headlines"]
 
 def cost(page: Page) -> None:
     """Where the time goes: the wall-time distribution and why the slowest 1 % are slow."""
-    say, ok = page.say, page.ok
+    say = page.say
+    ok = page.all.assign(compact=(page.all["compact_zone"].astype(str) != "none")
+                         .astype(float))   # every point: the not_converged ones cost most
     # --- the grid's cost: where the time goes
     say("## The cost of the grid\n")
     wt = ok["model_wall_time"].to_numpy(float)

@@ -168,3 +168,62 @@ def test_the_atlas_axes_name_their_units():
     assert axis_label("T") == "T [s]" and axis_label("C_sd") == "C_sd [1]"
     assert all(axis_label(p).endswith("]") for p in PARAMS if p != "dispersion")
     assert axis_label("dispersion") == "dispersion"
+
+
+def test_a_over_a0_at_a_distance_is_interpolated_between_the_enclosing_floes():
+    from herman2019.atlas.edge import at_distances
+    x = np.array([[0.25, 0.75, 1.25, 1.75, 2.25, np.nan], [1.5, 4.5, 7.5, 10.5, np.nan, np.nan]])
+    a = np.array([[1.0, 0.9, 0.8, 0.7, 0.6, np.nan], [1.0, 0.7, 0.4, 0.1, np.nan, np.nan]])
+    se = np.array([[0.01, 0.02, 0.03, 0.04, 0.05, np.nan], [0.0, 0.03, 0.06, 0.09, np.nan,
+                                                                np.nan]])
+    v, s = at_distances(x, a, se, np.array([5, 4]), (2.0, 5.0, 10.0))
+    # a(x) linear in x here: the interpolation is exact; beyond the last centre: NaN
+    np.testing.assert_allclose(v[0, 0], 0.65)
+    assert np.isnan(v[0, 1]) and np.isnan(v[0, 2])
+    np.testing.assert_allclose(v[1], [0.95, 0.65, 0.15])
+    np.testing.assert_allclose(s[1], [0.005, 0.035, 0.085])
+    np.testing.assert_allclose(s[0, 0], 0.045)
+
+
+def test_every_statement_read_where_the_paper_made_it_has_its_rows():
+    """Each atlas statement mapped to the settled paper-check finds its rows there (a
+    renamed claim would leave it "no row" unseen)."""
+    from herman2019.atlas.trends import PAPER_ROWS, paper_outcomes
+    got = paper_outcomes()
+    assert set(got) == set(PAPER_ROWS)
+    for statement, cell in got.items():
+        assert cell != "no row" and cell.startswith("#"), statement
+    assert "#12 holds" in got["no reversal where the collisional zone spans the domain"
+                              " (Fig. 6a, T 1.8 s)"]
+
+
+def test_the_page_leaves_out_not_converged_points_and_calibrates_version_9(tmp_path):
+    """start_page: not_converged points counted and left out; SEs times the calibration
+    factors for a table of the calibration's model version, as stated otherwise."""
+    import json as _json
+
+    from herman2019.atlas.page import start_page
+    from herman2019.calibration import CALIBRATED_VERSION
+    rows = []
+    for i, (st, lx) in enumerate([("converged_noisy", 0.5), ("not_converged", 0.5),
+                                  ("converged_noisy", 3.0)]):
+        row = {"hash": f"h{i}", "L_x": lx, "T": 1.2, "a0": 0.0125, "C_sd": 0.2, "eps": 0.6,
+               "d_f": 0.05, "dispersion": "ow", "status": st, "compact_zone": "none"}
+        for q in ("a_end", "a_end_rel", "W_c", "W_c_gap", "alpha_inner", "alpha_edge",
+                  "alpha_all", "alpha_exp"):
+            row[q], row[q + "_stderr"] = 1.0, 0.1
+        rows.append(row)
+    for version in (CALIBRATED_VERSION, "8"):
+        df = pd.DataFrame(rows).assign(provenance=_json.dumps({"model_version": version}))
+        page = start_page(df, tmp_path, 0, None, command="x")
+        assert list(page.ok["hash"]) == ["h0", "h2"] and page.not_converged == 1
+        text = "\n".join(page.lines)
+        assert "Left out: the 1 `not_converged` points" in text
+        if version == CALIBRATED_VERSION:
+            assert "Error bars: calibrated" in text
+            f = page.ok["a_end_stderr"].to_numpy() / 0.1
+            assert (f >= 1.0).all() and f[0] > 1.2   # L_x 0.5, C_sd 0.2, d_f 0.05, ow
+            np.testing.assert_allclose(page.ok["a_end_rel_stderr"], page.ok["a_end_stderr"])
+        else:
+            assert "Error bars: as stated" in text
+            assert (page.ok["a_end_stderr"] == 0.1).all()
