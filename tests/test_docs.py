@@ -18,7 +18,9 @@ reductions so that the whole walk takes about a minute (issue *first hour*):
   ``python -m pytest`` (this is it), ``sbatch`` (Slurm: ``tests/test_slurm.py``),
   ``python benchmarks/…`` (minutes to hours of computing), ``herman2019 numbers``,
   ``atlas`` and ``record`` (they make the shipped docs/ and results/);
-- ``herman2019 check --run`` runs the reduced configs with ``power_point``.
+- ``herman2019 check --run`` runs the reduced configs with ``power_point``;
+- the shipped ``results/`` are linked into the sandbox (read, never written: a reader
+  of a clone has them).
 
 Inline commands (``sweep …``/``floewave …``/``herman2019 …`` in backticks) are parsed by
 the real argument parsers. The *numbers* the docs quote (timings, single-trajectory
@@ -171,6 +173,7 @@ def test_every_code_block_runs(doc, walk, tmp_path, monkeypatch, run_main):
     sandbox = tmp_path / "clone"
     sandbox.mkdir()
     _reduced_configs(sandbox)
+    (sandbox / "results").symlink_to(ROOT / "results", target_is_directory=True)
     env = dict(os.environ, HOME=str(sandbox), MPLBACKEND="Agg",
                PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}")
     monkeypatch.chdir(sandbox)
