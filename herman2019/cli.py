@@ -136,8 +136,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     rc = sub.add_parser("record", help="ship a campaign shard's result without its store:"
                         " its table and provenance")
-    rc.add_argument("store", type=Path)
-    rc.add_argument("--shard", required=True, help="K/N")
+    rc.add_argument("store", type=Path, nargs="?")
+    rc.add_argument("--shard", help="K/N")
+    rc.add_argument("--plan", type=Path, help="the log of `sweep plan` before the run: its"
+                    " projection goes into provenance.json")
+    rc.add_argument("--summary", action="store_true", help="print the run's summary of"
+                    " --out's provenance.json (a Markdown table) and nothing else")
     rc.add_argument("--log", action="append", default=[], type=Path,
                     help="the log of each sweep run on the store, oldest first")
     rc.add_argument("--out", type=Path, default=record.RESULTS,

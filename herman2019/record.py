@@ -33,7 +33,7 @@ from sweep.analysis.export import export_profiles, export_table
 from sweep.analysis.load import load_profile, store_attrs, store_runs
 from sweep.errors import ConfigError
 
-__all__ = ["RESULTS", "parse_log", "problems", "command"]
+__all__ = ["RESULTS", "parse_log", "parse_plan", "problems", "summary", "command"]
 
 #: Where the shipped campaign's tables and provenance go (``--out``'s default).
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "herman2019"
@@ -96,6 +96,68 @@ def problems(store: Path, df, out: Path) -> dict:
     return {str(k): int(v) for k, v in kinds.value_counts().items()}
 
 
+PLAN = re.compile(r"projected: ([0-9.]+) core-hours")
+RATE = re.compile(r"kernel: ([0-9.e+]+) floe-steps/s per core on average")
+
+
+def parse_plan(path: Path) -> dict:
+    """What a ``sweep plan`` log says: the projected core-hours and the calibrated rate."""
+    text = path.read_text(errors="replace")
+    m, r = PLAN.search(text), RATE.search(text)
+    if not m:
+        raise ConfigError(f"--plan {path}: no 'projected: ... core-hours' line in it")
+    return {"core_hours": float(m.group(1)), "rate": float(r.group(1)) if r else None,
+            "log": path.name, "machine": machine()}
+
+
+def summary(prov: dict, grid_points: int | None = None) -> str:
+    """The run of a shipped campaign from its ``provenance.json`` as a Markdown table:
+    shards and points, statuses, runs (stops and resumes), commits and clean trees, CPU
+    of all ranks against the projection, wall time, master share, sizes, machines."""
+    shards = prov.get("shards", {})
+    if not shards:
+        return "no shard recorded"
+    n_total = {int(k.split("/")[1]) for k in shards}
+    points = sum(s["points"] for s in shards.values())
+    status: dict[str, int] = {}
+    for s in shards.values():
+        for k, v in s["status"].items():
+            status[k] = status.get(k, 0) + v
+    runs = [r for s in shards.values() for r in s["runs"]]
+    resumed = sorted((k for k, s in shards.items() if len(s["runs"]) > 1),
+                     key=lambda k: int(k.split("/")[0]))
+    commits = sorted({str(r.get("git_commit")) for r in runs})
+    dirty = sorted({str(r.get("git_dirty")) for r in runs})
+    cpu = sum(s.get("cpu_s_all_ranks") or 0.0 for s in shards.values())
+    wall = sum(r.get("wall_s", 0.0) for r in runs)
+    share = [r["master_cpu_share"] for r in runs if "master_cpu_share" in r]
+    plan = prov.get("plan")
+    prof_mb = sum(s["profiles"]["bytes"] for s in shards.values() if "profiles" in s) / 1e6
+    rows = [
+        ("shards", f"{len(shards)} of {'/'.join(str(n) for n in sorted(n_total))}: "
+         + ", ".join(sorted(shards, key=lambda k: int(k.split("/")[0])))),
+        ("points", f"{points:,}" + (f" of {grid_points:,}" if grid_points else "")),
+        ("status", "; ".join(f"{k} {v:,}" for k, v in sorted(status.items()))),
+        ("runs", f"{len(runs)}" + (f"; shards run more than once (stopped and resumed):"
+                                   f" {', '.join(resumed)}" if resumed else
+                                   "; every shard in one run")),
+        ("commit", f"{', '.join(c[:12] for c in commits)}; git_dirty {', '.join(dirty)}"),
+        ("CPU, all ranks", f"{cpu:,.0f} s = **{cpu / 3600:.2f} core-hours**"
+         + (f" against `sweep plan`'s {plan['core_hours']:.2f} for the whole grid before the"
+            f" run ({cpu / 3600 / plan['core_hours'] * (grid_points or points) / points:.2f}x"
+            " the projection, scaled to the points run)" if plan else "")),
+        ("wall", f"{wall / 3600:.2f} h (sum over runs)"),
+        ("master", f"{100 * min(share):.1f}-{100 * max(share):.1f} % of a core"
+         if share else "not logged"),
+        ("on disk", f"stores {sum(s['store_bytes'] for s in shards.values()) / 1e6:,.0f} MB"
+         f" + journals {sum(s.get('journal_bytes') or 0 for s in shards.values()) / 1e6:,.0f}"
+         f" MB; shipped tables {sum(s['table_bytes'] for s in shards.values()) / 1e6:.1f} MB"
+         + (f", profiles {prof_mb:.1f} MB" if prof_mb else "")),
+        ("machine", "; ".join(sorted({s["machine"] for s in shards.values()}))),
+    ]
+    return "\n".join(["| | |", "|---|---|"] + [f"| {a} | {b} |" for a, b in rows])
+
+
 def _plain(o):
     """numpy scalars (a store's attributes) as Python values for JSON."""
     return o.item() if hasattr(o, "item") else str(o)
@@ -103,7 +165,15 @@ def _plain(o):
 
 def command(args: Any) -> int:
     """``herman2019 record``: the shard's table and its provenance entry (status 0; 2 for a
-    bad ``--shard``)."""
+    bad ``--shard``); with ``--summary``, only the run's summary of ``--out``."""
+    if getattr(args, "summary", False):
+        prov_path = args.out / "provenance.json"
+        if not prov_path.exists():
+            raise ConfigError(f"--summary: no {prov_path}")
+        print(summary(json.loads(prov_path.read_text()), 24192))
+        return 0
+    if args.store is None or args.shard is None:
+        raise ConfigError("herman2019 record: give STORE and --shard K/N (or --summary)")
     try:
         k, n = (int(v) for v in args.shard.split("/"))
     except ValueError:
@@ -141,6 +211,8 @@ def command(args: Any) -> int:
                                  args.out / "problems" / f"problems-{k}-of-{n}.csv")
     prov_path = args.out / "provenance.json"
     prov = json.loads(prov_path.read_text()) if prov_path.exists() else {}
+    if getattr(args, "plan", None):
+        prov["plan"] = parse_plan(args.plan)
     prov.setdefault("campaign", "configs/herman2019.toml")
     prov["campaign_hash"] = attrs.get("campaign_hash")
     prov.setdefault("shards", {})[f"{k}/{n}"] = entry
