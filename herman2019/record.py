@@ -96,6 +96,8 @@ def problems(store: Path, df, out: Path) -> dict:
     return {str(k): int(v) for k, v in kinds.value_counts().items()}
 
 
+#: The markers of a results README's block that ``record`` keeps equal to :func:`summary`.
+SUMMARY_START, SUMMARY_END = "<!-- herman2019 record --summary -->\n", "<!-- end of summary -->"
 PLAN = re.compile(r"projected: ([0-9.]+) core-hours")
 RATE = re.compile(r"kernel: ([0-9.e+]+) floe-steps/s per core on average")
 
@@ -217,6 +219,12 @@ def command(args: Any) -> int:
     prov["campaign_hash"] = attrs.get("campaign_hash")
     prov.setdefault("shards", {})[f"{k}/{n}"] = entry
     prov_path.write_text(json.dumps(prov, indent=1, sort_keys=True, default=_plain) + "\n")
+    readme = args.out / "README.md"           # its summary block, if it has one, remade
+    if readme.exists() and SUMMARY_START in (text := readme.read_text()):
+        i = text.index(SUMMARY_START) + len(SUMMARY_START)
+        j = text.index(SUMMARY_END, i)
+        readme.write_text(text[:i] + summary(json.loads(prov_path.read_text()), 24192)
+                          + "\n" + text[j:])
     print(f"{table}: {rows} points, {entry['table_bytes'] / 1e6:.2f} MB; status"
           f" {entry['status']}; runs {len(runs)}; CPU of all ranks {entry['cpu_s_all_ranks']}"
           f" s; profiles {entry['profiles']['bytes'] / 1e6:.2f} MB;"

@@ -65,7 +65,8 @@ def test_each_results_readme_holds_the_summary_of_its_provenance():
     provenance.json, between markers (so a shard recorded without remaking it fails)."""
     from pathlib import Path
     root = Path(__file__).resolve().parents[2] / "results"
-    start, end = "<!-- herman2019 record --summary -->\n", "\n<!-- end of summary -->"
+    from herman2019.record import SUMMARY_END, SUMMARY_START
+    start, end = SUMMARY_START, "\n" + SUMMARY_END
     checked = 0
     for readme in sorted(root.glob("herman2019*/README.md")):
         text = readme.read_text()
