@@ -212,6 +212,8 @@ HONEST = math.sqrt(7 / 5)
 #: A point's chi^2 / dof counts at most this in the fit (|z| = 4): the factor describes the
 #: bulk; the rare points far beyond are the tail, counted apart (:func:`cross_validated`).
 CAP = 16.0
+#: The capped fit is repeated until no point's factor moves by SETTLED (at most ROUNDS).
+ROUNDS, SETTLED = 40, 1e-3
 
 
 def point_chi(runs: pd.DataFrame, q: str) -> pd.DataFrame:
@@ -287,7 +289,7 @@ def fit_factors(runs: pd.DataFrame, quantities: Sequence[str] = QUANTITIES[:7],
     shrunk. Each point's chi^2 counts at most ``cap`` per degree of freedom in units of
     its own factor (so a stratum whose errors are all too small is calibrated, and a rare
     point far beyond its stratum's factor does not set it): the fit is repeated with the
-    cap at ``cap`` f^2 until it settles (six rounds)."""
+    cap at ``cap`` max(1, f)^2 until no factor moves by SETTLED."""
     levels = {f: sorted(runs[f].unique().tolist()) for f in FEATURES if f != "not_converged"}
     terms = _terms(levels)
     rows = []
@@ -295,12 +297,17 @@ def fit_factors(runs: pd.DataFrame, quantities: Sequence[str] = QUANTITIES[:7],
         pts = point_chi(runs, q)
         X, dof = _design(pts, terms), pts["dof"].to_numpy(float)
         f = np.ones(len(pts))
-        for _ in range(6):      # cap in calibrated units: |z| > 4 after its factor
-            chi2 = np.minimum(pts["chi2"].to_numpy(), cap * dof * f**2)
+        for _ in range(ROUNDS):   # cap in calibrated units: |z| > 4 after its factor
+            chi2 = np.minimum(pts["chi2"].to_numpy(), cap * dof * np.maximum(f, 1.0)**2)
             b = _fit(X, chi2, dof, ridge)
-            f = np.exp(X @ b)
+            f, before = np.exp(X @ b), f
+            if np.max(np.abs(np.maximum(f, 1.0) - np.maximum(before, 1.0))) < SETTLED:
+                break
         rows += [{"quantity": q, "term": f, "level": str(v), "coef": float(c)}
                  for (f, v), c in zip(terms, b, strict=True)]
+        # each base level, as a term of coefficient 0: the levels the calibration saw
+        rows += [{"quantity": q, "term": f, "level": str(lv[0]), "coef": 0.0}
+                 for f, lv in levels.items()]
     return pd.DataFrame(rows)
 
 
@@ -313,16 +320,32 @@ def factors_of(df: pd.DataFrame, factors: pd.DataFrame, q: str) -> np.ndarray:
     terms = [(r.term, r.level if r.term == "dispersion" else
               (1 if r.term == "not_converged" else (float(r.level) if r.level else "")))
              for r in f.itertuples()]
-    return np.maximum(1.0, np.exp(_design(rows, terms) @ f["coef"].to_numpy(float)))
+    out = np.maximum(1.0, np.exp(_design(rows, terms) @ f["coef"].to_numpy(float)))
+    # a level the calibration never saw (no term, and not its base level): no factor
+    for feat in ("L_x", "C_sd", "d_f", "dispersion"):
+        if feat not in rows:
+            continue
+        seen = [lv for term, lv in terms if term == feat]
+        if feat == "dispersion":
+            unseen = ~rows[feat].astype(str).isin(seen).to_numpy()
+        else:
+            vals = rows[feat].to_numpy(float)
+            unseen = ~np.any(np.isclose(vals[:, None], np.asarray(seen, float)[None, :]),
+                             axis=1)
+        out[unseen] = np.nan
+    return out
 
 
 def with_calibrated_stderr(df: pd.DataFrame, factors: pd.DataFrame) -> pd.DataFrame:
     """``df`` with ``q_stderr_cal`` = ``q_stderr`` times the row's factor, for every
-    quantity of ``factors``."""
+    quantity of ``factors`` (and ``a_end_rel_stderr_cal`` with a_end's); NaN for a row at
+    a parameter value the calibration never saw."""
     out = df.copy()
-    for q in factors["quantity"].unique():
-        out[q + "_stderr_cal"] = out[q + "_stderr"].to_numpy(float) * factors_of(out,
-                                                                                   factors, q)
+    for q in dict.fromkeys(factors["quantity"]):
+        f = factors_of(out, factors, q)
+        out[q + "_stderr_cal"] = out[q + "_stderr"].to_numpy(float) * f
+        if q == "a_end" and "a_end_rel_stderr" in out:
+            out["a_end_rel_stderr_cal"] = out["a_end_rel_stderr"].to_numpy(float) * f
     return out
 
 
@@ -334,11 +357,21 @@ def calibrated_factors(path: str | Path | None = None) -> pd.DataFrame:
 
 def calibrated(df: pd.DataFrame, factors: str | Path | pd.DataFrame | None = None
                ) -> pd.DataFrame:
-    """``df`` (a table of the grid, ``sweep.load("results/herman2019")``) with the
-    calibrated standard errors ``q_stderr_cal`` of the shipped factors
-    (``results/calibration/factors.csv``, or ``factors``: a file or its table)."""
+    """``df`` (a table of the grid at the calibration's model version, e.g. the release's
+    ``sweep.load("results/herman2019-release")``) with the calibrated standard errors
+    ``q_stderr_cal`` of the shipped factors (``results/calibration/factors.csv``, or
+    ``factors``: a file or its table). ValueError for a table of another model version
+    (its ``provenance``) than the factors' ``model_version``."""
+    import json as _json
     if not isinstance(factors, pd.DataFrame):
         factors = calibrated_factors(factors)
+    want = str(factors["model_version"].iloc[0]) if "model_version" in factors else None
+    if want is not None and "provenance" in df and len(df):
+        have = sorted({str(_json.loads(p).get("model_version")) for p in df["provenance"]})
+        if have != [want]:
+            raise ValueError(f"the factors were calibrated at model version {want}; this"
+                             f" table is version {', '.join(have)}: its SEs cannot be"
+                             " calibrated with them")
     return with_calibrated_stderr(df, factors)
 
 
@@ -408,9 +441,21 @@ def format_factors(factors: pd.DataFrame) -> str:
     qs = list(dict.fromkeys(factors["quantity"]))
     head = "| term | " + " | ".join(qs) + " |"
     lines = [head, "|" + "---|" * (len(qs) + 1)]
-    for (term, level), g in factors.groupby(["term", "level"], sort=False):
-        name = "base (L_x 0.5, C_sd 0.005, d_f 0.005, ep)" if term == "intercept" else (
-            term if term == "not_converged" else f"{term} = {level}")
+    order = ("intercept", *FEATURES)
+
+    def key(tl):
+        term, level = tl
+        try:
+            lv: tuple = (0, float(level))
+        except ValueError:
+            lv = (1, level)
+        return (order.index(term), lv)
+
+    groups = dict(list(factors.groupby(["term", "level"], sort=False)))
+    for term, level in sorted(groups, key=key):
+        g = groups[term, level]
+        name = "intercept (at every base level: those at 1.00)" if term == "intercept" \
+            else (term if term == "not_converged" else f"{term} = {level}")
         vals = g.set_index("quantity")["coef"]
         lines.append(f"| {name} | " + " | ".join(f"{math.exp(vals[q]):.2f}" for q in qs) + " |")
     return "\n".join(lines)
@@ -426,7 +471,7 @@ def command(args) -> int:
         if not path.exists():
             raise ConfigError(f"--factors: no runs in {path}")
         runs = pd.read_csv(path)
-        factors = fit_factors(runs)
+        factors = fit_factors(runs).assign(model_version=CALIBRATED_VERSION)
         factors.to_csv(out / FACTORS, index=False, float_format="%.6f")
         print(format_factors(factors))
         print()

@@ -10,12 +10,19 @@
 # run records one commit and git_dirty false. A stop (SIGTERM or Ctrl-C to mpiexec) ends
 # the run cleanly; the same command resumes it. bash's time reports the CPU of every rank
 # (mpiexec waits for them).
-K=$1
-N=${2:-16}
+K=${1:-}; N=${2:-}
+for v in "$K" "$N"; do
+    case "$v" in *[!0-9]*|'') echo "run_shard.sh: give K and N, non-negative integers (K < N)" >&2; exit 2;; esac
+done
+[ "$K" -lt "$N" ] || { echo "run_shard.sh: K = $K is not below N = $N" >&2; exit 2; }
 STORES=${STORES:-/work/campaign}
 ROOT="$(cd "$(dirname "$0")/../.." && pwd)"
 cd "$ROOT"
-if [ -n "$(git status --porcelain --untracked-files=no)" ]; then
+if ! status=$(git status --porcelain --untracked-files=no); then
+    echo "run_shard.sh: $ROOT: git status failed" >&2
+    exit 2
+fi
+if [ -n "$status" ]; then
     echo "run_shard.sh: $ROOT has uncommitted changes to tracked files; commit them first" >&2
     exit 2
 fi

@@ -186,3 +186,22 @@ def test_the_docs_check_of_the_factors_is_what_the_command_makes():
                 cal.SHIPPED / "README.md"):
         text = doc.read_text()
         assert text[text.index(start) + len(start):text.index(end)] == want, doc
+
+
+def test_calibrated_refuses_another_model_version_and_an_unseen_level():
+    import json
+    fac = cal.calibrated_factors()
+    assert set(fac["model_version"].astype(str)) == {cal.CALIBRATED_VERSION}
+    row = {"L_x": 0.5, "T": 1.2, "a0": 0.0125, "C_sd": 0.2, "eps": 0.6, "d_f": 0.05,
+           "dispersion": "ow", "status": "converged_noisy"}
+    for q in cal.QUANTITIES[:7]:
+        row[q], row[q + "_stderr"] = 1.0, 0.1
+    row["a_end_rel"], row["a_end_rel_stderr"] = 0.8, 0.08
+    df = pd.DataFrame([row, {**row, "L_x": 1.0}, {**row, "dispersion": "xx"}])
+    ok = cal.calibrated(df.assign(provenance=json.dumps({"model_version": "9"})))
+    f = ok["a_end_stderr_cal"] / 0.1
+    assert f[0] > 1.0 and np.isnan(f[1]) and np.isnan(f[2])
+    assert ok["a_end_rel_stderr_cal"][0] == pytest.approx(0.08 * f[0])
+    with pytest.raises(ValueError, match="calibrated at model version 9; this table is"
+                                         " version 8"):
+        cal.calibrated(df.assign(provenance=json.dumps({"model_version": "8"})))
