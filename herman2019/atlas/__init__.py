@@ -76,7 +76,15 @@ def make_atlas(table: str | Path, out: str | Path, *, bootstrap: int = 200,
         profiles = sweep.load_profiles(folder)
     figdir = out / "atlas"
     figdir.mkdir(parents=True, exist_ok=True)
-    page = start_page(df, figdir, bootstrap, plt, command=command, profiles=profiles)
+    root = Path(__file__).resolve().parents[2]
+    try:
+        source = str(Path(table).resolve().relative_to(root))
+    except ValueError:
+        source = str(table)
+    if source != "results/herman2019" and command == COMMAND:
+        command = f"{COMMAND} {source}"
+    page = start_page(df, figdir, bootstrap, plt, command=command, profiles=profiles,
+                      source=source)
     for section in SECTIONS:
         section(page)
     text = "\n".join(page.lines)

@@ -1,6 +1,6 @@
 """The atlas's readings near the ice edge and of the collisional zone: a(x)/a0 at fixed
 distances from the edge (from the shipped profiles), the two rules for W_c side by side,
-and W_c over every point (the ice extent where the whole sheet collides)."""
+and W_c over every point (where no compact zone forms: how far floes collide)."""
 from __future__ import annotations
 
 import math
@@ -11,7 +11,7 @@ import pandas as pd
 from herman2019.atlas.page import Page
 from herman2019.atlas.stats import PARAMS, fmt, marginal
 
-__all__ = ["EDGE_X", "at_distances", "zone_rules", "near_edge"]
+__all__ = ["EDGE_X", "at_distances", "collision_extent", "zone_rules", "near_edge"]
 
 #: The distances from the ice edge [m] at which "near the edge" is read from a(x)/a0.
 EDGE_X = (2.0, 5.0, 10.0)
@@ -40,16 +40,21 @@ def at_distances(x: np.ndarray, a: np.ndarray, se: np.ndarray, n: np.ndarray,
     return out, out_se
 
 
+def _rows(page: Page, df: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
+    """(rows of ``df`` that have profiles, their index in ``page.profiles``)."""
+    prof = page.profiles
+    pos = pd.Series(np.arange(prof.sizes["point"]), index=prof["hash"].values.astype(str))
+    idx = pos.reindex(df["hash"].astype(str)).to_numpy()
+    have = np.isfinite(idx)
+    return have, idx[have].astype(int)
+
+
 def _attach(page: Page) -> None:
     """Put a/a0 at EDGE_X (and SEs) on ``page.ok`` as ``a_rel_{d}m`` columns."""
-    prof = page.profiles
-    ok = page.ok
+    prof, ok = page.profiles, page.ok
     if prof is None:
         return
-    pos = pd.Series(np.arange(prof.sizes["point"]), index=prof["hash"].values.astype(str))
-    idx = pos.reindex(ok["hash"].astype(str)).to_numpy()
-    have = np.isfinite(idx)
-    rows = idx[have].astype(int)
+    have, rows = _rows(page, ok)
     vals, ses = at_distances(prof["x"].values[rows], prof["a_rel"].values[rows],
                              prof["a_rel_stderr"].values[rows], prof["n_floes"].values[rows])
     fac = page.se_factor.get("a_end")
@@ -61,56 +66,90 @@ def _attach(page: Page) -> None:
         ok[col], ok[col + "_stderr"] = v, s
 
 
+def collision_extent(page: Page, df: pd.DataFrame) -> pd.Series:
+    """Per point without a compact zone, how far from the edge floes collide: the far end
+    (centre + L_x / 2) of the farthest floe in contact with its downwave neighbour at any
+    time (``contact_fraction`` > 0 in the profiles), 0 where none is; NaN without
+    profiles."""
+    out = pd.Series(np.nan, index=df.index)
+    if page.profiles is None:
+        return out
+    prof = page.profiles
+    have, rows = _rows(page, df)
+    x, cf = prof["x"].values[rows], prof["contact_fraction"].values[rows]
+    touch = np.nan_to_num(cf, nan=0.0) > 0
+    far = np.where(touch, x, -np.inf).max(axis=1) + 0.5 * df["L_x"].to_numpy(float)[have]
+    out.iloc[np.flatnonzero(have)] = np.where(np.isfinite(far), far, 0.0)
+    return out
+
+
 def zone_rules(page: Page) -> None:
     """The two rules for the collisional zone side by side, and W_c over every point."""
-    say, ok = page.say, page.ok
+    say, sh, ok = page.say, page.shares, page.ok
     say("## The collisional zone under both rules\n")
-    lay = ok["compact_zone"].astype(str) != "none"
-    gap = np.isfinite(ok["W_c_gap"])
+    lay = sh["compact_zone"].astype(str) != "none"
+    gap = np.isfinite(sh["W_c_gap"])
     both = lay & gap
-    diff = (ok.loc[both, "W_c"] - ok.loc[both, "W_c_gap"]).to_numpy(float)
+    diff = (sh.loc[both, "W_c"] - sh.loc[both, "W_c_gap"]).to_numpy(float)
     say("Two rules place the boundary W_c between the collisional zone and the compact ice"
         " (docs/model.md): the *layout rule* (`W_c`: where a compact zone of at least"
         " `compact_min_pairs` touching pairs over `compact_min_length` begins,"
         " `compact_zone` not `none`) and the *gap rule* (`W_c_gap`: where the time-mean gap"
-        " between floes first stays below `gap_threshold`). They differ:\n")
+        " between floes first stays below `gap_threshold`). Over the"
+        f" {len(sh)} points with results:\n")
     say("| rule | points with a zone | share | W_c median [m] | W_c 10-90 % [m] |")
     say("|---|---|---|---|---|")
     for name, m, col in (("layout (`W_c`)", lay, "W_c"), ("gap (`W_c_gap`)", gap, "W_c_gap")):
-        w = ok.loc[m, col].to_numpy(float)
+        w = sh.loc[m, col].to_numpy(float)
         w = w[np.isfinite(w)]
         s = m.mean()
-        err = 100 * math.sqrt(s * (1 - s) / len(ok))
-        say(f"| {name} | {int(m.sum())} | {100 * s:.1f} % ± {err:.1f} %"
-            f" | {np.median(w):.2f} | {np.quantile(w, 0.1):.2f}-{np.quantile(w, 0.9):.2f} |")
+        err = 100 * math.sqrt(s * (1 - s) / len(sh))
+        spread = (f"{np.median(w):.2f} | {np.quantile(w, 0.1):.2f}-{np.quantile(w, 0.9):.2f}"
+                  if w.size else "– | –")
+        say(f"| {name} | {int(m.sum())} | {100 * s:.1f} % ± {err:.1f} % | {spread} |")
     say("")
-    say(f"Both rules find a zone at {int(both.sum())} points, only the layout rule at"
-        f" {int((lay & ~gap).sum())}, only the gap rule at {int((gap & ~lay).sum())}; where"
-        f" both do, W_c − W_c_gap has median {np.median(diff):+.2f} m and median |W_c −"
-        f" W_c_gap| {np.median(np.abs(diff)):.2f} m, against a median SE(W_c) of"
-        f" {np.nanmedian(ok.loc[both, 'W_c_stderr']):.2f} m: the rule is a choice that moves"
-        " W_c by more than its error bar, so a W_c is quoted with its rule.\n")
-    ext = ok["W_c"].where(lay, ok["ice_extent"])
-    ext_se = ok["W_c_stderr"].where(lay, 0.0)
-    ext_gap = ok["W_c_gap"].where(gap, ok["ice_extent"])
-    ext_gap_se = ok["W_c_gap_stderr"].where(gap, 0.0)
-    page.ok["W_c_all"], page.ok["W_c_all_stderr"] = ext, ext_se
-    say("**The collisional zone's width over every point.** Where no compact zone forms the"
-        " whole sheet collides: the collisional zone spans the ice, and its width is the"
-        " ice extent (`ice_extent`). With that, W_c is defined at every point, and its"
-        " trends are not conditioned on a zone forming. Mean over every other parameter at"
-        " each value (no SE on the ice extent, which is the sheet's length plus its"
-        " gaps):\n")
-    say("| parameter | layout rule: value: mean ± SE | gap rule: value: mean ± SE |")
-    say("|---|---|---|")
-    for p in PARAMS:
-        m1 = marginal(ok, ext, ext_se, p, page.rng, page.bootstrap)
-        m2 = marginal(ok, ext_gap, ext_gap_se, p, page.rng, page.bootstrap)
-        say(f"| {p} | " + "; ".join(f"{v}: {fmt(mu, s)}" for v, _, mu, s in m1) + " | "
-            + "; ".join(f"{v}: {fmt(mu, s)}" for v, _, mu, s in m2) + " |")
-    say("")
+    if diff.size:
+        med_se = float(np.nanmedian(sh.loc[both, "W_c_stderr"]))
+        med_abs = float(np.median(np.abs(diff)))
+        more = ("more than" if med_abs > med_se else "less than")
+        say(f"Both rules find a zone at {int(both.sum())} points, only the layout rule at"
+            f" {int((lay & ~gap).sum())}, only the gap rule at {int((gap & ~lay).sum())};"
+            f" where both do, W_c − W_c_gap has median {np.median(diff):+.2f} m and median"
+            f" |W_c − W_c_gap| {med_abs:.2f} m, {more} the median stated SE(W_c),"
+            f" {med_se:.2f} m" + (": the rule moves W_c by more than its error bar, so a W_c"
+                                  " is quoted with its rule.\n" if med_abs > med_se
+                                  else ".\n"))
+    # W_c over every point: where no compact zone forms, how far floes collide
+    ext = collision_extent(page, ok)
+    nz = ~(ok["compact_zone"].astype(str) != "none")
+    if ext.notna().any():
+        w_all = ok["W_c"].where(~nz, ext)
+        w_se = ok["W_c_stderr"].where(~nz, 0.0)
+        ice = ok["ice_extent"]
+        reach = (ext[nz] >= ice[nz] - ok.loc[nz, "L_x"] - 0.05).mean()
+        none = int((ext[nz] == 0).sum())
+        say("**The collisional zone's width over every point.** Where no compact zone"
+            " forms, W_c is not defined; here it is taken as how far from the edge floes"
+            " collide at all: the far end of the farthest floe that touches its downwave"
+            " neighbour at any time (`contact_fraction` > 0 in the profiles). Then it is"
+            " defined at every converged point and its trends are not conditioned on a zone"
+            f" forming. Of the {int(nz.sum())} converged points without a compact zone,"
+            f" collisions reach the last floe at {100 * reach:.1f} % (the whole sheet"
+            f" collides) and at {none} no floe touches another. Mean over every other"
+            " parameter at each value (the layout rule's W_c with its SE where a zone"
+            " forms, the collisions' extent without an SE elsewhere):\n")
+        say("| parameter | value: mean ± SE (n) |")
+        say("|---|---|")
+        for p in PARAMS:
+            m1 = marginal(ok, w_all, w_se, p, page.rng, page.bootstrap)
+            say(f"| {p} | " + "; ".join(f"{v}: {fmt(mu, s)} ({k})" for v, k, mu, s in m1)
+                + " |")
+        say("")
+        page.ok["W_c_all"], page.ok["W_c_all_stderr"] = w_all, w_se
+    else:
+        say("Without the profiles beside the table, how far collisions reach where no"
+            " compact zone forms is not known, and W_c is read only where a zone forms.\n")
     page.zone_rules = {"layout": float(lay.mean()), "gap": float(gap.mean()),
-                       "median_abs_diff": float(np.median(np.abs(diff))),
                        "both": int(both.sum())}
 
 
@@ -129,7 +168,8 @@ def near_edge(page: Page) -> None:
         " centres enclose the distance (its SE alike: the bound for fully correlated"
         f" neighbours), at {n_have} points. alpha_edge, a slope fitted over the whole"
         " collisional zone, is not used for it: that zone's width changes with the"
-        " parameters (with d_f most). Mean over every other parameter at each value:\n")
+        " parameters (the marginal table of W_c above). Mean over every other parameter at"
+        " each value:\n")
     for d in EDGE_X:
         col = f"a_rel_{d:g}m"
         say(f"**a/a0 at {d:g} m**\n")

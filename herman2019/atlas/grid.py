@@ -17,15 +17,18 @@ __all__ = ["compact_zones", "marginal_effects", "variance", "wc_law"]
 
 def compact_zones(page: Page) -> None:
     """Where a compact zone forms: the layouts, the share by each parameter and its figure."""
-    say, ok = page.say, page.ok
+    say = page.say
     plt, figdir = page.plt, page.figdir
-    # --- where a compact zone forms
-    ok["compact"] = (ok["compact_zone"].astype(str) != "none").astype(float)
+    # --- where a compact zone forms: over every point with results (not_converged too)
+    page.ok["compact"] = (page.ok["compact_zone"].astype(str) != "none").astype(float)
+    page.shares["compact"] = (page.shares["compact_zone"].astype(str) != "none").astype(float)
+    ok = page.shares
     say("## Where a compact zone forms\n")
     lay = ok["compact_zone"].astype(str).value_counts()
     say("Layouts (`compact_zone`): " + ", ".join(f"{k} {v} ({100 * v / len(ok):.1f} %)"
                                                  for k, v in lay.items()) + ".\n")
-    say("Share of points with a compact zone (± binomial SE) by each parameter:\n")
+    say(f"Share of the {len(ok)} points with results (not_converged included) that have a"
+        " compact zone (± binomial SE) by each parameter:\n")
     say("| parameter | value: share |")
     say("|---|---|")
     for p in PARAMS:

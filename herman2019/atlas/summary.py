@@ -16,8 +16,9 @@ __all__ = ["cost", "dispersions", "headlines"]
 def cost(page: Page) -> None:
     """Where the time goes: the wall-time distribution and why the slowest 1 % are slow."""
     say = page.say
-    ok = page.all.assign(compact=(page.all["compact_zone"].astype(str) != "none")
-                         .astype(float))   # every point: the not_converged ones cost most
+    ok = page.all[np.isfinite(page.all["model_wall_time"].astype(float))]
+    ok = ok.assign(compact=(ok["compact_zone"].astype(str) != "none").astype(float))
+    # every point with a wall time: the not_converged ones cost most
     # --- the grid's cost: where the time goes
     say("## The cost of the grid\n")
     wt = ok["model_wall_time"].to_numpy(float)
@@ -28,7 +29,7 @@ def cost(page: Page) -> None:
         f" mean {wt.mean():.2f} s, 99th percentile {q99:.2f} s, maximum {wt.max():.2f} s;"
         f" {wt.sum() / 3600:.2f} hours summed over these {len(ok)} points (wall time of"
         " each point on its rank, with 3 ranks sharing 2 cores: more than the CPU time;"
-        " the CPU of all ranks is in `results/herman2019/provenance.json`).\n")
+        f" the CPU of all ranks is in `{page.source}/provenance.json`).\n")
     cap = (slow["iterations"] >= maxit).mean() if maxit else math.nan
     say(f"The slowest 1 % ({len(slow)} points, ≥ {q99:.2f} s) are slow because their"
         " attenuation iteration does not settle: median"
@@ -72,12 +73,14 @@ def dispersions(page: Page) -> None:
     say("Mean over the other parameters at each period:\n")
     say("![a_end/a0, W_c and alpha_inner/alpha_c against T for ep, ml, ow]"
         "(atlas/dispersion.png)\n")
-    say("| dispersion | points | share with a compact zone | a_end/a0 | W_c [m] |")
-    say("|---|---|---|---|---|")
+    say("| dispersion | points with results | share with a compact zone | converged points |"
+        " a_end/a0 | W_c [m] |")
+    say("|---|---|---|---|---|---|")
     disp_means = {}
     for disp in ("ep", "ml", "ow"):
         g = ok[ok["dispersion"] == disp]
-        s = g["compact"].mean()
+        sg = page.shares[page.shares["dispersion"] == disp]
+        s = sg["compact"].mean()
         ya, sa, _ = resp["a_end_rel"]
         yw, sw, _ = resp["W_c"]
         ma = marginal(g.assign(_all=0), ya.loc[g.index], sa.loc[g.index], "_all", rng,
@@ -85,8 +88,8 @@ def dispersions(page: Page) -> None:
         mw = marginal(g.assign(_all=0), yw.loc[g.index], sw.loc[g.index], "_all", rng,
                       page.bootstrap)[0]
         disp_means[disp] = fmt(ma[2], ma[3])
-        say(f"| {disp} | {len(g)} | {s:.3f} ± {math.sqrt(s * (1 - s) / len(g)):.3f} | "
-            f"{fmt(ma[2], ma[3])} | {fmt(mw[2], mw[3])} |")
+        say(f"| {disp} | {len(sg)} | {s:.3f} ± {math.sqrt(s * (1 - s) / len(sg)):.3f} |"
+            f" {len(g)} | {fmt(ma[2], ma[3])} | {fmt(mw[2], mw[3])} |")
     say("")
     page.disp_means = disp_means
 
@@ -98,11 +101,12 @@ def headlines(page: Page) -> None:
     verdicts, decomp, law = page.verdicts, page.decomp, page.law
     disp_means = page.disp_means
     # --- headlines, at the top
-    spread = {q: ok.groupby(q, observed=True)["compact"].mean() for q in PARAMS}
+    shares = page.shares
+    spread = {q: shares.groupby(q, observed=True)["compact"].mean() for q in PARAMS}
     top = max(spread, key=lambda q: spread[q].max() - spread[q].min())
     d_share = spread[top]
     heads = ["## Headlines\n",
-             f"- A compact zone forms at {100 * ok['compact'].mean():.1f} % of the points"
+             f"- A compact zone forms at {100 * shares['compact'].mean():.1f} % of the points"
              f" ({lay.get('edge', 0)} edge, {lay.get('patchy', 0)} patchy,"
              f" {lay.get('inverted', 0)} inverted); of the 7 parameters {top} moves its"
              f" share most: {100 * d_share.max():.1f} % at {top} = {d_share.idxmax()} against"
