@@ -104,6 +104,8 @@ RATE = re.compile(r"kernel: ([0-9.e+]+) floe-steps/s per core on average")
 
 def parse_plan(path: Path) -> dict:
     """What a ``sweep plan`` log says: the projected core-hours and the calibrated rate."""
+    if not path.is_file():
+        raise ConfigError(f"--plan {path}: no such file")
     text = path.read_text(errors="replace")
     m, r = PLAN.search(text), RATE.search(text)
     if not m:
@@ -176,6 +178,10 @@ def command(args: Any) -> int:
         return 0
     if args.store is None or args.shard is None:
         raise ConfigError("herman2019 record: give STORE and --shard K/N (or --summary)")
+    plan = parse_plan(args.plan) if getattr(args, "plan", None) else None   # before writing
+    for log in args.log:
+        if not log.is_file():
+            raise ConfigError(f"--log {log}: no such file")
     try:
         k, n = (int(v) for v in args.shard.split("/"))
     except ValueError:
@@ -213,14 +219,15 @@ def command(args: Any) -> int:
                                  args.out / "problems" / f"problems-{k}-of-{n}.csv")
     prov_path = args.out / "provenance.json"
     prov = json.loads(prov_path.read_text()) if prov_path.exists() else {}
-    if getattr(args, "plan", None):
-        prov["plan"] = parse_plan(args.plan)
+    if plan is not None:
+        prov["plan"] = plan
     prov.setdefault("campaign", "configs/herman2019.toml")
     prov["campaign_hash"] = attrs.get("campaign_hash")
     prov.setdefault("shards", {})[f"{k}/{n}"] = entry
     prov_path.write_text(json.dumps(prov, indent=1, sort_keys=True, default=_plain) + "\n")
     readme = args.out / "README.md"           # its summary block, if it has one, remade
-    if readme.exists() and SUMMARY_START in (text := readme.read_text()):
+    if (readme.exists() and SUMMARY_START in (text := readme.read_text())
+            and SUMMARY_END in text[text.index(SUMMARY_START):]):
         i = text.index(SUMMARY_START) + len(SUMMARY_START)
         j = text.index(SUMMARY_END, i)
         readme.write_text(text[:i] + summary(json.loads(prov_path.read_text()), 24192)

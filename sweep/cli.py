@@ -230,12 +230,12 @@ def cmd_export(args: argparse.Namespace) -> int:
                           " or both")
     if args.profiles is not None:       # before anything is written
         check_profiles_output(args.profiles)
+    if args.profiles is not None:       # first: the one that can refuse a store
+        n = export_profiles(args.store, args.profiles)
+        print(f"sweep: wrote the profiles of {plural(n, 'point')} to {args.profiles}")
     if args.output is not None:
         n = export_table(args.store, args.output)
         print(f"sweep: wrote {plural(n, 'row')} to {args.output}")
-    if args.profiles is not None:
-        n = export_profiles(args.store, args.profiles)
-        print(f"sweep: wrote the profiles of {plural(n, 'point')} to {args.profiles}")
     return EXIT_OK
 
 

@@ -96,7 +96,6 @@ def dispersions(page: Page) -> None:
 
 def headlines(page: Page) -> None:
     """The headlines, computed from the sections, put at the top of the page."""
-    ok = page.ok
     lines, head_at, lay = page.lines, page.head_at, page.lay
     verdicts, decomp, law = page.verdicts, page.decomp, page.law
     disp_means = page.disp_means

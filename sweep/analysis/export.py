@@ -12,6 +12,7 @@ from floewave.paths import output_file_problem
 from sweep.analysis.load import load, read_profiles, store_attrs, store_runs
 from sweep.analysis.profiles_file import (
     ENCODING,
+    PARAMETERS,
     PROFILE_FILE_VARS,
     PROFILE_STORE_VARS,
     check_profiles_output,
@@ -66,11 +67,19 @@ def export_profiles(store: str | Path, output: str | Path,
     check_profiles_output(output)
     df = load(store) if df is None else df
     data = read_profiles(store, list(df["hash"]), PROFILE_STORE_VARS)
+    if not data:
+        raise StoreError(f"{store}: no point has profiles to write (all failed, invalid or"
+                         " stored before profiles); nothing written")
     attrs = store_attrs(store)
     version = json.loads(attrs.get("campaign_json") or "{}").get("model_version", "unknown")
     commits = sorted({str(r.get("git_commit")) for r in store_runs(store)})
+    swept = tuple(json.loads(attrs.get("swept_fields") or "[]")) or PARAMETERS
+    parameters = tuple(dict.fromkeys((*PARAMETERS, *swept)))
+    from sweep.provenance import git_state
     ds = profiles_dataset(df, data, str(version), commits,
-                          str(attrs.get("campaign_hash", "")))
+                          str(attrs.get("campaign_hash", "")),
+                          tuple(p for p in parameters if p in df),
+                          f"commit {git_state()[0]}")
     enc = {k: dict(ENCODING, chunksizes=(min(512, max(ds.sizes["point"], 1)),
                                          max(ds.sizes["floe"], 1)))
            for k in (*PROFILE_FILE_VARS, "x")}
@@ -79,7 +88,8 @@ def export_profiles(store: str | Path, output: str | Path,
         ds.to_netcdf(tmp, engine="h5netcdf", encoding=enc)
         tmp.replace(output)
     except OSError as exc:
-        tmp.unlink(missing_ok=True)
         raise StoreError(f"--profiles {output}: cannot be written:"
                          f" {exc.strerror or exc}") from None
+    finally:
+        tmp.unlink(missing_ok=True)
     return int(ds.sizes["point"])

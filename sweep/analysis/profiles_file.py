@@ -42,15 +42,11 @@ PROFILE_FILE_VARS: dict[str, tuple[str, str]] = {
     "a_rel": ("1", "wave amplitude at the floe over the incident amplitude, a/a0"),
     "a_rel_stderr": ("1", "standard error of a/a0 (jackknife over the ensemble's replicas)"),
     "gap_mean": ("m", "time-mean gap to the next floe (NaN for the last floe)"),
-    "contact_fraction": ("1", "fraction of time in contact with the next floe"),
+    "contact_fraction": ("1", "fraction of time in contact with the next floe (NaN for the"
+                              " last floe)"),
 }
-#: The swept parameters carried along ``point``: name -> (units, long_name).
-PARAMETERS: dict[str, tuple[str, str]] = {
-    "L_x": ("m", "floe length"), "T": ("s", "wave period"),
-    "a0": ("m", "incident wave amplitude at the ice edge"),
-    "C_sd": ("1", "skin-drag coefficient"), "eps": ("1", "restitution coefficient"),
-    "d_f": ("m", "initial floe-floe distance"), "dispersion": ("", "dispersion relation"),
-}
+#: The parameters carried along ``point`` when the store does not name its swept ones.
+PARAMETERS = ("L_x", "T", "a0", "C_sd", "eps", "d_f", "dispersion")
 #: The store's profile datasets the file is made from.
 PROFILE_STORE_VARS = ("x_mean", "a", "a_stderr", "gap_mean", "contact_fraction")
 #: netCDF compression of the profile variables.
@@ -58,11 +54,14 @@ ENCODING = {"zlib": True, "complevel": 4, "shuffle": True}
 
 
 def profiles_dataset(rows: pd.DataFrame, data: dict[str, dict[str, np.ndarray]],
-                     model_version: str, commits: list[str],
-                     campaign_hash: str = "") -> xr.Dataset:
+                     model_version: str, commits: list[str], campaign_hash: str = "",
+                     parameters: tuple[str, ...] = PARAMETERS,
+                     writer: str = "") -> xr.Dataset:
     """The profiles file's Dataset: one ``point`` per row of ``rows`` (a store's table,
     those with profiles, in order) from ``data`` (hash -> the store's profiles
-    ``x_mean``, ``a``, ``a_stderr``, ``gap_mean``, ``contact_fraction``)."""
+    ``x_mean``, ``a``, ``a_stderr``, ``gap_mean``, ``contact_fraction``), with the swept
+    ``parameters`` as coordinates along ``point``; ``writer`` says what wrote it."""
+    from sweep.store.schema import column
     rows = rows[rows["hash"].isin(list(data))].reset_index(drop=True)
     n_floe = max((len(p["a"]) for p in data.values()), default=0)
     arrays = {k: np.full((len(rows), n_floe), np.nan, np.float32)
@@ -83,8 +82,9 @@ def profiles_dataset(rows: pd.DataFrame, data: dict[str, dict[str, np.ndarray]],
                 "x": (("point", "floe"), arrays["x"]),
                 "hash": ("point", rows["hash"].astype(str).to_numpy(object)),
                 "status": ("point", rows["status"].astype(str).to_numpy(object)),
-                **{p: ("point", rows[p].astype(str).to_numpy(object) if p == "dispersion"
-                       else rows[p].to_numpy(float)) for p in PARAMETERS}})
+                **{p: ("point", rows[p].astype(str).to_numpy(object)
+                       if not pd.api.types.is_numeric_dtype(rows[p])
+                       else rows[p].to_numpy(float)) for p in parameters}})
     ds["n_floes"] = ("point", n_floes)
     for k, (units, long_name) in PROFILE_FILE_VARS.items():
         ds[k].attrs.update(units=units, long_name=long_name)
@@ -94,15 +94,18 @@ def profiles_dataset(rows: pd.DataFrame, data: dict[str, dict[str, np.ndarray]],
     ds["hash"].attrs.update(long_name="point identity: SHA-256 of its configuration,"
                             " the hash column of the table")
     ds["status"].attrs.update(long_name="point status (docs/output.md)")
-    for p, (units, long_name) in PARAMETERS.items():
-        ds[p].attrs.update(long_name=long_name, **({"units": units} if units else {}))
+    for p in parameters:
+        col = column(p)
+        ds[p].attrs.update(long_name=col.long_name, **({"units": col.units} if col.units
+                                                        else {}))
     ds.attrs.update(
+        parameters=" ".join(parameters),
         Conventions="CF-1.10",
         title="floewave: per-point profiles along the ice (a/a0, its standard error,"
               " mean gap, contact fraction)",
         source=f"floewave model version {model_version}",
         history=f"computed by sweep run at commit {', '.join(commits)}; written by"
-                f" floewave {floewave.__version__}'s sweep export --profiles",
+                f" sweep export --profiles ({writer or 'floewave ' + floewave.__version__})",
         references="Herman, Cheng and Shen (2019), The Cryosphere 13, 2887,"
                    " doi:10.5194/tc-13-2887-2019",
         comment="floe positions are NaN beyond n_floes; the per-point scalars, config_json"
@@ -147,21 +150,33 @@ def load_profiles_file(path: str | Path, **selectors: Any) -> xr.Dataset:
     ds = parts[0] if len(parts) == 1 else xr.concat(parts, dim="point",
                                                     data_vars="minimal", coords="minimal",
                                                     compat="override", join="outer")
+    hashes = ds["hash"].values.astype(str)
+    if len(set(hashes)) != len(hashes):
+        dup = pd.Series(hashes).value_counts()
+        raise StoreError(f"{path}: point {dup.index[0][:12]} appears {int(dup.iloc[0])}"
+                         " times across the profile files (two exports of one campaign in"
+                         " one folder?)")
+    along = [str(k) for k, v in ds.coords.items() if v.dims == ("point",)]
     keep = np.ones(ds.sizes["point"], bool)
     for name, want in selectors.items():
-        if name not in PARAMETERS and name not in ("hash", "status"):
+        if name not in along:
             raise PointNotFoundError(f"{path}: {name!r} is not a parameter of the profiles"
-                                     f" (parameters: {', '.join(PARAMETERS)})",
+                                     f" (selectable: {', '.join(along)})",
                                      store=str(path), key=name)
         wanted = list(want) if isinstance(want, (list, tuple, np.ndarray)) else [want]
         col = ds[name].values
         hit = np.zeros(len(col), bool)
+        numeric = np.issubdtype(col.dtype, np.number)
         for w in wanted:
-            if isinstance(w, str):
-                hit |= np.array([(str(c) == w) or (name == "hash" and str(c).startswith(w))
-                                 for c in col])
-            else:
+            if name == "hash":
+                hit |= np.array([str(c).startswith(str(w)) for c in col])
+            elif numeric and not isinstance(w, str):
                 hit |= np.isclose(col.astype(float), float(w), rtol=1e-9, atol=0.0)
+            else:
+                hit |= np.array([str(c) == str(w) for c in col])
+        if name == "hash" and hit.sum() > len(wanted):
+            raise PointNotFoundError(f"{path}: hash prefix {want!r} matches {int(hit.sum())}"
+                                     " points", store=str(path), key=str(want))
         keep &= hit
     if not keep.any():
         raise PointNotFoundError(f"{path}: no point with profiles matches {selectors}",

@@ -124,3 +124,26 @@ def test_export_cli_refuses_bad_input_and_writes_nothing(store, tmp_path, capsys
                  "--profiles", str(tmp_path / "p.nc")]) == 0
     assert table.exists() and (tmp_path / "p.nc").exists()
     assert "profiles of 8 points" in capsys.readouterr().out
+
+
+def test_two_exports_of_one_campaign_in_a_folder_are_refused(store, tmp_path):
+    folder = tmp_path / "profiles"
+    folder.mkdir()
+    export_profiles(store, folder / "a.nc")
+    export_profiles(store, folder / "b.nc")
+    with pytest.raises(StoreError, match="appears 2 times across the profile files"):
+        sweep.load_profiles(folder)
+
+
+def test_a_store_without_profiles_writes_nothing(tmp_path, capsys):
+    from sweep import parse_campaign
+    failed = tmp_path / "f.h5"
+    run_campaign(parse_campaign(TOML.replace("eps = [0.2, 0.4, 0.6]", "eps = [0.4]"),
+                                "t.toml"), str(failed), compute="sweep.testing:raising_point")
+    out = tmp_path / "p.nc"
+    with pytest.raises(StoreError, match="no point has profiles"):
+        export_profiles(failed, out)
+    assert not out.exists() and not (tmp_path / "p.nc.part").exists()
+    assert main(["export", str(failed), "--profiles", str(out), "--output",
+                 str(tmp_path / "t.csv")]) != 0
+    assert not out.exists() and not (tmp_path / "t.csv").exists()
