@@ -312,11 +312,12 @@ def fit_factors(runs: pd.DataFrame, quantities: Sequence[str] = QUANTITIES[:7],
 
 
 def factors_of(df: pd.DataFrame, factors: pd.DataFrame, q: str) -> np.ndarray:
-    """Each row's calibration factor for ``q`` (``df``'s ``status`` gives
-    ``not_converged``; its parameters the levels)."""
+    """Each row's calibration factor for ``q`` (its parameters give the levels; its
+    ``not_converged`` column, a share of seeds as in the fit, or else its ``status``, the
+    not_converged term)."""
     f = factors[factors["quantity"] == q]
-    rows = df.assign(not_converged=(df["status"].astype(str) == "not_converged")
-                     .astype(float)) if "status" in df else df
+    rows = df if "not_converged" in df else df.assign(
+        not_converged=(df["status"].astype(str) == "not_converged").astype(float))
     terms = [(r.term, r.level if r.term == "dispersion" else
               (1 if r.term == "not_converged" else (float(r.level) if r.level else "")))
              for r in f.itertuples()]
@@ -393,8 +394,7 @@ def cross_validated(runs: pd.DataFrame, quantities: Sequence[str] = QUANTITIES[:
             fac = fit_factors(runs[fold != k], [q])
             pts = point_chi(runs[fold == k], q)
             if len(pts):
-                pts["f"] = factors_of(pts.assign(status=np.where(
-                    pts["not_converged"] > 0.5, "not_converged", "converged")), fac, q)
+                pts["f"] = factors_of(pts, fac, q)   # its share of not_converged seeds
                 parts.append(pts)
         held[q] = pd.concat(parts, ignore_index=True)
     strata: list[tuple[str, object, object]] = [("all", None, None)]
