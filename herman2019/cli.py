@@ -23,7 +23,7 @@ import traceback
 from collections.abc import Sequence
 from pathlib import Path
 
-from herman2019 import calibration, numbers, record
+from herman2019 import calibration, factors, numbers, record
 from herman2019 import report as study_report
 from herman2019.atlas import make_atlas
 from herman2019.check import check_stores, format_table
@@ -237,6 +237,12 @@ def _print_outcomes(path: Path, *, as_json: bool) -> int:
     return EXIT_OK
 
 
+def cmd_calibrate(args: argparse.Namespace) -> int:
+    """``--factors``: the calibrated SEs' factors (:mod:`herman2019.factors`); else the
+    calibration's runs and table (:mod:`herman2019.calibration`)."""
+    return (factors.command if args.factors else calibration.command)(args)
+
+
 def cmd_atlas(args: argparse.Namespace) -> int:
     """Status 0; 2 for a bad argument, 3 for a missing table."""
     if args.bootstrap < 0:
@@ -247,7 +253,7 @@ def cmd_atlas(args: argparse.Namespace) -> int:
 
 _COMMANDS = {"check": cmd_check, "report": study_report.command, "atlas": cmd_atlas,
              "numbers": numbers.command, "record": record.command,
-             "calibrate": calibration.command}
+             "calibrate": cmd_calibrate}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -7,7 +7,7 @@ and writes ``OUT/atlas.md`` with its figures in ``OUT/atlas/``:
 
 - headlines, computed from what follows;
 - the points read: the converged ones (``not_converged`` counted and left out), their
-  standard errors calibrated (:func:`herman2019.calibration.calibrated`) when the table is
+  standard errors calibrated (:func:`herman2019.factors.calibrated`) when the table is
   of the calibration's model version;
 - where a compact zone forms: the share of points whose layout is not ``none`` by each
   parameter, over the pairs T x a0, C_sd x eps and d_f x L_x, and the layouts;

@@ -56,7 +56,7 @@ def start_page(df: pd.DataFrame, figdir: Path, bootstrap: int, plt: Any, *,
     standard errors are the calibrated ones (``herman2019.calibration``) when the table is
     of the model version the calibration was made at; ``profiles`` (the table's
     ``profiles/`` files, ``sweep.load_profiles``) or None."""
-    from herman2019.calibration import CALIBRATED_VERSION, calibrated_factors, factors_of
+    from herman2019.factors import CALIBRATED_VERSION, calibrated_factors, factors_of
     files = list(df.attrs.get("files", ()))
     rng = np.random.default_rng(0)
     lines: list[str] = []
@@ -107,7 +107,7 @@ def start_page(df: pd.DataFrame, figdir: Path, bootstrap: int, plt: Any, *,
         wc = np.isfinite(ok["W_c"]).to_numpy()
         say("**Error bars: calibrated.** Every SE below of a_end (and a/a0), W_c, W_c_gap"
             " and the alpha fits is the point's stated one times its calibration factor"
-            " (`herman2019.calibration.calibrated`: a factor by L_x, C_sd, d_f and"
+            " (`herman2019.factors.calibrated`: a factor by L_x, C_sd, d_f and"
             " dispersion fitted to 340 points on three seeds, docs/convergence.md,"
             " \"Calibrated standard errors\"; median factor of W_c over the points with a"
             f" W_c {float(se_factor['W_c'][wc].median()):.2f}, of alpha_all"

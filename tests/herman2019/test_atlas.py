@@ -203,7 +203,7 @@ def test_the_page_leaves_out_not_converged_points_and_calibrates_version_9(tmp_p
     import json as _json
 
     from herman2019.atlas.page import start_page
-    from herman2019.calibration import CALIBRATED_VERSION
+    from herman2019.factors import CALIBRATED_VERSION
     rows = []
     for i, (st, lx) in enumerate([("converged_noisy", 0.5), ("not_converged", 0.5),
                                   ("converged_noisy", 3.0)]):

@@ -9,6 +9,7 @@ import pandas as pd
 import pytest
 
 from herman2019 import calibration as cal
+from herman2019 import factors as fx
 from herman2019.cli import main
 
 
@@ -116,7 +117,7 @@ def _runs_by_stratum(seed: int = 9) -> pd.DataFrame:
             row = {**{k: p[k] for k in cal.AXES}, "group": "zone", "seed": s,
                    "status": p["status"], "layout": "edge"}
             for q in cal.QUANTITIES:
-                row[q] = 1.0 + 0.1 * cal.HONEST * rng.normal()
+                row[q] = 1.0 + 0.1 * fx.HONEST * rng.normal()
                 row[q + "_stderr"] = 0.1 / small
             rows.append(row)
     return pd.DataFrame(rows)
@@ -124,7 +125,7 @@ def _runs_by_stratum(seed: int = 9) -> pd.DataFrame:
 
 def test_the_factors_find_where_the_errors_are_small_and_calibrate_them():
     runs = _runs_by_stratum()
-    fac = cal.fit_factors(runs, ["a_end"])
+    fac = fx.fit_factors(runs, ["a_end"])
     coef = fac.set_index(["term", "level"])["coef"]
     assert abs(math.exp(coef["intercept", ""])) == pytest.approx(1.0, abs=0.12)
     assert math.exp(coef["L_x", "3.0"]) == pytest.approx(2.5, rel=0.12)
@@ -132,17 +133,17 @@ def test_the_factors_find_where_the_errors_are_small_and_calibrate_them():
     assert math.exp(coef["not_converged", "1"]) == pytest.approx(1.5, rel=0.2)
     # a row's calibrated SE: times its factor, never below the stated one
     pts = runs.drop_duplicates(list(cal.AXES)).assign(a_end_stderr=0.04)
-    out = cal.calibrated(pts, fac)
+    out = fx.calibrated(pts, fac)
     f = out["a_end_stderr_cal"] / 0.04
     assert (f >= 1.0).all()
     at3 = (pts["L_x"] == 3.0) & (pts["status"] != "not_converged")
     assert f[at3].median() == pytest.approx(2.5, rel=0.15)
     # checked on points the factors were not fitted on: 2.5 -> about 1.18 at L_x 3
-    check = cal.cross_validated(runs, ["a_end"]).set_index("stratum")
+    check = fx.cross_validated(runs, ["a_end"]).set_index("stratum")
     assert check.loc["L_x = 3.0", "a_end_raw"] > 2.2
-    assert check.loc["L_x = 3.0", "a_end_cal"] == pytest.approx(cal.HONEST, rel=0.12)
+    assert check.loc["L_x = 3.0", "a_end_cal"] == pytest.approx(fx.HONEST, rel=0.12)
     assert check.loc["all", "a_end_tail"] == 0
-    assert "| L_x = 3.0 |" in cal.format_check(check.reset_index(), ["a_end"])
+    assert "| L_x = 3.0 |" in fx.format_check(check.reset_index(), ["a_end"])
 
 
 def test_calibrate_factors_writes_the_file_the_docs_table_comes_from(tmp_path, capsys):
@@ -160,14 +161,14 @@ def test_the_shipped_factors_are_those_of_the_shipped_runs():
     results/calibration/runs.csv.gz (to the file's 6 decimals), and the docs' table of
     them is what format_factors makes."""
     runs = pd.read_csv(cal.SHIPPED / "runs.csv.gz")
-    shipped = pd.read_csv(cal.SHIPPED / cal.FACTORS, dtype={"level": str},
+    shipped = pd.read_csv(cal.SHIPPED / fx.FACTORS, dtype={"level": str},
                           keep_default_na=False)
-    fit = cal.fit_factors(runs)
+    fit = fx.fit_factors(runs)
     assert list(shipped["term"]) == list(fit["term"])
     np.testing.assert_allclose(shipped["coef"], fit["coef"], atol=2e-6)
     from pathlib import Path
     start, end = "<!-- herman2019 calibrate --factors -->\n", "\n<!-- end of factors -->"
-    want = cal.format_factors(shipped)
+    want = fx.format_factors(shipped)
     for doc in (Path(__file__).resolve().parents[2] / "docs" / "convergence.md",
                 cal.SHIPPED / "README.md"):
         text = doc.read_text()
@@ -180,7 +181,7 @@ def test_the_docs_check_of_the_factors_is_what_the_command_makes():
     is what `herman2019 calibrate --factors` prints (14 s)."""
     from pathlib import Path
     runs = pd.read_csv(cal.SHIPPED / "runs.csv.gz")
-    want = cal.format_check(cal.cross_validated(runs))
+    want = fx.format_check(fx.cross_validated(runs))
     start, end = "<!-- factors checked -->\n", "\n<!-- end of factors checked -->"
     for doc in (Path(__file__).resolve().parents[2] / "docs" / "convergence.md",
                 cal.SHIPPED / "README.md"):
@@ -190,18 +191,18 @@ def test_the_docs_check_of_the_factors_is_what_the_command_makes():
 
 def test_calibrated_refuses_another_model_version_and_an_unseen_level():
     import json
-    fac = cal.calibrated_factors()
-    assert set(fac["model_version"].astype(str)) == {cal.CALIBRATED_VERSION}
+    fac = fx.calibrated_factors()
+    assert set(fac["model_version"].astype(str)) == {fx.CALIBRATED_VERSION}
     row = {"L_x": 0.5, "T": 1.2, "a0": 0.0125, "C_sd": 0.2, "eps": 0.6, "d_f": 0.05,
            "dispersion": "ow", "status": "converged_noisy"}
     for q in cal.QUANTITIES[:7]:
         row[q], row[q + "_stderr"] = 1.0, 0.1
     row["a_end_rel"], row["a_end_rel_stderr"] = 0.8, 0.08
     df = pd.DataFrame([row, {**row, "L_x": 1.0}, {**row, "dispersion": "xx"}])
-    ok = cal.calibrated(df.assign(provenance=json.dumps({"model_version": "9"})))
+    ok = fx.calibrated(df.assign(provenance=json.dumps({"model_version": "9"})))
     f = ok["a_end_stderr_cal"] / 0.1
     assert f[0] > 1.0 and np.isnan(f[1]) and np.isnan(f[2])
     assert ok["a_end_rel_stderr_cal"][0] == pytest.approx(0.08 * f[0])
     with pytest.raises(ValueError, match="calibrated at model version 9; this table is"
                                          " version 8"):
-        cal.calibrated(df.assign(provenance=json.dumps({"model_version": "8"})))
+        fx.calibrated(df.assign(provenance=json.dumps({"model_version": "8"})))
