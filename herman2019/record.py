@@ -233,8 +233,9 @@ def command(args: Any) -> int:
         readme.write_text(text[:i] + summary(json.loads(prov_path.read_text()), 24192)
                           + "\n" + text[j:])
     print(f"{table}: {rows} points, {entry['table_bytes'] / 1e6:.2f} MB; status"
-          f" {entry['status']}; runs {len(runs)}; CPU of all ranks {entry['cpu_s_all_ranks']}"
-          f" s; profiles {entry['profiles']['bytes'] / 1e6:.2f} MB;"
+          f" {entry['status']}; runs {len(runs)}; CPU of all ranks"
+          f" {entry['cpu_s_all_ranks'] or 0:.1f} s;"
+          f" profiles {entry['profiles']['bytes'] / 1e6:.2f} MB;"
           f" store {entry['store_bytes'] / 1e6:.0f} MB + journal"
           f" {(entry['journal_bytes'] or 0) / 1e6:.0f} MB")
     return 0
