@@ -86,19 +86,23 @@ def decomposition(df, y):
     return int(ok.sum()), main, full, pairs
 
 
-def paired(ok, y, se, p, sign, *, order=None, where=None):
+def paired(ok, y, se, p, sign, *, order=None, where=None, ref=None):
     """The paper's "all else equal": every pair of points that differ only in ``p``, at
     adjacent values (or the two of ``order``), the later minus the earlier, z = sign x
     difference / its SE. Counts: pairs with both values, agreeing (z >= 2), contradicting
     (z <= -2), and the share with the stated sign. ``where`` (a boolean per point) keeps
-    the pairs whose earlier point has it."""
+    the pairs whose earlier point has it. ``ref`` = (value, SE) of another quantity: the
+    pair's direction is then its difference's sign (``sign`` x that), and only pairs
+    whose ``ref`` difference is resolved (|z| >= 2) count ("the order of ref holds in y")."""
     others = [q for q in PARAMS if q != p]
+    r_y, r_s = ref if ref is not None else (y * 0.0, se * 0.0)   # unused without ref
     frame = ok.assign(_y=y.to_numpy(float), _s=se.to_numpy(float),
+                      _ry=r_y.to_numpy(float), _rs=r_s.to_numpy(float),
                       _w=(where.to_numpy(bool) if where is not None
                           else np.ones(len(ok), bool)))
     frame[p] = frame[p].astype(str)
     vals = list(order) if order else [str(v) for v in sorted(ok[p].unique())]
-    piv = frame.pivot_table(index=others, columns=p, values=["_y", "_s", "_w"],
+    piv = frame.pivot_table(index=others, columns=p, values=["_y", "_s", "_w", "_ry", "_rs"],
                             aggfunc="first", observed=True)
     zs, rel, at = [], [], []
     keys = piv.index.to_frame(index=False)
@@ -110,6 +114,14 @@ def paired(ok, y, se, p, sign, *, order=None, where=None):
         w = piv["_w"][v1].to_numpy(float) > 0
         d = sign * (y2 - y1)
         s = np.sqrt(s1**2 + s2**2)
+        if ref is not None:
+            rd = piv["_ry"][v2].to_numpy(float) - piv["_ry"][v1].to_numpy(float)
+            rs = np.sqrt(piv["_rs"][v1].to_numpy(float) ** 2
+                         + piv["_rs"][v2].to_numpy(float) ** 2)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                resolved = np.abs(rd / rs) >= 2
+            d = np.sign(rd) * d
+            w = w & resolved
         # a pair counts only with both values and both error bars (a point without an SE
         # cannot decide a pair)
         ok2 = np.isfinite(d) & w & np.isfinite(s) & (s > 0)

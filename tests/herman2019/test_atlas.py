@@ -227,3 +227,17 @@ def test_the_page_leaves_out_not_converged_points_and_calibrates_version_9(tmp_p
         else:
             assert "Error bars: as stated" in text
             assert (page.ok["a_end_stderr"] == 0.1).all()
+
+
+def test_a_pair_read_against_another_quantity_s_order():
+    """``ref``: the pair's direction is the other quantity's difference; pairs where that
+    difference is not resolved (|z| < 2) do not count (the Fig. 6a 'no reversal' reading:
+    the order at 5 m holds at the far end)."""
+    df, _, se = grid(0, slope=0.0)
+    ref = pd.Series(np.where(df["L_x"] == 0.5, 1.0, -1.0) * df["eps"], index=df.index)
+    same = atlas.paired(df, ref * 2.0, se, "eps", 1, ref=(ref, se))
+    flipped = atlas.paired(df, -ref, se, "eps", 1, ref=(ref, se))
+    assert same["n"] == flipped["n"] > 0
+    assert same["agree"] == same["n"] and flipped["contra"] == flipped["n"]
+    blurred = atlas.paired(df, ref, se, "eps", 1, ref=(ref, se * 100))   # never resolved
+    assert blurred["n"] == 0
