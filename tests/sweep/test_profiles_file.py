@@ -17,17 +17,7 @@ from sweep.analysis.export import export_profiles
 from sweep.analysis.profiles_file import PROFILE_FILE_VARS
 from sweep.cli import main
 from sweep.errors import PointNotFoundError, StoreError
-
-TOML = """\
-[base]
-L_sheet = 6.0
-[sweep]
-L_x = [0.5, 1.5]
-eps = [0.2, 0.4, 0.6]
-dispersion = ["ml", "ep"]
-[run]
-progress_interval = 100.0
-"""
+from tests.sweep.test_run import TOML  # the in-process campaign: 12 points, eps 0.4 fails
 
 
 @pytest.fixture(scope="module")
