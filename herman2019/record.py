@@ -157,9 +157,38 @@ def summary(prov: dict, grid_points: int | None = None) -> str:
          f" + journals {sum(s.get('journal_bytes') or 0 for s in shards.values()) / 1e6:,.0f}"
          f" MB; shipped tables {sum(s['table_bytes'] for s in shards.values()) / 1e6:.1f} MB"
          + (f", profiles {prof_mb:.1f} MB" if prof_mb else "")),
-        ("machine", "; ".join(sorted({s["machine"] for s in shards.values()}))),
+        ("machine", _machines(shards)),
     ]
     return "\n".join(["| | |", "|---|---|"] + [f"| {a} | {b} |" for a, b in rows])
+
+
+def remake_readme(out: Path) -> bool:
+    """Remake the summary block of ``OUT/README.md`` from ``OUT/provenance.json``, if the
+    README has one (between SUMMARY_START and SUMMARY_END); True when it had."""
+    readme = out / "README.md"
+    if not (readme.exists() and SUMMARY_START in (text := readme.read_text())
+            and SUMMARY_END in text[text.index(SUMMARY_START):]):
+        return False
+    i = text.index(SUMMARY_START) + len(SUMMARY_START)
+    j = text.index(SUMMARY_END, i)
+    prov = json.loads((out / "provenance.json").read_text())
+    readme.write_text(text[:i] + summary(prov, 24192) + "\n" + text[j:])
+    return True
+
+
+def _machines(shards: dict) -> str:
+    """Each CPU the shards ran on, with its shards and CPU seconds per point (a row is
+    reproduced bit for bit only on a CPU of its kind; on another, within its error bar)."""
+    by: dict[str, list[str]] = {}
+    for k in sorted(shards, key=lambda k: int(k.split("/")[0])):
+        by.setdefault(shards[k]["machine"], []).append(k)
+    parts = []
+    for m, ks in sorted(by.items(), key=lambda kv: int(kv[1][0].split("/")[0])):
+        cpu = sum(shards[k].get("cpu_s_all_ranks") or 0.0 for k in ks)
+        pts = sum(shards[k]["points"] for k in ks)
+        parts.append(f"{m}: shard{'s' if len(ks) > 1 else ''} {', '.join(ks)}"
+                     + (f" ({cpu / pts:.2f} CPU-s per point)" if cpu and pts else ""))
+    return "; ".join(parts)
 
 
 def _plain(o):
@@ -225,13 +254,7 @@ def command(args: Any) -> int:
     prov["campaign_hash"] = attrs.get("campaign_hash")
     prov.setdefault("shards", {})[f"{k}/{n}"] = entry
     prov_path.write_text(json.dumps(prov, indent=1, sort_keys=True, default=_plain) + "\n")
-    readme = args.out / "README.md"           # its summary block, if it has one, remade
-    if (readme.exists() and SUMMARY_START in (text := readme.read_text())
-            and SUMMARY_END in text[text.index(SUMMARY_START):]):
-        i = text.index(SUMMARY_START) + len(SUMMARY_START)
-        j = text.index(SUMMARY_END, i)
-        readme.write_text(text[:i] + summary(json.loads(prov_path.read_text()), 24192)
-                          + "\n" + text[j:])
+    remake_readme(args.out)
     print(f"{table}: {rows} points, {entry['table_bytes'] / 1e6:.2f} MB; status"
           f" {entry['status']}; runs {len(runs)}; CPU of all ranks"
           f" {entry['cpu_s_all_ranks'] or 0:.1f} s;"

@@ -39,6 +39,16 @@ def test_the_summary_adds_the_shards_and_scales_the_projection():
     assert "abc123, def456; git_dirty False, True" in two
 
 
+def test_the_summary_names_each_machine_with_its_shards_and_speed():
+    """A grid run on two kinds of CPU (its rows reproduce bit for bit only on their own
+    kind): the machine row says which shards ran where, and the CPU per point on each."""
+    other = _shard(1000, 1500.0, 1) | {"machine": "CPU Y, AVX-512, 2 cores"}
+    text = summary({"shards": {"0/16": _shard(1500, 1800.0, 1), "2/16": other,
+                               "1/16": _shard(500, 600.0, 1)}})
+    assert ("| machine | CPU X, AVX2, 2 cores: shards 0/16, 1/16 (1.20 CPU-s per point);"
+            " CPU Y, AVX-512, 2 cores: shard 2/16 (1.50 CPU-s per point) |") in text
+
+
 def test_the_plan_log_gives_the_projection(tmp_path):
     log = tmp_path / "plan.log"
     log.write_text("kernel: 5.133e+07 floe-steps/s per core on average (calibrated ...)\n"
