@@ -9,7 +9,9 @@ Shen (2019) on floewave campaigns run by sweep.
 - ``numbers``: the record of every number the docs quote (docs/numbers.txt);
 - ``record``: one shard's table and provenance into ``results/herman2019``;
 - ``calibrate``: the error bars calibrated on the grid's own points over several seeds
-  (:mod:`herman2019.calibration`).
+  (:mod:`herman2019.calibration`);
+- ``surrogate``: the released grid as a function with an error bar, anywhere in its box
+  (:mod:`herman2019.surrogate`; docs/surrogate.md).
 
 Exit statuses are those of :mod:`sweep.errors` (0 ok, 1 internal error, 2 bad input,
 3 store problem, 6 interrupted but resumable); a claim's verdict never sets it.
@@ -31,6 +33,7 @@ from herman2019.outcomes import classify, format_outcomes
 from herman2019.seeds import across_seeds, check_seeds, format_seed_table
 from herman2019.settle import settle
 from herman2019.settled import format_settled, settled_json
+from herman2019.surrogate import command as surrogate_command
 from sweep.errors import EXIT_INTERNAL, EXIT_OK, EXIT_STORE, ConfigError, command_status, report
 
 __all__ = ["main", "build_parser"]
@@ -133,6 +136,11 @@ def build_parser() -> argparse.ArgumentParser:
     ca.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3])
     ca.add_argument("--sample-seed", type=int, default=47)
     ca.add_argument("--jobs", type=int, default=1, help="processes (default 1)")
+
+    su = sub.add_parser("surrogate", help="the released grid as a function: alpha, a_end/a0,"
+                        " p_zone and W_c anywhere in its box with a standard error"
+                        " (docs/surrogate.md)")
+    surrogate_command.add_arguments(su)
 
     rc = sub.add_parser("record", help="ship a campaign shard's result without its store:"
                         " its table and provenance")
@@ -253,7 +261,7 @@ def cmd_atlas(args: argparse.Namespace) -> int:
 
 _COMMANDS = {"check": cmd_check, "report": study_report.command, "atlas": cmd_atlas,
              "numbers": numbers.command, "record": record.command,
-             "calibrate": cmd_calibrate}
+             "calibrate": cmd_calibrate, "surrogate": surrogate_command.command}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -1,0 +1,162 @@
+"""``herman2019 surrogate``: predict, build, validate.
+
+    herman2019 surrogate --L_x 1.0 --T 1.3 --a0 0.02 --C_sd 0.05 --eps 0.5 --d_f 0.01 \\
+        --dispersion ml                          # one point (each option takes several
+                                                 # values, broadcast as numpy does)
+    herman2019 surrogate --csv points.csv [--out predictions.csv]
+    herman2019 surrogate --build [--grid results/herman2019] [--dir results/surrogate] --jobs 2
+    herman2019 surrogate --validate [--dir results/surrogate] --jobs 2 [--docs docs]
+
+``--build``: the node arrays from the grid's table (:mod:`.build`), the calibration set's
+points run (resumable, ``DIR/calibration/runs.csv.gz``), the interpolation-error scale
+fitted on them, ``DIR/surrogate.npz`` written. ``--validate``: the validation set's points
+run (``DIR/validation/runs.csv.gz``), compared with the surrogate
+(``DIR/validation.csv.gz``: every point's model values beside the surrogate's), the error
+tables printed and, with ``--docs``, ``DOCS/surrogate.md`` and its figure written. Exit
+status 0; 2 for a bad argument or a point outside the box; 3 for a missing file.
+"""
+from __future__ import annotations
+
+import json
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from herman2019.surrogate.grid import AXES, OutsideBox
+from herman2019.surrogate.model import QUANTITIES, SHIPPED, Surrogate
+
+__all__ = ["command", "add_arguments", "DIR"]
+
+ROOT = Path(__file__).resolve().parents[2]
+#: The shipped surrogate's directory.
+DIR = SHIPPED.parent
+
+
+def add_arguments(p) -> None:
+    for a in AXES:
+        p.add_argument(f"--{a}", type=float, nargs="+", metavar="X")
+    p.add_argument("--dispersion", nargs="+", metavar="NAME")
+    p.add_argument("--csv", type=Path, help="points to predict: a CSV with columns"
+                   f" {', '.join(AXES)}, dispersion")
+    p.add_argument("--out", type=Path, help="write the predictions as CSV here")
+    p.add_argument("--detail", action="store_true", help="also each SE's two parts")
+    p.add_argument("--file", type=Path, help="the surrogate (default: the shipped one,"
+                   " results/surrogate/surrogate.npz)")
+    p.add_argument("--build", action="store_true", help="build it from --grid")
+    p.add_argument("--validate", action="store_true", help="run and compare the"
+                   " validation set")
+    p.add_argument("--grid", default=str(ROOT / "results" / "herman2019"),
+                   help="the grid's table (default: results/herman2019)")
+    p.add_argument("--dir", type=Path, default=DIR, help="where the surrogate, its runs"
+                   " and its validation go (default: results/surrogate)")
+    p.add_argument("--docs", type=Path, help="with --validate: write DOCS/surrogate.md")
+    p.add_argument("--jobs", type=int, default=1, help="processes for the runs")
+
+
+def _commit() -> str:
+    try:
+        return subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True,
+                              text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return ""
+
+
+def command(args) -> int:
+    from sweep.errors import EXIT_OK, ConfigError
+    if args.jobs < 1:
+        raise ConfigError(f"--jobs {args.jobs}: at least 1")
+    if args.build and args.validate:
+        raise ConfigError("--build and --validate: one at a time (build, then validate)")
+    if args.build:
+        return _build(args)
+    if args.validate:
+        return _validate(args)
+    sur = Surrogate.load(args.file)      # FileNotFoundError: exit status 3
+    given = {a: getattr(args, a) for a in AXES}
+    if args.csv is not None:
+        if any(v is not None for v in given.values()) or args.dispersion:
+            raise ConfigError("--csv and point options: give one")
+        if not args.csv.is_file():
+            raise FileNotFoundError(f"--csv {args.csv}: no such file")
+        pts = pd.read_csv(args.csv)
+        missing = [c for c in (*AXES, "dispersion") if c not in pts]
+        if missing:
+            raise ConfigError(f"--csv {args.csv}: no column {', '.join(missing)}")
+        params = {a: pts[a].to_numpy(float) for a in AXES}
+        disp = pts["dispersion"].astype(str).to_numpy()
+    else:
+        missing = [f"--{a}" for a, v in given.items() if v is None]
+        if missing or not args.dispersion:
+            raise ConfigError("give every parameter (" + ", ".join(
+                missing + ([] if args.dispersion else ["--dispersion"]))
+                + " missing) or --csv FILE")
+        params = {a: np.asarray(v, float) for a, v in given.items()}
+        disp = np.asarray(args.dispersion, dtype=object)
+    try:
+        out = sur.predict(disp, detail=args.detail, **params)
+    except (OutsideBox, ValueError) as exc:
+        raise ConfigError(str(exc)) from None
+    if args.out is not None:
+        out.to_csv(args.out, index=False)
+        print(f"{args.out}: {len(out)} points")
+    else:
+        with pd.option_context("display.max_columns", None, "display.width", 200):
+            print(out.to_string(index=False, float_format=lambda v: f"{v:.5g}"))
+    return EXIT_OK
+
+
+def _build(args) -> int:
+    import sweep
+    from sweep.errors import EXIT_OK, ConfigError
+
+    from herman2019.calibration import run_sample
+    from herman2019.surrogate.build import build
+    from herman2019.surrogate.validate import SETS, draw_points, fit_scale, model_table
+    try:
+        table = sweep.load(args.grid)
+        sur = build(table, source=_relative(args.grid), commit=_commit())
+    except (FileNotFoundError, ValueError) as exc:
+        raise ConfigError(f"--grid {args.grid}: {exc}") from None
+    n, seed = SETS["calibration"]
+    pts = draw_points(sur.levels, n, seed)
+    runs = run_sample(pts, [0], args.dir / "calibration", args.jobs)
+    scale = fit_scale(sur, model_table(runs))
+    sur.meta["calibration"] = {"points": int(len(runs)), "draw_seed": seed}
+    sur.save(args.dir / "surrogate.npz")
+    print(f"{args.dir / 'surrogate.npz'}: {sur.meta['points']} nodes from {args.grid}"
+          f" ({sur.meta['standard_errors']} SEs, model version"
+          f" {', '.join(sur.meta['model_version'])}); interpolation-error scale "
+          + ", ".join(f"{q} {c:.3f}" for q, c in scale.items()))
+    return EXIT_OK
+
+
+def _relative(path) -> str:
+    try:
+        return str(Path(path).resolve().relative_to(ROOT))
+    except ValueError:
+        return str(path)
+
+
+def _validate(args) -> int:
+    from sweep.errors import EXIT_OK
+
+    from herman2019.calibration import run_sample
+    from herman2019.surrogate.page import make_page
+    from herman2019.surrogate.validate import SETS, compare, draw_points, model_table
+    sur = Surrogate.load(args.dir / "surrogate.npz")
+    n, seed = SETS["validation"]
+    pts = draw_points(sur.levels, n, seed)
+    runs = run_sample(pts, [0], args.dir / "validation", args.jobs)
+    cmp = compare(sur, model_table(runs))
+    keep = [*AXES, "dispersion", "status", "zone", "p_zone"] + [
+        c for q in QUANTITIES for c in (q, q + "_se", q + "_sur", q + "_sur_se", q + "_z")]
+    cmp[keep].to_csv(args.dir / "validation.csv.gz", index=False)
+    text = make_page(sur, cmp, args.docs, _relative(args.dir))
+    print(text)
+    return EXIT_OK
+
+
+def meta_json(sur: Surrogate) -> str:
+    return json.dumps(sur.meta, sort_keys=True)

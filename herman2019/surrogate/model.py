@@ -1,0 +1,154 @@
+"""The surrogate: the released grid read as a function of (L_x, T, a0, C_sd, eps, d_f) per
+dispersion relation, with a standard error on every value.
+
+**Values.** Each quantity is interpolated multilinearly between the nodes of the grid
+(:mod:`.grid`: log axes for L_x, a0, C_sd, d_f), in log(value): ``alpha_all``,
+``alpha_edge``, ``a_end_rel`` (a_end/a0) and ``W_c``. ``p_zone``, the probability that a
+compact zone forms, is the multilinear interpolant of the nodes' 0/1 outcome; ``W_c`` (the
+zone's width where one forms) is interpolated over the corners with a zone only, and is
+NaN where no corner of the cell has one.
+
+**Standard errors.** Two parts, added in quadrature (in log, so relative): the nodes'
+stochastic errors carried through the weights, sqrt(sum w_i^2 se_i^2) (the calibrated SEs
+of ``results/calibration/factors.csv`` where the table is of that model version), and the
+interpolation error between the nodes, estimated per axis from the node values' curvature
+along it (the leave-one-out residual at each interior node with its noise taken out,
+:mod:`.build`), scaled by one factor per quantity fitted on off-grid points run for the
+purpose (never on the validation set). At a node both the interpolation error and its
+position term are zero, and the surrogate returns the node's own value and SE.
+"""
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from herman2019.surrogate.grid import AXES, DISPERSIONS, OutsideBox, cell_weights, check_box
+
+__all__ = ["QUANTITIES", "Surrogate", "SHIPPED"]
+
+#: The interpolated quantities (each in log), in the output's order.
+QUANTITIES = ("alpha_all", "alpha_edge", "a_end_rel", "W_c")
+#: The shipped surrogate, built from the released grid.
+SHIPPED = Path(__file__).resolve().parents[2] / "results" / "surrogate" / "surrogate.npz"
+#: Points per block when predicting (bounds the memory of the corners' gather).
+BLOCK = 8192
+
+
+@dataclass
+class Surrogate:
+    """Node arrays per dispersion relation (fields in C order over :data:`AXES`) and the
+    interpolation error's scale per quantity. Build with :func:`.build.build`; save and
+    load with :meth:`save` and :meth:`load`."""
+
+    levels: dict[str, np.ndarray]
+    fields: dict[str, np.ndarray]          # dispersion -> (n_nodes, n_fields)
+    names: tuple[str, ...]                 # the field names
+    scale: dict[str, float] = field(default_factory=dict)   # quantity -> c
+    meta: dict = field(default_factory=dict)
+
+    # ------------------------------------------------------------------ files
+    def save(self, path: str | Path) -> None:
+        """One ``.npz`` file (loads in milliseconds; no pickle)."""
+        arrays = {f"level_{a}": v for a, v in self.levels.items()}
+        arrays |= {f"fields_{d}": v.astype(np.float64) for d, v in self.fields.items()}
+        arrays["meta"] = np.frombuffer(json.dumps(
+            {"names": list(self.names), "scale": self.scale, "meta": self.meta},
+            sort_keys=True).encode(), dtype=np.uint8)
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        with open(path, "wb") as fh:
+            np.savez_compressed(fh, **arrays)
+
+    @classmethod
+    def load(cls, path: str | Path | None = None) -> Surrogate:
+        """The surrogate of ``path`` (default: the shipped one, :data:`SHIPPED`)."""
+        path = SHIPPED if path is None else Path(path)
+        if not path.is_file():
+            raise FileNotFoundError(f"{path}: no surrogate file (build it with"
+                                    " `herman2019 surrogate --build`)")
+        with np.load(path, allow_pickle=False) as z:
+            head = json.loads(z["meta"].tobytes().decode())
+            levels = {a: z[f"level_{a}"] for a in AXES}
+            fields = {d: z[f"fields_{d}"] for d in DISPERSIONS if f"fields_{d}" in z}
+        return cls(levels, fields, tuple(head["names"]), head["scale"], head["meta"])
+
+    # ------------------------------------------------------------------ reading
+    def column(self, name: str) -> int:
+        return self.names.index(name)
+
+    def predict(self, dispersion, detail: bool = False, **params) -> pd.DataFrame:
+        """The surrogate at the points given by ``params`` (the six axes, scalars or arrays
+        broadcast together; ``dispersion`` a name or an array of names): one row per
+        point with the parameters and, per quantity, its value and ``_se`` (``detail``:
+        also ``_se_noise`` and ``_se_interp``, relative, and ``W_c`` where p_zone > 0).
+        OutsideBox (a ValueError) for a point outside the grid's box or an unknown
+        dispersion relation."""
+        missing = [a for a in AXES if a not in params]
+        extra = sorted(set(params) - set(AXES))
+        if missing or extra:
+            raise TypeError(f"surrogate: give each of {', '.join(AXES)} and dispersion"
+                            + (f"; missing {', '.join(missing)}" if missing else "")
+                            + (f"; unknown {', '.join(extra)}" if extra else ""))
+        arrays = np.broadcast_arrays(*(np.asarray(params[a], dtype=float) for a in AXES),
+                                     np.asarray(dispersion, dtype=object))
+        q = {a: arrays[k].ravel() for k, a in enumerate(AXES)}
+        disp = arrays[-1].ravel().astype(str)
+        unknown = sorted(set(disp) - set(self.fields))
+        if unknown:
+            raise OutsideBox(f"dispersion {str(unknown[0])!r}: the surrogate knows"
+                             f" {', '.join(self.fields)}")
+        check_box(self.levels, q)
+        out = pd.DataFrame({a: q[a] for a in AXES})
+        out.insert(len(AXES), "dispersion", pd.array(disp, dtype="string"))
+        cols: dict[str, np.ndarray] = {}
+        for d in self.fields:
+            sel = np.flatnonzero(disp == d)
+            for lo in range(0, sel.size, BLOCK):
+                part = sel[lo:lo + BLOCK]
+                got = self._predict_one(d, {a: q[a][part] for a in AXES}, detail)
+                for k, v in got.items():
+                    cols.setdefault(k, np.full(disp.size, np.nan))[part] = v
+        for k, v in cols.items():
+            out[k] = v
+        return out
+
+    def _predict_one(self, d: str, q: Mapping[str, np.ndarray], detail: bool
+                     ) -> dict[str, np.ndarray]:
+        F = self.fields[d]
+        idx, w, t, h = cell_weights(self.levels, q)
+        pos = (t * (1.0 - t) * h**2) ** 2                      # (n, 6): (t(1-t)h^2)^2
+        corners = F[idx]                                        # (n, 64, n_fields)
+        zone = corners[..., self.column("zone")]
+        res: dict[str, np.ndarray] = {"p_zone": np.sum(w * zone, axis=1)}
+        for qn in QUANTITIES:
+            y = corners[..., self.column(f"y_{qn}")]
+            s2 = corners[..., self.column(f"s_{qn}")] ** 2
+            m = np.isfinite(y) & np.isfinite(s2)
+            wm = np.where(m, w, 0.0)
+            tot = wm.sum(axis=1)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                wn = wm / tot[:, None]
+                mean = np.sum(wn * np.where(m, y, 0.0), axis=1)
+                noise2 = np.sum(wn**2 * np.where(m, s2, 0.0), axis=1)
+                interp2 = np.zeros_like(mean)
+                for k, a in enumerate(AXES):
+                    kappa = corners[..., self.column(f"k_{qn}_{a}")]
+                    mk = m & np.isfinite(kappa)
+                    wk = np.where(mk, w, 0.0)
+                    kk = np.sum(wk * np.where(mk, kappa, 0.0), axis=1) / wk.sum(axis=1)
+                    interp2 += np.nan_to_num(kk) * pos[:, k]
+            interp2 *= self.scale.get(qn, 1.0) ** 2
+            bad = tot <= 0
+            value = np.exp(mean)
+            rel = np.sqrt(noise2 + interp2)
+            value[bad], rel[bad] = np.nan, np.nan
+            res[qn] = value
+            res[qn + "_se"] = value * rel
+            if detail:
+                res[qn + "_se_noise"] = np.where(bad, np.nan, np.sqrt(noise2))
+                res[qn + "_se_interp"] = np.where(bad, np.nan, np.sqrt(interp2))
+        return res

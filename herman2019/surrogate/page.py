@@ -1,0 +1,218 @@
+"""docs/surrogate.md: the surrogate's API, how it is built, and its error on the
+validation set, made by ``herman2019 surrogate --validate --docs docs`` from the shipped
+files (a test holds the page to the command)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from herman2019.surrogate.grid import AXES, DISPERSIONS
+from herman2019.surrogate.model import QUANTITIES, Surrogate
+from herman2019.surrogate.validate import brier, by_region, error_table, reliability
+
+__all__ = ["make_page", "COMMAND", "TARGET_RMS", "TARGET_MEDIAN"]
+
+COMMAND = "herman2019 surrogate --validate --docs docs"
+#: Issue 48's targets: RMS z per quantity within this, alpha_all's median relative error
+#: at most this.
+TARGET_RMS, TARGET_MEDIAN = (0.8, 1.3), 0.05
+LABEL = {"alpha_all": "alpha_all [1/m]", "alpha_edge": "alpha_edge [1/m]",
+         "a_end_rel": "a_end/a0", "W_c": "W_c [m]"}
+
+
+def _fmt(v, nd=2) -> str:
+    return "–" if v is None or (isinstance(v, float) and not np.isfinite(v)) else f"{v:.{nd}f}"
+
+
+def _example(sur: Surrogate) -> str:
+    p = sur.predict("ml", L_x=1.0, T=1.3, a0=0.02, C_sd=0.05, eps=0.5, d_f=0.01)
+    r = p.iloc[0]
+    return ", ".join(f"{q} {r[q]:.4g} ± {r[q + '_se']:.2g}" for q in QUANTITIES) \
+        + f", p_zone {r['p_zone']:.3f}"
+
+
+def make_page(sur: Surrogate, cmp: pd.DataFrame, docs: Path | None, source: str) -> str:
+    """The page's text; with ``docs``, written to DOCS/surrogate.md with its figure in
+    DOCS/surrogate/validation.png."""
+    err = error_table(cmp)
+    meta = sur.meta
+    base = float(np.nanmean(np.concatenate([f[:, sur.column("zone")]
+                                            for f in sur.fields.values()])))
+    br = brier(cmp, base)
+    rel = reliability(cmp)
+    lines = [
+        "# The surrogate: the released grid as a function",
+        "",
+        f"Made by `{COMMAND}` from `{source}` (`surrogate.npz`, built by `herman2019"
+        f" surrogate --build --jobs 2` from `{meta.get('source')}`: model version"
+        f" {', '.join(meta.get('model_version', []))}, {meta.get('points'):,} nodes, their"
+        f" {meta.get('standard_errors')} standard errors; commit"
+        f" {str(meta.get('commit'))[:12] or 'unknown'}). **Stochastic**: the nodes and the"
+        " validation points are 8-replica ensembles; another seed or CPU gives other"
+        " values within their error bars.",
+        "",
+        "The paper's grid (3 x 7 x 4 x 6 x 4 x 4 x 3 points) is a full tensor product, so"
+        " it can be read as a function of six continuous parameters per dispersion"
+        " relation. The surrogate gives, anywhere inside the grid's box, `alpha_all`,"
+        " `alpha_edge` (1/m), `a_end_rel` (a/a0 at the far end), `p_zone` (the"
+        " probability that a compact zone forms) and `W_c` (its width where one forms),"
+        " each with a standard error that holds between the nodes as well as at them"
+        " (checked below on points it was not fitted on). Outside the box it refuses.",
+        "",
+        "## Using it",
+        "",
+        "```python",
+        "from herman2019.surrogate import surrogate",
+        "df = surrogate(L_x=1.0, T=1.3, a0=0.02, C_sd=0.05, eps=0.5, d_f=0.01, dispersion=\"ml\")",
+        "# arrays broadcast; one row per point: the parameters, each quantity and its _se",
+        "import numpy as np",
+        "df = surrogate(L_x=1.0, T=np.linspace(1.1, 2.0, 50), a0=0.02, C_sd=0.05, eps=0.5,",
+        "               d_f=0.01, dispersion=\"ep\")",
+        "df.set_index(\"T\").to_xarray()          # an xarray Dataset over T",
+        "```",
+        "",
+        "    herman2019 surrogate --L_x 1.0 --T 1.3 --a0 0.02 --C_sd 0.05 --eps 0.5"
+        " --d_f 0.01 --dispersion ml",
+        "    herman2019 surrogate --csv points.csv --out predictions.csv",
+        "",
+        f"At that point: {_example(sur)}. `detail=True` (`--detail`) adds each SE's two"
+        " parts, relative: `_se_noise` (the nodes' stochastic errors carried through) and"
+        " `_se_interp` (the interpolation error). A point outside the box raises"
+        " `herman2019.surrogate.OutsideBox` (a `ValueError`; the command exits 2) naming"
+        " the parameter and the box's range. The box: "
+        + "; ".join(f"{a} {sur.levels[a][0]:g}-{sur.levels[a][-1]:g}" for a in AXES)
+        + f"; dispersion {', '.join(DISPERSIONS)}. Its speed: `python"
+        " benchmarks/bench_surrogate.py`.",
+        "",
+        "## How it is built",
+        "",
+        "- **Values**: multilinear interpolation between the grid's nodes, in log(value),"
+        " with L_x, a0, C_sd and d_f on log axes (T and eps linear); at a node it returns"
+        " the node. `p_zone` is the interpolant of the nodes' 0/1 outcome; `W_c` is"
+        " interpolated over the corners with a zone only (NaN where no corner has one).",
+        "- **Noise**: each node's calibrated standard error (docs/convergence.md,"
+        " \"Calibrated standard errors\") carried through the weights,"
+        " sqrt(sum w_i^2 se_i^2).",
+        "- **Interpolation error**: per axis, the curvature of log(value) along it from the"
+        " leave-one-out residual at every interior node (its noise taken out), as the"
+        " error (y''/2) t(1-t) h^2 a linear interpolant makes inside a cell of width h;"
+        " summed in quadrature over the axes, times one scale per quantity fitted so that"
+        f" the RMS z of a *calibration set* ({meta.get('calibration', {}).get('points', '?')}"
+        " off-grid points run for the purpose, draw seed"
+        f" {meta.get('calibration', {}).get('draw_seed', '?')}) is 1: "
+        + ", ".join(f"{q} {sur.scale.get(q, np.nan):.2f}" for q in QUANTITIES) + ".",
+        "- **The points off the grid** (calibration and validation sets): uniform in the"
+        " box in each axis's coordinate (log for L_x, a0, C_sd, d_f), T on the model's"
+        " 4 ms lattice and L_x on its 1 cm one, the dispersion relation uniform, each run"
+        " at the released defaults and seed 0 as the grid's points were"
+        " (`herman2019.surrogate.validate`).",
+        "",
+        f"## Its error on the validation set ({len(cmp)} points, never fitted on)",
+        "",
+        "z = (log q_surrogate - log q_model) / sqrt(se_surrogate^2 + se_model^2), in log"
+        " (so relative), with the model point's calibrated SE; W_c where the model point"
+        " has a compact zone and the surrogate's cell one at a corner. Target (issue 48):"
+        f" RMS z in [{TARGET_RMS[0]}, {TARGET_RMS[1]}] for each quantity, median relative"
+        f" error of alpha_all at most {TARGET_MEDIAN:.0%}.",
+        "",
+        "| quantity | points | RMS z [95 % CI] | median \\|rel. error\\| | 90th pct |"
+        " median stated rel. SE | \\|z\\| > 4 | RMS z target |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for r in err.itertuples():
+        ok = TARGET_RMS[0] <= r.rms_z <= TARGET_RMS[1]
+        lines.append(f"| {r.quantity} | {r.points} | {_fmt(r.rms_z)} [{_fmt(r.rms_z_lo)},"
+                     f" {_fmt(r.rms_z_hi)}] | {100 * r.median_rel_error:.1f} % |"
+                     f" {100 * r.p90_rel_error:.1f} % | {100 * r.median_rel_se:.1f} % |"
+                     f" {r.beyond_4} | {'met' if ok else 'NOT met'} |")
+    med = float(err.loc[err["quantity"] == "alpha_all", "median_rel_error"].iloc[0])
+    lines += [
+        "",
+        f"alpha_all's median relative error: {100 * med:.1f} %"
+        f" ({'met' if med <= TARGET_MEDIAN else 'NOT met'}: target"
+        f" {100 * TARGET_MEDIAN:.0f} %).",
+        "",
+        "**Where in the box it is worst** (alpha_all; each axis's range cut in three equal"
+        " parts of its coordinate):",
+        "",
+        "| region | points | RMS z | median \\|rel. error\\| |",
+        "|---|---|---|---|",
+    ]
+    reg = by_region(cmp, "alpha_all")
+    for r in reg.itertuples():
+        lines.append(f"| {r.region} | {r.points} | {_fmt(r.rms_z)} |"
+                     f" {100 * r.median_rel_error:.1f} % |")
+    worst = reg.loc[reg["median_rel_error"].idxmax()]
+    lines += [
+        "",
+        f"Worst: {worst['region']} (median {100 * worst['median_rel_error']:.1f} %).",
+        "",
+        "**The compact zone's probability** against the validation points' outcomes"
+        f" (Brier score {br['brier']:.3f}; a constant, the grid's share {base:.3f}:"
+        f" {br['brier_constant']:.3f}; skill {br['skill']:.2f}):",
+        "",
+        "| p_zone | points | mean p_zone | observed share |",
+        "|---|---|---|---|",
+    ]
+    for r in rel.itertuples():
+        lines.append(f"| {r.p_zone} | {r.points} | {_fmt(r.mean_p, 3)} |"
+                     + (f" {r.observed:.3f} ± {r.observed_se:.3f} |" if r.points else " – |"))
+    lines += [
+        "",
+        "![The surrogate against the model at the validation points](surrogate/validation.png)",
+        "",
+        "*The surrogate against the model at the validation points (stochastic; error bars"
+        " ±1 SE, the surrogate's horizontal, the model's vertical), and p_zone's"
+        " reliability. Made by the command above.*",
+        "",
+        "## What it is not",
+        "",
+        "- A statement about the paper's model between the nodes beyond what the grid's"
+        " nodes and its validation points bear out: the interpolation error's scale is"
+        " fitted on off-grid points, so its error bars are checked in the bulk, not at"
+        " every corner of the box (the regions above show where they hold less well).",
+        "- A model of other defaults: every node and every off-grid point runs at the"
+        " released defaults (L_sheet 42 m, 8 replicas...).",
+    ]
+    text = "\n".join(lines)
+    if docs is not None:
+        docs = Path(docs)
+        (docs / "surrogate").mkdir(parents=True, exist_ok=True)
+        _figure(cmp, docs / "surrogate" / "validation.png")
+        (docs / "surrogate.md").write_text(text + "\n")
+    return text
+
+
+def _figure(cmp: pd.DataFrame, path: Path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(1, 5, figsize=(19, 3.9))
+    for ax, q in zip(axes, QUANTITIES, strict=False):
+        z = cmp[q + "_z"].to_numpy(float)
+        m = np.isfinite(z)
+        x, y = cmp[q + "_sur"].to_numpy(float)[m], cmp[q].to_numpy(float)[m]
+        ax.errorbar(x, y, xerr=cmp[q + "_sur_se"].to_numpy(float)[m],
+                    yerr=cmp[q + "_se"].to_numpy(float)[m], fmt="o", ms=3, lw=0.6,
+                    alpha=0.7)
+        lo, hi = np.nanmin([x.min(), y.min()]), np.nanmax([x.max(), y.max()])
+        ax.plot([lo, hi], [lo, hi], "k-", lw=0.8)
+        if q.startswith("alpha"):
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+        ax.set_xlabel(f"surrogate: {LABEL[q]}")
+        ax.set_ylabel(f"model: {LABEL[q]}")
+        ax.set_title(f"{q} ({m.sum()} points)")
+    ax = axes[-1]
+    rel = reliability(cmp)
+    ok = rel["points"] > 0
+    ax.errorbar(rel["mean_p"][ok], rel["observed"][ok], yerr=rel["observed_se"][ok], fmt="o")
+    ax.plot([0, 1], [0, 1], "k-", lw=0.8)
+    ax.set_xlabel("p_zone (surrogate)")
+    ax.set_ylabel("share with a compact zone (model)")
+    ax.set_title("p_zone reliability")
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)

@@ -1,0 +1,210 @@
+"""Off-grid points run with the model, to fit the surrogate's interpolation-error scale
+(the *calibration* set) and to check it (the *validation* set, never fitted on).
+
+**The points** (:func:`draw_points`): uniform inside the grid's box in each axis's
+interpolation coordinate (log for L_x, a0, C_sd, d_f: the coordinate the grid's levels
+and the surrogate use, so every cell of the grid is drawn about equally often), rounded
+where the model needs it (T to 4 ms: T/dt an integer multiple of ``drag_every`` = 4
+steps; L_x to 1 cm, a multiple of dx) and elsewhere to 6 significant digits, the
+dispersion relation uniform over the three. Each is run at the model's defaults (the released ones: ``configs/
+herman2019.toml``'s ``[base]``) and ``seed`` 0, as the grid's points were, by
+:func:`herman2019.calibration.run_sample` (resumable; one row per point).
+
+**The statistic** (:func:`compare`): per quantity, in log (so relative),
+z = (log q_surrogate - log q_model) / sqrt(se_surrogate^2 + se_model^2), with the
+model point's calibrated SE (the factor of its nearest calibrated levels); W_c where the
+model point has a compact zone and the surrogate's cell has one at a corner.
+:func:`fit_scale` sets each quantity's interpolation-error scale c so that the RMS z of
+the calibration set is 1. :func:`error_table` gives, on the validation set, RMS z, the
+median and 90th percentile of |q_surrogate / q_model - 1| and the points beyond |z| 4;
+:func:`reliability` and :func:`brier` check p_zone against the points' outcomes.
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+from scipy.optimize import brentq
+
+from herman2019.surrogate.grid import AXES, DISPERSIONS, coordinate
+from herman2019.surrogate.model import QUANTITIES, Surrogate
+
+__all__ = ["SETS", "draw_points", "model_table", "compare", "fit_scale", "error_table",
+           "reliability", "brier", "by_region"]
+
+#: The two sets: name -> (points, draw seed). Their draw seeds differ, so no point of one
+#: is in the other.
+SETS = {"calibration": (300, 4801), "validation": (300, 4802)}
+#: The lattices the model's T and L_x live on: T/dt a multiple of drag_every (0.001 s x
+#: 4), L_x/dx an integer (dx 0.01 m).
+T_STEP, L_STEP = 0.004, 0.01
+
+
+def draw_points(levels: Mapping[str, np.ndarray], n: int, seed: int) -> pd.DataFrame:
+    """``n`` points uniform in the box (module docstring), with ``group`` = "offgrid"."""
+    rng = np.random.default_rng(seed)
+    cols = {}
+    for a in AXES:
+        lo, hi = coordinate(a, [levels[a][0], levels[a][-1]])
+        u = rng.uniform(lo, hi, n)
+        cols[a] = np.exp(u) if a in ("L_x", "a0", "C_sd", "d_f") else u
+    cols["T"] = np.round(np.round(cols["T"] / T_STEP) * T_STEP, 3)
+    cols["L_x"] = np.round(np.round(cols["L_x"] / L_STEP) * L_STEP, 2)
+    for a in ("a0", "C_sd", "eps", "d_f"):      # 6 significant digits: a config
+        cols[a] = np.array([float(f"{v:.6g}") for v in cols[a]])   # a reader can retype
+    cols["dispersion"] = rng.choice(np.array(DISPERSIONS), n)
+    out = pd.DataFrame(cols)[[*AXES, "dispersion"]]
+    out["group"] = "offgrid"
+    return out
+
+
+def model_table(runs: pd.DataFrame) -> pd.DataFrame:
+    """The runs' rows with ``a_end_rel`` and every quantity's calibrated SE ``q_se`` (the
+    factor of the nearest calibrated level of L_x, C_sd, d_f: off the grid's levels)."""
+    from herman2019.factors import calibrated_factors, factors_of
+    fac = calibrated_factors()
+    out = runs.copy()
+    out["a_end_rel"] = out["a_end"] / out["a0"]
+    out["a_end_rel_stderr"] = out["a_end_stderr"] / out["a0"]
+    snap = out.copy()
+    for feat in ("L_x", "C_sd", "d_f"):
+        lv = np.array(sorted({float(x) for x in fac.loc[fac["term"] == feat, "level"]}))
+        x = np.log(out[feat].to_numpy(float))
+        snap[feat] = lv[np.argmin(np.abs(x[:, None] - np.log(lv)[None, :]), axis=1)]
+    for q in QUANTITIES:
+        base = "a_end" if q == "a_end_rel" else q
+        f = factors_of(snap.assign(status=out["status"]), fac, base)
+        out[q + "_se"] = out[q + "_stderr"].to_numpy(float) * np.nan_to_num(f, nan=1.0)
+    out["zone"] = (out["layout"].astype(str) != "none").astype(float)
+    return out
+
+
+def compare(sur: Surrogate, model: pd.DataFrame) -> pd.DataFrame:
+    """The surrogate beside the model at the model table's points: per quantity the
+    surrogate's value and SE (``q_sur``, ``q_sur_se``; its parts ``q_se_noise``,
+    ``q_se_interp``), the model's (``q``, ``q_se``), and ``q_z`` (module docstring)."""
+    pred = sur.predict(model["dispersion"].astype(str).to_numpy(), detail=True,
+                       **{a: model[a].to_numpy(float) for a in AXES})
+    out = model.reset_index(drop=True).copy()
+    out["p_zone"] = pred["p_zone"].to_numpy()
+    for q in QUANTITIES:
+        out[q + "_sur"] = pred[q].to_numpy()
+        out[q + "_sur_se"] = pred[q + "_se"].to_numpy()
+        out[q + "_se_noise"] = pred[q + "_se_noise"].to_numpy()
+        out[q + "_se_interp"] = pred[q + "_se_interp"].to_numpy()
+        out[q + "_z"] = _z(out, q, 1.0)
+    return out
+
+
+def _z(cmp: pd.DataFrame, q: str, scale_ratio: float) -> np.ndarray:
+    """z of ``q`` with the interpolation part of the surrogate's SE times ``scale_ratio``."""
+    x, y = cmp[q + "_sur"].to_numpy(float), cmp[q].to_numpy(float)
+    noise, interp = cmp[q + "_se_noise"].to_numpy(float), cmp[q + "_se_interp"].to_numpy(float)
+    rel_model = cmp[q + "_se"].to_numpy(float) / y
+    with np.errstate(invalid="ignore", divide="ignore"):
+        z = (np.log(x) - np.log(y)) / np.sqrt(noise**2 + (scale_ratio * interp)**2
+                                                + rel_model**2)
+    ok = np.isfinite(z) & (y > 0)
+    if q == "W_c":
+        ok &= cmp["zone"].to_numpy() > 0
+    return np.where(ok, z, np.nan)
+
+
+def fit_scale(sur: Surrogate, calibration: pd.DataFrame) -> dict[str, float]:
+    """Each quantity's interpolation-error scale c (times the current one) that makes the
+    calibration set's RMS z 1; 0 when the nodes' noise alone already gives RMS z <= 1.
+    Sets ``sur.scale`` and returns it."""
+    cmp = compare(sur, calibration)
+    for q in QUANTITIES:
+        def excess(r, q=q):
+            z = _z(cmp, q, r)
+            return float(np.nanmean(z**2)) - 1.0
+        if excess(0.0) <= 0:
+            ratio = 0.0
+        else:
+            hi = 1.0
+            while excess(hi) > 0 and hi < 1e6:
+                hi *= 2
+            ratio = brentq(excess, 0.0, hi, xtol=1e-6)
+        sur.scale[q] = float(sur.scale.get(q, 1.0) * ratio)
+    return dict(sur.scale)
+
+
+def error_table(cmp: pd.DataFrame, quantities: Sequence[str] = QUANTITIES) -> pd.DataFrame:
+    """Per quantity on ``cmp`` (:func:`compare`): points, RMS z with its 95 % interval (as
+    if z were normal), median and 90th percentile of the relative error, its median
+    stated SE, and points beyond |z| 4."""
+    from scipy.stats import chi2
+    rows = []
+    for q in quantities:
+        z = cmp[q + "_z"].to_numpy(float)
+        ok = np.isfinite(z)
+        n = int(ok.sum())
+        rel = np.abs(cmp[q + "_sur"].to_numpy(float)[ok] / cmp[q].to_numpy(float)[ok] - 1)
+        se_rel = cmp[q + "_sur_se"].to_numpy(float)[ok] / cmp[q + "_sur"].to_numpy(float)[ok]
+        ss = float(np.sum(z[ok] ** 2))
+        rows.append({"quantity": q, "points": n,
+                     "rms_z": np.sqrt(ss / n) if n else np.nan,
+                     "rms_z_lo": np.sqrt(ss / chi2.ppf(0.975, n)) if n else np.nan,
+                     "rms_z_hi": np.sqrt(ss / chi2.ppf(0.025, n)) if n else np.nan,
+                     "median_rel_error": float(np.median(rel)) if n else np.nan,
+                     "p90_rel_error": float(np.quantile(rel, 0.9)) if n else np.nan,
+                     "median_rel_se": float(np.median(se_rel)) if n else np.nan,
+                     "beyond_4": int(np.sum(np.abs(z[ok]) > 4))})
+    return pd.DataFrame(rows)
+
+
+def by_region(cmp: pd.DataFrame, q: str = "alpha_all", bins: int = 3) -> pd.DataFrame:
+    """Where in the box the surrogate is worst: per axis, the validation points split into
+    ``bins`` equal parts of the axis's coordinate, and per dispersion relation; in each,
+    points, RMS z and median relative error of ``q``."""
+    rows = []
+    z = cmp[q + "_z"].to_numpy(float)
+    rel = np.abs(cmp[q + "_sur"].to_numpy(float) / cmp[q].to_numpy(float) - 1)
+    ok = np.isfinite(z)
+    for a in AXES:
+        u = coordinate(a, cmp[a].to_numpy(float))
+        edges = np.linspace(u.min(), u.max(), bins + 1)
+        part = np.clip(np.searchsorted(edges, u, side="right") - 1, 0, bins - 1)
+        for b in range(bins):
+            lo, hi = edges[b], edges[b + 1]
+            if a in ("L_x", "a0", "C_sd", "d_f"):
+                lo, hi = np.exp(lo), np.exp(hi)
+            m = ok & (part == b)
+            rows.append({"region": f"{a} {lo:.4g}-{hi:.4g}", "points": int(m.sum()),
+                         "rms_z": float(np.sqrt(np.mean(z[m] ** 2))) if m.any() else np.nan,
+                         "median_rel_error": float(np.median(rel[m])) if m.any() else np.nan})
+    for d in DISPERSIONS:
+        m = ok & (cmp["dispersion"].astype(str).to_numpy() == d)
+        rows.append({"region": f"dispersion {d}", "points": int(m.sum()),
+                     "rms_z": float(np.sqrt(np.mean(z[m] ** 2))) if m.any() else np.nan,
+                     "median_rel_error": float(np.median(rel[m])) if m.any() else np.nan})
+    return pd.DataFrame(rows)
+
+
+def reliability(cmp: pd.DataFrame, edges: Sequence[float] = (0, 1e-9, 0.1, 0.3, 0.5, 0.7,
+                                                              0.9, 1 - 1e-9, 1.0)
+                ) -> pd.DataFrame:
+    """p_zone against the outcome: per bin of p_zone, points, mean p_zone, the share of
+    points with a compact zone and its binomial SE."""
+    p, o = cmp["p_zone"].to_numpy(float), cmp["zone"].to_numpy(float)
+    rows = []
+    for lo, hi in zip(edges[:-1], edges[1:], strict=True):
+        m = (p >= lo) & ((p < hi) if hi < 1.0 else (p <= hi))
+        n = int(m.sum())
+        share = float(o[m].mean()) if n else np.nan
+        rows.append({"p_zone": f"[{lo:.2g}, {hi:.2g}" + ("]" if hi >= 1.0 else ")"),
+                     "points": n, "mean_p": float(p[m].mean()) if n else np.nan,
+                     "observed": share,
+                     "observed_se": float(np.sqrt(share * (1 - share) / n)) if n else np.nan})
+    return pd.DataFrame(rows)
+
+
+def brier(cmp: pd.DataFrame, base_rate: float) -> dict[str, float]:
+    """Brier score of p_zone, of the constant ``base_rate`` (the grid's share of points
+    with a compact zone), and the skill 1 - ratio."""
+    p, o = cmp["p_zone"].to_numpy(float), cmp["zone"].to_numpy(float)
+    b = float(np.mean((p - o) ** 2))
+    b0 = float(np.mean((base_rate - o) ** 2))
+    return {"brier": b, "brier_constant": b0, "skill": 1 - b / b0 if b0 > 0 else np.nan}

@@ -1,0 +1,216 @@
+"""The surrogate (issue 48) on synthetic grids whose answer is known: multilinear weights
+against scipy's interpolator, the nodes returned as they are, a log-linear function
+exact between them, the interpolation error of a quadratic predicted exactly, W_c over
+the corners with a zone, the box refused, the scale fit, the command's statuses; and the
+shipped surrogate against the shipped table at every node."""
+from __future__ import annotations
+
+import itertools
+import json
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy.interpolate import RegularGridInterpolator
+
+from herman2019.cli import main
+from herman2019.surrogate import AXES, OutsideBox, Surrogate
+from herman2019.surrogate.build import build, loo_kappa2
+from herman2019.surrogate.grid import cell_weights, coordinate
+from herman2019.surrogate.validate import brier, error_table, fit_scale, reliability
+
+LEVELS = {"L_x": [0.5, 1.5, 3.0], "T": [1.1, 1.4, 2.0], "a0": [0.0125, 0.02, 0.025],
+          "C_sd": [0.005, 0.05, 0.2], "eps": [0.2, 0.5, 0.8], "d_f": [0.005, 0.02, 0.05]}
+
+
+def _u(a, v):
+    return coordinate(a, v)
+
+
+def synthetic(f, se_rel=0.0, zone=None, dispersions=("ml",)):
+    """A full grid table over LEVELS with every quantity = f(coordinates) (log-space
+    value: q = exp(f)), relative SE ``se_rel``, compact zone where ``zone`` says."""
+    rows = []
+    for d in dispersions:
+        for combo in itertools.product(*(LEVELS[a] for a in AXES)):
+            p = dict(zip(AXES, combo, strict=True))
+            u = {a: float(_u(a, p[a])) for a in AXES}
+            v = math.exp(f(u))
+            z = zone(p) if zone else True
+            row = {**p, "dispersion": d, "status": "converged_noisy",
+                   "compact_zone": "edge" if z else "none"}
+            for q in ("alpha_all", "alpha_edge", "a_end_rel"):
+                row[q], row[q + "_stderr"] = v, se_rel * v
+            row["W_c"] = 20 * v if z else np.nan
+            row["W_c_stderr"] = se_rel * 20 * v if z else np.nan
+            rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def _query(n, seed=0):
+    rng = np.random.default_rng(seed)
+    return {a: np.exp(rng.uniform(*np.log([LEVELS[a][0], LEVELS[a][-1]]), n))
+            if a in ("L_x", "a0", "C_sd", "d_f")
+            else rng.uniform(LEVELS[a][0], LEVELS[a][-1], n) for a in AXES}
+
+
+def test_the_weights_are_scipy_s_multilinear_interpolation():
+    levels = {a: np.asarray(v, float) for a, v in LEVELS.items()}
+    rng = np.random.default_rng(1)
+    values = rng.normal(size=[3] * 6)
+    q = _query(500)
+    idx, w, t, h = cell_weights(levels, q)
+    ours = np.sum(w * values.ravel()[idx], axis=1)
+    ref = RegularGridInterpolator([_u(a, levels[a]) for a in AXES], values)(
+        np.stack([_u(a, q[a]) for a in AXES], axis=1))
+    np.testing.assert_allclose(ours, ref, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(w.sum(axis=1), 1.0, rtol=1e-12)
+    assert ((t >= 0) & (t <= 1)).all() and (h > 0).all()
+
+
+def test_at_a_node_the_surrogate_is_the_node():
+    df = synthetic(lambda u: 0.3 * u["T"] ** 2 - u["C_sd"] * u["d_f"], se_rel=0.02)
+    sur = build(df)
+    p = sur.predict("ml", **{a: df[a].to_numpy() for a in AXES})
+    for q in ("alpha_all", "a_end_rel", "W_c"):
+        np.testing.assert_allclose(p[q], df[q], rtol=1e-13)
+        np.testing.assert_allclose(p[q + "_se"], df[q + "_stderr"], rtol=1e-12)
+    assert (p["p_zone"] == 1).all()
+
+
+def test_a_log_linear_function_is_exact_between_the_nodes_with_no_interpolation_error():
+    def f(u):
+        return 0.5 * u["L_x"] - 1.2 * u["T"] + 0.3 * u["a0"] + 0.1 * u["C_sd"] - u["eps"]
+    sur = build(synthetic(f))
+    q = _query(300)
+    p = sur.predict("ml", detail=True, **q)
+    want = np.exp([f({a: float(_u(a, q[a][i])) for a in AXES}) for i in range(300)])
+    np.testing.assert_allclose(p["alpha_all"], want, rtol=1e-12)
+    assert np.nanmax(p["alpha_all_se_interp"]) < 1e-12
+    assert np.nanmax(p["alpha_all_se"]) < 1e-12
+
+
+def test_the_interpolation_error_of_a_quadratic_is_predicted_exactly():
+    """log q = c T^2: a linear interpolant's error inside a cell of width h at position t
+    is c t(1-t) h^2, which the leave-one-out curvature gives with scale 1 (no noise)."""
+    c = 0.8
+    sur = build(synthetic(lambda u: c * u["T"] ** 2))
+    q = _query(200, seed=3)
+    p = sur.predict("ml", detail=True, **q)
+    true = np.abs(np.log(p["alpha_all"]) - c * q["T"] ** 2)
+    np.testing.assert_allclose(p["alpha_all_se_interp"], true, rtol=1e-9, atol=1e-12)
+    assert np.median(true) > 1e-3          # the case is not trivial
+
+
+def test_the_loo_curvature_takes_out_the_nodes_noise():
+    """Pure noise of known SE: the noise-corrected curvature is zero in most places."""
+    rng = np.random.default_rng(5)
+    y = rng.normal(0, 0.01, (40, 7))
+    k2 = loo_kappa2(y, np.full_like(y, 0.01), np.linspace(0, 1, 7), axis=1)
+    raw = loo_kappa2(y, np.zeros_like(y), np.linspace(0, 1, 7), axis=1)
+    assert np.mean(k2 == 0) > 0.5 and np.mean(k2) < 0.5 * np.mean(raw)
+
+
+def test_w_c_is_read_over_the_corners_with_a_zone_and_p_zone_is_their_weight():
+    df = synthetic(lambda u: 0.0, zone=lambda p: p["eps"] < 0.6)
+    sur = build(df)
+    p = sur.predict("ml", L_x=1.0, T=1.3, a0=0.02, C_sd=0.05, eps=[0.3, 0.65, 0.8],
+                    d_f=0.01)
+    t = (0.65 - 0.5) / (0.8 - 0.5)
+    np.testing.assert_allclose(p["p_zone"], [1.0, 1 - t, 0.0], atol=1e-12)
+    np.testing.assert_allclose(p["W_c"][:2], [20.0, 20.0], rtol=1e-12)   # exp(0) * 20
+    assert np.isnan(p["W_c"][2]) and np.isnan(p["W_c_se"][2])
+
+
+def test_outside_the_box_it_refuses_naming_the_parameter():
+    sur = build(synthetic(lambda u: 0.0))
+    ok = dict(L_x=1.0, T=1.3, a0=0.02, C_sd=0.05, eps=0.5, d_f=0.01)
+    with pytest.raises(OutsideBox, match=r"d_f = 0.06 is outside the grid's box \[0.005, 0.05\]"):
+        sur.predict("ml", **(ok | {"d_f": [0.01, 0.06]}))
+    with pytest.raises(OutsideBox, match="T = nan"):
+        sur.predict("ml", **(ok | {"T": np.nan}))
+    with pytest.raises(OutsideBox, match="dispersion 'ep'"):
+        sur.predict("ep", **ok)
+    with pytest.raises(TypeError, match="missing eps"):
+        sur.predict("ml", **{k: v for k, v in ok.items() if k != "eps"})
+    assert len(sur.predict("ml", **(ok | {"L_x": 3.0, "d_f": 0.005}))) == 1   # the ends
+
+
+def test_an_incomplete_grid_is_refused():
+    df = synthetic(lambda u: 0.0)
+    with pytest.raises(ValueError, match="the whole tensor product"):
+        build(df.iloc[1:])
+
+
+def test_save_and_load_give_the_same_surrogate(tmp_path):
+    sur = build(synthetic(lambda u: 0.2 * u["eps"] ** 2, se_rel=0.01))
+    sur.scale["alpha_all"] = 1.7
+    sur.save(tmp_path / "s.npz")
+    back = Surrogate.load(tmp_path / "s.npz")
+    q = _query(50)
+    pd.testing.assert_frame_equal(sur.predict("ml", **q), back.predict("ml", **q))
+    assert back.scale["alpha_all"] == 1.7
+
+
+def _model_at(q, f, noise, seed):
+    """Model 'runs' at points q: exp(f) with relative noise ``noise`` and that SE."""
+    rng = np.random.default_rng(seed)
+    n = len(q["T"])
+    v = np.exp([f({a: float(_u(a, q[a][i])) for a in AXES}) for i in range(n)])
+    v = v * np.exp(rng.normal(0, noise, n))
+    out = pd.DataFrame(q)
+    out["dispersion"] = "ml"
+    out["zone"] = 1.0
+    for qn in ("alpha_all", "alpha_edge", "a_end_rel"):
+        out[qn], out[qn + "_se"] = v, noise * v
+    out["W_c"], out["W_c_se"] = 20 * v, noise * 20 * v
+    return out
+
+
+def test_the_scale_fit_makes_the_calibration_set_honest_and_holds_on_another_set():
+    """A curved function with noisy nodes: after the fit the calibration set's RMS z is 1
+    and an independent validation set's is near 1 (the error model has the right shape)."""
+    def f(u):
+        return 0.6 * u["T"] ** 2 + 0.3 * u["eps"] * u["C_sd"]
+    sur = build(synthetic(f, se_rel=0.01))
+    cal = _model_at(_query(400, 11), f, 0.01, 1)
+    fit_scale(sur, cal)
+    from herman2019.surrogate.validate import compare
+    assert error_table(compare(sur, cal))["rms_z"].iloc[0] == pytest.approx(1.0, abs=1e-4)
+    val = error_table(compare(sur, _model_at(_query(400, 12), f, 0.01, 2)))
+    assert 0.8 <= val["rms_z"].iloc[0] <= 1.25
+
+
+def test_reliability_and_brier_score_a_perfect_and_a_constant_forecast():
+    cmp = pd.DataFrame({"p_zone": [0.0, 0.0, 1.0, 1.0, 0.5, 0.5],
+                        "zone": [0.0, 0.0, 1.0, 1.0, 1.0, 0.0]})
+    b = brier(cmp, 0.5)
+    assert b["brier"] == pytest.approx(0.5 / 6) and b["brier_constant"] == 0.25
+    rel = reliability(cmp).set_index("p_zone")
+    assert rel.loc["[0, 1e-09)", "observed"] == 0.0
+    assert rel.loc["[1, 1]", "observed"] == 1.0
+    assert rel.loc["[0.5, 0.7)", "observed"] == 0.5
+
+
+def test_the_command_predicts_refuses_and_names_what_is_wrong(tmp_path, capsys):
+    sur = build(synthetic(lambda u: 0.1 * u["T"]))
+    sur.save(tmp_path / "s.npz")
+    base = ["surrogate", "--file", str(tmp_path / "s.npz"), "--L_x", "1", "--T", "1.3", "1.5",
+            "--a0", "0.02", "--C_sd", "0.05", "--eps", "0.5", "--dispersion", "ml"]
+    assert main(base + ["--d_f", "0.01"]) == 0
+    out = capsys.readouterr().out
+    assert out.splitlines()[0].split()[:8] == [*AXES, "dispersion", "p_zone"]
+    assert len(out.splitlines()) == 3
+    assert main(base + ["--d_f", "0.5"]) == 2
+    assert "d_f = 0.5 is outside the grid's box" in capsys.readouterr().err
+    assert main(base) == 2
+    assert "--d_f missing" in capsys.readouterr().err
+    pd.DataFrame({a: [LEVELS[a][1]] for a in AXES} | {"dispersion": ["ml"]}).to_csv(
+        tmp_path / "p.csv", index=False)
+    assert main(["surrogate", "--file", str(tmp_path / "s.npz"), "--csv",
+                 str(tmp_path / "p.csv"), "--out", str(tmp_path / "o.csv")]) == 0
+    assert len(pd.read_csv(tmp_path / "o.csv")) == 1
+    assert main(["surrogate", "--file", str(tmp_path / "none.npz"), "--csv",
+                 str(tmp_path / "p.csv")]) == 3
+    assert "no surrogate file" in capsys.readouterr().err
