@@ -32,6 +32,9 @@ __all__ = ["FIELD_NAMES", "build", "loo_kappa2", "se_columns"]
 #: The node fields, in the arrays' column order.
 FIELD_NAMES = ("zone",) + tuple(f"{p}_{q}" for q in QUANTITIES for p in ("y", "s")) + \
     tuple(f"k_{q}_{a}" for q in QUANTITIES for a in AXES)
+#: Along L_x (three levels): the quadratic through them (2) or the line through the cell's
+#: two (1), per quantity; chosen by measured error (``benchmarks/surrogate_methods.py``).
+LX_ORDER = {"alpha_all": 2, "alpha_edge": 2, "a_end_rel": 2, "W_c": 1}
 #: Statuses with results.
 DONE = ("converged", "converged_noisy", "not_converged")
 
@@ -72,7 +75,8 @@ def loo_kappa2(y: np.ndarray, s: np.ndarray, u: np.ndarray, axis: int) -> np.nda
     return np.moveaxis(out, -1, axis)
 
 
-def build(table: pd.DataFrame, source: str = "", commit: str = "") -> Surrogate:
+def build(table: pd.DataFrame, source: str = "", commit: str = "",
+          lx_order: dict[str, int] | None = None) -> Surrogate:
     """The surrogate of ``table`` (``sweep.load`` of a full grid), interpolation-error
     scale 1 (fit it with :func:`.validate.fit_scale`). ValueError when a dispersion
     relation's rows are not the full tensor product of the axes."""
@@ -109,5 +113,6 @@ def build(table: pd.DataFrame, source: str = "", commit: str = "") -> Surrogate:
                 cols[f"k_{q}_{a}"] = loo_kappa2(Y, S, coordinate(a, levels[a]), k).ravel()
         fields[d] = np.stack([cols[name] for name in FIELD_NAMES], axis=1)
     meta = {"source": source, "commit": commit, "model_version": versions,
-            "standard_errors": which, "points": int(sum(len(f) for f in fields.values()))}
+            "standard_errors": which, "points": int(sum(len(f) for f in fields.values())),
+            "lx_order": dict(LX_ORDER if lx_order is None else lx_order)}
     return Surrogate(levels, fields, FIELD_NAMES, {q: 1.0 for q in QUANTITIES}, meta)

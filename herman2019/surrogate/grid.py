@@ -83,3 +83,31 @@ def cell_weights(levels: Mapping[str, np.ndarray], query: Mapping[str, np.ndarra
 def node_levels(table, axes: Sequence[str] = AXES) -> dict[str, np.ndarray]:
     """Each axis's sorted distinct values in ``table`` (a DataFrame)."""
     return {a: np.sort(table[a].unique().astype(float)) for a in axes}
+
+
+def quadratic_weights(levels: Mapping[str, np.ndarray], query: Mapping[str, np.ndarray],
+                      axis: str = "L_x") -> tuple[np.ndarray, np.ndarray]:
+    """As :func:`cell_weights`, but along ``axis`` (which must have exactly three levels)
+    the quadratic through all three (Lagrange weights, which may be negative) instead of
+    the line through the cell's two: corners (n, 96) and weights (n, 96), summing to 1.
+    Linear along the other axes; at a node it is the node."""
+    k = AXES.index(axis)
+    u = coordinate(axis, levels[axis])
+    if len(u) != 3:
+        raise ValueError(f"{axis}: a quadratic needs exactly three levels, not {len(u)}")
+    idx, w, _, _ = cell_weights(levels, query)
+    shape = [len(levels[a]) for a in AXES]
+    stride = int(np.prod(shape[k + 1:]))
+    x = coordinate(axis, np.asarray(query[axis], dtype=float).ravel())
+    lag = np.stack([np.prod([(x - u[m]) / (u[j] - u[m]) for m in range(3) if m != j], axis=0)
+                    for j in range(3)], axis=1)                               # (n, 3)
+    # the 32 corners of the other axes: those with this axis's bit 0
+    keep = _CORNERS[:, k] == 0
+    base_idx = idx[:, keep]                                   # at this axis's lower node
+    j0 = (base_idx[:, :1] // stride) % shape[k]                # its level index (n, 1)
+    base_idx = base_idx - j0 * stride                          # at level 0
+    # the other axes' linear weights: the 64 weights summed over this axis's bit
+    w_other = w[:, keep] + w[:, ~keep]
+    idx_q = np.concatenate([base_idx + j * stride for j in range(3)], axis=1)
+    w_q = np.concatenate([w_other * lag[:, j:j + 1] for j in range(3)], axis=1)
+    return idx_q, w_q

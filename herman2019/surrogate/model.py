@@ -27,7 +27,14 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from herman2019.surrogate.grid import AXES, DISPERSIONS, OutsideBox, cell_weights, check_box
+from herman2019.surrogate.grid import (
+    AXES,
+    DISPERSIONS,
+    OutsideBox,
+    cell_weights,
+    check_box,
+    quadratic_weights,
+)
 
 __all__ = ["QUANTITIES", "Surrogate", "SHIPPED"]
 
@@ -116,33 +123,43 @@ class Surrogate:
             out[k] = v
         return out
 
+    def order(self, q: str) -> int:
+        """Along L_x: 1 (linear) or 2 (the quadratic through its three levels)."""
+        return int(self.meta.get("lx_order", {}).get(q, 1))
+
+    def _columns(self, d: str) -> dict[str, np.ndarray]:
+        """Dispersion ``d``'s node fields as contiguous columns, cached (a prediction
+        gathers only the columns it reads)."""
+        cache = self.__dict__.setdefault("_cols", {})
+        if d not in cache:
+            cache[d] = {n: np.ascontiguousarray(self.fields[d][:, i])
+                        for i, n in enumerate(self.names)}
+        return cache[d]
+
     def _predict_one(self, d: str, q: Mapping[str, np.ndarray], detail: bool
                      ) -> dict[str, np.ndarray]:
-        F = self.fields[d]
+        col = self._columns(d)
         idx, w, t, h = cell_weights(self.levels, q)
         pos = (t * (1.0 - t) * h**2) ** 2                      # (n, 6): (t(1-t)h^2)^2
-        corners = F[idx]                                        # (n, 64, n_fields)
-        zone = corners[..., self.column("zone")]
-        res: dict[str, np.ndarray] = {"p_zone": np.sum(w * zone, axis=1)}
+        quad = None
+        if any(self.order(qn) == 2 for qn in QUANTITIES):
+            quad = quadratic_weights(self.levels, q, "L_x")
+        res: dict[str, np.ndarray] = {"p_zone": np.sum(w * col["zone"][idx], axis=1)}
         for qn in QUANTITIES:
-            y = corners[..., self.column(f"y_{qn}")]
-            s2 = corners[..., self.column(f"s_{qn}")] ** 2
-            m = np.isfinite(y) & np.isfinite(s2)
-            wm = np.where(m, w, 0.0)
-            tot = wm.sum(axis=1)
-            with np.errstate(invalid="ignore", divide="ignore"):
-                wn = wm / tot[:, None]
-                mean = np.sum(wn * np.where(m, y, 0.0), axis=1)
-                noise2 = np.sum(wn**2 * np.where(m, s2, 0.0), axis=1)
-                interp2 = np.zeros_like(mean)
-                for k, a in enumerate(AXES):
-                    kappa = corners[..., self.column(f"k_{qn}_{a}")]
-                    mk = m & np.isfinite(kappa)
-                    wk = np.where(mk, w, 0.0)
-                    kk = np.sum(wk * np.where(mk, kappa, 0.0), axis=1) / wk.sum(axis=1)
-                    interp2 += np.nan_to_num(kk) * pos[:, k]
-            interp2 *= self.scale.get(qn, 1.0) ** 2
-            bad = tot <= 0
+            mean, noise2, terms, bad = _linear(col, idx, w, pos, qn)
+            interp2 = self.scale.get(qn, 1.0) ** 2 * terms.sum(axis=1)
+            if quad is not None and self.order(qn) == 2:
+                y, s = col[f"y_{qn}"][quad[0]], col[f"s_{qn}"][quad[0]]
+                full = np.all(np.isfinite(y) & np.isfinite(s), axis=1)
+                w2 = np.where(full[:, None], quad[1], 0.0)
+                mean2 = np.sum(w2 * np.where(full[:, None], y, 0.0), axis=1)
+                noise2q = np.sum((w2 * np.where(full[:, None], s, 0.0)) ** 2, axis=1)
+                other = terms.sum(axis=1) - terms[:, AXES.index("L_x")]
+                interp2q = (self.scale.get(qn, 1.0) ** 2 * other
+                            + self.scale.get(qn + ":L_x", 1.0) ** 2 * (mean2 - mean) ** 2)
+                mean = np.where(full, mean2, mean)             # linear where a node lacks
+                noise2 = np.where(full, noise2q, noise2)
+                interp2 = np.where(full, interp2q, interp2)
             value = np.exp(mean)
             rel = np.sqrt(noise2 + interp2)
             value[bad], rel[bad] = np.nan, np.nan
@@ -152,3 +169,31 @@ class Surrogate:
                 res[qn + "_se_noise"] = np.where(bad, np.nan, np.sqrt(noise2))
                 res[qn + "_se_interp"] = np.where(bad, np.nan, np.sqrt(interp2))
         return res
+
+
+def _linear(col: Mapping[str, np.ndarray], idx: np.ndarray, w: np.ndarray, pos: np.ndarray,
+            qn: str):
+    """Multilinear over the corners where ``qn`` has a value (weights renormalised): mean
+    of log q, its noise variance, the interpolation-error terms per axis (n, 6), and where
+    no corner has a value."""
+    y, s = col[f"y_{qn}"][idx], col[f"s_{qn}"][idx]
+    m = np.isfinite(y) & np.isfinite(s)
+    every = bool(m.all())
+    wm = w if every else np.where(m, w, 0.0)
+    tot = wm.sum(axis=1)
+    bad = tot <= 0
+    terms = np.empty(pos.shape)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        wn = wm / tot[:, None]
+        mean = np.sum(wn * (y if every else np.where(m, y, 0.0)), axis=1)
+        noise2 = np.sum((wn * (s if every else np.where(m, s, 0.0))) ** 2, axis=1)
+        for k, a in enumerate(AXES):
+            kappa = col[f"k_{qn}_{a}"][idx]
+            mk = m & np.isfinite(kappa)
+            if mk.all():
+                kk = np.sum(w * kappa, axis=1)
+            else:
+                wk = np.where(mk, w, 0.0)
+                kk = np.sum(wk * np.where(mk, kappa, 0.0), axis=1) / wk.sum(axis=1)
+            terms[:, k] = np.nan_to_num(kk) * pos[:, k]
+    return mean, noise2, terms, bad

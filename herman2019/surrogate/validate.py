@@ -111,23 +111,59 @@ def _z(cmp: pd.DataFrame, q: str, scale_ratio: float) -> np.ndarray:
     return np.where(ok, z, np.nan)
 
 
+def _residuals(sur: Surrogate, model: pd.DataFrame, q: str, scales: dict) -> tuple:
+    """log residual, the noise variance (nodes' and model point's), and the interpolation
+    variance at ``scales`` (the surrogate's scales for q replaced), where comparable."""
+    keep = dict(sur.scale)
+    try:
+        sur.scale.update(scales)
+        cmp = compare(sur, model)
+    finally:
+        sur.scale.clear()
+        sur.scale.update(keep)
+    ok = np.isfinite(cmp[q + "_z"].to_numpy(float))
+    r = (np.log(cmp[q + "_sur"]) - np.log(cmp[q])).to_numpy(float)[ok]
+    noise = (cmp[q + "_se_noise"].to_numpy(float)[ok] ** 2
+             + (cmp[q + "_se"] / cmp[q]).to_numpy(float)[ok] ** 2)
+    return r, noise, cmp[q + "_se_interp"].to_numpy(float)[ok] ** 2
+
+
 def fit_scale(sur: Surrogate, calibration: pd.DataFrame) -> dict[str, float]:
-    """Each quantity's interpolation-error scale c (times the current one) that makes the
-    calibration set's RMS z 1; 0 when the nodes' noise alone already gives RMS z <= 1.
-    Sets ``sur.scale`` and returns it."""
-    cmp = compare(sur, calibration)
+    """Fit each quantity's interpolation-error scales on the calibration set: the scale of
+    the curvature terms (``q``) and, where the surrogate is quadratic along L_x, the scale
+    of the quadratic's departure from the line (``q:L_x``). Their ratio by maximum
+    likelihood (normal residuals in log), then one common factor so that the calibration
+    set's RMS z is 1 (0 when the noise alone gives RMS z <= 1). Sets ``sur.scale``."""
+    from scipy.optimize import minimize
     for q in QUANTITIES:
-        def excess(r, q=q):
-            z = _z(cmp, q, r)
-            return float(np.nanmean(z**2)) - 1.0
-        if excess(0.0) <= 0:
-            ratio = 0.0
+        two = sur.order(q) == 2
+        r, noise, a = _residuals(sur, calibration, q, {q: 1.0, q + ":L_x": 0.0})
+        b = (_residuals(sur, calibration, q, {q: 0.0, q + ":L_x": 1.0})[2] if two
+             else np.zeros_like(a))
+
+        def var(p):
+            return noise + np.exp(2 * p[0]) * a + np.exp(2 * p[1]) * b
+
+        def nll(p):
+            v = var(p)
+            return float(np.sum(np.log(v) + r * r / v))
+        p = minimize(nll, np.zeros(2), method="Nelder-Mead",
+                     options={"xatol": 1e-4, "fatol": 1e-6}).x if np.any(a + b > 0) \
+            else np.array([-np.inf, -np.inf])
+        sa, sb = float(np.exp(p[0])), float(np.exp(p[1])) if two else 0.0
+
+        def excess(c):
+            return float(np.mean(r * r / (noise + c * c * (sa * sa * a + sb * sb * b)))) - 1
+        if not np.isfinite(sa) or excess(0.0) <= 0:
+            c = 0.0
         else:
             hi = 1.0
             while excess(hi) > 0 and hi < 1e6:
                 hi *= 2
-            ratio = brentq(excess, 0.0, hi, xtol=1e-6)
-        sur.scale[q] = float(sur.scale.get(q, 1.0) * ratio)
+            c = brentq(excess, 0.0, hi, xtol=1e-8)
+        sur.scale[q] = c * sa if np.isfinite(sa) else 0.0
+        if two:
+            sur.scale[q + ":L_x"] = c * sb
     return dict(sur.scale)
 
 

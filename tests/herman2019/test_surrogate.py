@@ -214,3 +214,25 @@ def test_the_command_predicts_refuses_and_names_what_is_wrong(tmp_path, capsys):
     assert main(["surrogate", "--file", str(tmp_path / "none.npz"), "--csv",
                  str(tmp_path / "p.csv")]) == 3
     assert "no surrogate file" in capsys.readouterr().err
+
+
+def test_along_l_x_the_quadratic_through_its_three_levels_is_exact_for_a_parabola():
+    """log q quadratic in log L_x: the quadratic reading (the default for the alphas and
+    a_end/a0) is exact between the levels, the line is not and says so in its error."""
+    def f(u):
+        return 0.9 * u["L_x"] ** 2 - 0.4 * u["L_x"] + 0.2 * u["eps"]
+    df = synthetic(f, se_rel=0.01)
+    q = _query(200, seed=8)
+    want = np.exp([f({a: float(_u(a, q[a][i])) for a in AXES}) for i in range(200)])
+    quad = build(df).predict("ml", detail=True, **q)
+    np.testing.assert_allclose(quad["alpha_all"], want, rtol=1e-12)
+    assert np.all(quad["alpha_all_se_noise"] <= 0.01 * (1 + 1e-12))   # weights: |sum| = 1
+    line = build(df, lx_order={k: 1 for k in ("alpha_all", "alpha_edge", "a_end_rel",
+                                              "W_c")}).predict("ml", detail=True, **q)
+    err = np.abs(np.log(line["alpha_all"] / want))
+    assert np.median(err) > 0.01
+    # (the curvature's noise correction, r^2 - var(r) with var ~ 1e-4, moves it by ~1e-4)
+    np.testing.assert_allclose(line["alpha_all_se_interp"], err, rtol=2e-3, atol=1e-9)
+    nodes = df[list(AXES)].to_dict("list")
+    at = build(df).predict("ml", **nodes)
+    np.testing.assert_allclose(at["alpha_all_se"], df["alpha_all_stderr"], rtol=1e-12)

@@ -1,0 +1,122 @@
+"""Which interpolation for the surrogate: measured on off-grid points run with the model.
+
+    python benchmarks/surrogate_methods.py [--grid results/herman2019]
+        [--runs results/surrogate/calibration/runs.csv.gz]
+
+Interpolates alpha_all, alpha_edge and a_end/a0 (defined at every node) of the grid's
+table at the points of ``--runs`` (the surrogate's calibration set by default: the choice
+is made there, not on the validation set) with scipy's tensor-grid interpolators, and
+prints per method the median and 90th percentile of |q_interp / q_model - 1|:
+
+- ``linear, log q, log axes``: the surrogate's choice (L_x, a0, C_sd, d_f on log axes);
+- ``linear, q, linear axes``: the plain reading of the table;
+- ``linear, log q, linear axes``;
+- ``linear x quadratic L_x``: linear over the other five axes, the quadratic through
+  L_x's three levels;
+- ``pchip`` and ``cubic`` (``RegularGridInterpolator``, log q, log axes): they need four
+  nodes per axis and L_x has three, so each is applied over the other five axes at each
+  of L_x's three levels, then joined along L_x by the quadratic through the three (and,
+  as a check, linearly).
+
+The model values are one 8-replica ensemble each (stochastic): the medians include their
+noise (median stated SE printed), so a method can only be told from another where they
+differ by more than that.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy.interpolate import RegularGridInterpolator
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+AXES = ("L_x", "T", "a0", "C_sd", "eps", "d_f")
+LOG = {"L_x", "a0", "C_sd", "d_f"}
+QS = ("alpha_all", "alpha_edge", "a_end_rel")
+
+
+def coord(a, v, log_axes):
+    v = np.asarray(v, float)
+    return np.log(v) if a in log_axes else v
+
+
+def grid_arrays(table, disp, q, levels):
+    part = table[table["dispersion"].astype(str) == disp].sort_values(list(AXES))
+    return part[q].to_numpy(float).reshape([len(levels[a]) for a in AXES])
+
+
+def interp(method, values, levels, pts, log_q, log_axes, join="quadratic"):
+    """Values at ``pts`` (dict of arrays)."""
+    y = np.log(values) if log_q else values
+    if method == "linear" and join == "linear":
+        f = RegularGridInterpolator([coord(a, levels[a], log_axes) for a in AXES], y)
+        out = f(np.stack([coord(a, pts[a], log_axes) for a in AXES], axis=1))
+    else:       # over the five other axes at each L_x level, then along L_x
+        rest = AXES[1:]
+        xs = np.stack([coord(a, pts[a], log_axes) for a in rest], axis=1)
+        at = np.stack([RegularGridInterpolator(
+            [coord(a, levels[a], log_axes) for a in rest], y[i], method=method)(xs)
+            for i in range(len(levels["L_x"]))], axis=1)            # (n, 3)
+        u = coord("L_x", levels["L_x"], log_axes)
+        x = coord("L_x", pts["L_x"], log_axes)
+        if join == "quadratic":
+            lag = np.stack([np.prod([(x - u[m]) / (u[k] - u[m]) for m in range(3) if m != k],
+                                    axis=0) for k in range(3)], axis=1)
+            out = np.sum(lag * at, axis=1)
+        else:
+            j = np.clip(np.searchsorted(u, x, side="right") - 1, 0, len(u) - 2)
+            t = (x - u[j]) / (u[j + 1] - u[j])
+            out = (1 - t) * at[np.arange(len(x)), j] + t * at[np.arange(len(x)), j + 1]
+    return np.exp(out) if log_q else out
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--grid", default=str(ROOT / "results" / "herman2019"))
+    ap.add_argument("--runs", default=str(ROOT / "results" / "surrogate" / "calibration"
+                                          / "runs.csv.gz"))
+    args = ap.parse_args()
+    import sweep
+    table = sweep.load(args.grid)
+    table["a_end_rel"] = table["a_end"] / table["a0"]
+    runs = pd.read_csv(args.runs)
+    runs["a_end_rel"] = runs["a_end"] / runs["a0"]
+    runs["a_end_rel_stderr"] = runs["a_end_stderr"] / runs["a0"]
+    levels = {a: np.sort(table[a].unique().astype(float)) for a in AXES}
+    methods = [("linear, log q, log axes", "linear", True, LOG, "linear"),
+               ("linear, q, linear axes", "linear", False, set(), "linear"),
+               ("linear, log q, linear axes", "linear", True, set(), "linear"),
+               ("linear x quadratic L_x, log q, log axes", "linear", True, LOG, "quadratic"),
+               ("pchip x quadratic L_x, log q, log axes", "pchip", True, LOG, "quadratic"),
+               ("pchip x linear L_x, log q, log axes", "pchip", True, LOG, "linear"),
+               ("cubic x quadratic L_x, log q, log axes", "cubic", True, LOG, "quadratic")]
+    print(f"{len(runs)} off-grid points of {args.runs}; grid {args.grid}")
+    print(f"{'method':42s} " + " ".join(f"{q + ' med':>15s} {'p90':>6s}" for q in QS))
+    for name, method, log_q, log_axes, join in methods:
+        cells = []
+        for q in QS:
+            rel = np.full(len(runs), np.nan)
+            for d in runs["dispersion"].astype(str).unique():
+                m = (runs["dispersion"].astype(str) == d).to_numpy()
+                v = grid_arrays(table, d, q, levels)
+                pts = {a: runs.loc[m, a].to_numpy(float) for a in AXES}
+                if not np.all(np.isfinite(v) & (v > 0)):
+                    v = np.where(np.isfinite(v) & (v > 0), v, np.nanmin(v[v > 0]))
+                got = interp(method, v, levels, pts, log_q, log_axes, join)
+                rel[m] = np.abs(got / runs.loc[m, q].to_numpy(float) - 1)
+            ok = np.isfinite(rel)
+            cells.append(f"{100 * np.median(rel[ok]):14.1f}% {100 * np.quantile(rel[ok], 0.9):5.1f}%")
+        print(f"{name:42s} " + " ".join(cells))
+    se = " ".join(f"{q} {100 * np.nanmedian(runs[q + '_stderr'] / runs[q]):.1f} %"
+                  for q in QS)
+    print(f"median stated SE of the model points: {se}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
