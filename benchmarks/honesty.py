@@ -21,8 +21,8 @@ standard error falls as 1/sqrt(iterations averaged)).
     python benchmarks/honesty.py --reference --capped 24 --references /tmp/refs.json
 
 ``--capped N``: instead of the Fig. 2 and random points, N points drawn (``--grid-seed``)
-from those the shipped grid (``results/herman2019``) ended ``not_converged`` (model
-version 8's grid: all at the cap of 100 windows): the points a stopping rule for a
+from those model version 8's grid (``results/herman2019-v8``) ended ``not_converged``
+(all at that version's cap of 100 windows): the points a stopping rule for a
 stationary noisy state acts on.
 
 ``--reference``: two runs of one protocol share its biases, so the between-seed z cannot see
@@ -71,9 +71,10 @@ REFERENCE_FILE = Path(__file__).parent / "data" / "references.json"
 
 
 def capped(n: int, seed: int) -> list[dict]:
-    """``n`` grid points drawn (``seed``) from the shipped grid's ``not_converged`` rows."""
+    """``n`` grid points drawn (``seed``) from model version 8's grid's ``not_converged``
+    rows (``results/herman2019-v8``: the points docs/convergence.md's check was made on)."""
     import sweep
-    df = sweep.load(REFERENCE_FILE.parents[2] / "results" / "herman2019")
+    df = sweep.load(REFERENCE_FILE.parents[2] / "results" / "herman2019-v8")
     rows = df[df["status"] == "not_converged"].sample(n, random_state=seed)
     axes = ("L_x", "T", "a0", "C_sd", "eps", "d_f", "dispersion")
     return [{k: (str(r[k]) if k == "dispersion" else float(r[k])) for k in axes}

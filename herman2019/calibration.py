@@ -6,7 +6,8 @@ errors, with its confidence interval.
     herman2019 calibrate --out results/calibration --jobs 2    # run (resumes), then the table
     herman2019 calibrate --out results/calibration --table     # the table of the stored runs
 
-**The sample** (:func:`draw`): from the shipped table (``results/herman2019``), ``n_zone``
+**The sample** (:func:`draw`): from a table of the grid (by default model version 8's,
+``results/herman2019-v8``, which the shipped calibration was drawn from), ``n_zone``
 points whose layout has a compact zone, ``n_none`` without one, and ``n_nc`` of those it
 ended ``not_converged``; within each group one point per cell of (C_sd, L_x, d_f,
 dispersion) in a random order of the cells, so that every level of each is drawn about

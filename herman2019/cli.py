@@ -127,8 +127,10 @@ def build_parser() -> argparse.ArgumentParser:
     ca.add_argument("--factors", action="store_true", help="fit the calibrated standard"
                     " errors' factors to the stored runs, write OUT/factors.csv and print"
                     " them with their cross-validated check")
-    ca.add_argument("--grid", default=str(ROOT / "results" / "herman2019"),
-                    help="the table the sample is drawn from (default: results/herman2019)")
+    ca.add_argument("--grid", default=str(ROOT / "results" / "herman2019-v8"),
+                    help="the table the sample is drawn from (default: results/herman2019-v8,"
+                    " model version 8's grid, which the shipped calibration's sample was"
+                    " drawn from)")
     ca.add_argument("--n-zone", type=int, default=200, help="points with a compact zone")
     ca.add_argument("--n-none", type=int, default=100, help="points without one")
     ca.add_argument("--n-nc", type=int, default=40, help="points the table ended"

@@ -184,7 +184,7 @@ def calibrated_factors(path: str | Path | None = None) -> pd.DataFrame:
 def calibrated(df: pd.DataFrame, factors: str | Path | pd.DataFrame | None = None
                ) -> pd.DataFrame:
     """``df`` (a table of the grid at the calibration's model version, e.g. the release's
-    ``sweep.load("results/herman2019-release")``) with the calibrated standard errors
+    ``sweep.load("results/herman2019")``) with the calibrated standard errors
     ``q_stderr_cal`` of the shipped factors (``results/calibration/factors.csv``, or
     ``factors``: a file or its table). ValueError for a table of another model version
     (its ``provenance``) than the factors' ``model_version``."""
