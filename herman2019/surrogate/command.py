@@ -111,17 +111,15 @@ def _build(args) -> int:
     import sweep
     from sweep.errors import EXIT_OK, ConfigError
 
-    from herman2019.calibration import run_sample
     from herman2019.surrogate.build import build
-    from herman2019.surrogate.validate import SETS, draw_points, fit_scale, model_table
+    from herman2019.surrogate.validate import SETS, fit_scale, model_table
     try:
         table = sweep.load(args.grid)
         sur = build(table, source=_relative(args.grid), commit=_commit())
     except (FileNotFoundError, ValueError) as exc:
         raise ConfigError(f"--grid {args.grid}: {exc}") from None
     n, seed = SETS["calibration"]
-    pts = draw_points(sur.levels, n, seed)
-    runs = run_sample(pts, [0], args.dir / "calibration", args.jobs)
+    runs = _run_set("calibration", sur.levels, args.dir, args.jobs)
     scale = fit_scale(sur, model_table(runs))
     sur.meta["calibration"] = {"points": int(len(runs)), "draw_seed": seed}
     sur.save(args.dir / "surrogate.npz")
@@ -130,6 +128,33 @@ def _build(args) -> int:
           f" {', '.join(sur.meta['model_version'])}); interpolation-error scale "
           + ", ".join(f"{q} {c:.3f}" for q, c in scale.items()))
     return EXIT_OK
+
+
+def _run_set(name: str, levels, out: Path, jobs: int) -> pd.DataFrame:
+    """The off-grid set ``name`` run (resumed) into OUT/NAME/runs.csv.gz; when this call
+    computed runs, OUT/provenance.json records who made the set: model version, commit,
+    clean tree, machine, date."""
+    import datetime
+
+    import floewave
+    from herman2019.calibration import run_sample
+    from herman2019.numbers import machine
+    from herman2019.surrogate.validate import SETS, draw_points
+    n, seed = SETS[name]
+    path = out / name / "runs.csv.gz"
+    before = len(pd.read_csv(path)) if path.exists() else 0
+    runs = run_sample(draw_points(levels, n, seed), [0], out / name, jobs)
+    if len(runs) > before:
+        prov_path = out / "provenance.json"
+        prov = json.loads(prov_path.read_text()) if prov_path.exists() else {}
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
+                               cwd=ROOT, capture_output=True, text=True).stdout.strip() != ""
+        prov[name] = {"points": int(len(runs)), "draw_seed": seed,
+                      "model_version": str(floewave.MODEL_VERSION), "commit": _commit(),
+                      "git_dirty": dirty, "machine": machine(),
+                      "date": datetime.date.today().isoformat()}
+        prov_path.write_text(json.dumps(prov, indent=1, sort_keys=True) + "\n")
+    return runs
 
 
 def _relative(path) -> str:
@@ -142,13 +167,10 @@ def _relative(path) -> str:
 def _validate(args) -> int:
     from sweep.errors import EXIT_OK
 
-    from herman2019.calibration import run_sample
     from herman2019.surrogate.page import make_page
-    from herman2019.surrogate.validate import SETS, compare, draw_points, model_table
+    from herman2019.surrogate.validate import compare, model_table
     sur = Surrogate.load(args.dir / "surrogate.npz")
-    n, seed = SETS["validation"]
-    pts = draw_points(sur.levels, n, seed)
-    runs = run_sample(pts, [0], args.dir / "validation", args.jobs)
+    runs = _run_set("validation", sur.levels, args.dir, args.jobs)
     cmp = compare(sur, model_table(runs))
     keep = [*AXES, "dispersion", "status", "zone", "p_zone"] + [
         c for q in QUANTITIES for c in (q, q + "_se", q + "_sur", q + "_sur_se", q + "_z")]
