@@ -118,10 +118,12 @@ def _build(args) -> int:
         sur = build(table, source=_relative(args.grid), commit=_commit())
     except (FileNotFoundError, ValueError) as exc:
         raise ConfigError(f"--grid {args.grid}: {exc}") from None
-    n, seed = SETS["calibration"]
-    runs = _run_set("calibration", sur.levels, args.dir, args.jobs)
+    runs = pd.concat([_run_set(name, sur.levels, args.dir, args.jobs)
+                      for name in ("calibration", "calibration_axes")], ignore_index=True)
     scale = fit_scale(sur, model_table(runs))
-    sur.meta["calibration"] = {"points": int(len(runs)), "draw_seed": seed}
+    sur.meta["calibration"] = {"points": int(len(runs)),
+                               "sets": {k: list(SETS[k]) for k in ("calibration",
+                                                                    "calibration_axes")}}
     sur.save(args.dir / "surrogate.npz")
     print(f"{args.dir / 'surrogate.npz'}: {sur.meta['points']} nodes from {args.grid}"
           f" ({sur.meta['standard_errors']} SEs, model version"
@@ -139,17 +141,17 @@ def _run_set(name: str, levels, out: Path, jobs: int) -> pd.DataFrame:
     import floewave
     from herman2019.calibration import run_sample
     from herman2019.numbers import machine
-    from herman2019.surrogate.validate import SETS, draw_points
-    n, seed = SETS[name]
+    from herman2019.surrogate.validate import SETS, draw_set
+    kind, n, seed = SETS[name]
     path = out / name / "runs.csv.gz"
     before = len(pd.read_csv(path)) if path.exists() else 0
-    runs = run_sample(draw_points(levels, n, seed), [0], out / name, jobs)
+    runs = run_sample(draw_set(name, levels), [0], out / name, jobs)
     if len(runs) > before:
         prov_path = out / "provenance.json"
         prov = json.loads(prov_path.read_text()) if prov_path.exists() else {}
         dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
                                cwd=ROOT, capture_output=True, text=True).stdout.strip() != ""
-        prov[name] = {"points": int(len(runs)), "draw_seed": seed,
+        prov[name] = {"points": int(len(runs)), "kind": kind, "draw_seed": seed,
                       "model_version": str(floewave.MODEL_VERSION), "commit": _commit(),
                       "git_dirty": dirty, "machine": machine(),
                       "date": datetime.date.today().isoformat()}
@@ -170,9 +172,10 @@ def _validate(args) -> int:
     from herman2019.surrogate.page import make_page
     from herman2019.surrogate.validate import compare, model_table
     sur = Surrogate.load(args.dir / "surrogate.npz")
-    runs = _run_set("validation", sur.levels, args.dir, args.jobs)
+    runs = pd.concat([_run_set(name, sur.levels, args.dir, args.jobs)
+                      for name in ("validation", "validation_axes")], ignore_index=True)
     cmp = compare(sur, model_table(runs))
-    keep = [*AXES, "dispersion", "status", "zone", "p_zone"] + [
+    keep = [*AXES, "dispersion", "group", "status", "zone", "p_zone"] + [
         c for q in QUANTITIES for c in (q, q + "_se", q + "_sur", q + "_sur_se", q + "_z")]
     cmp[keep].to_csv(args.dir / "validation.csv.gz", index=False)
     text = make_page(sur, cmp, args.docs, _relative(args.dir))

@@ -33,9 +33,20 @@ from herman2019.surrogate.model import QUANTITIES, Surrogate
 __all__ = ["SETS", "draw_points", "model_table", "compare", "fit_scale", "error_table",
            "reliability", "brier", "by_region"]
 
-#: The two sets: name -> (points, draw seed). Their draw seeds differ, so no point of one
-#: is in the other.
-SETS = {"calibration": (300, 4801), "validation": (300, 4802)}
+#: The off-grid sets: name -> (kind, size, draw seed). ``random``: that many points uniform
+#: in the box (:func:`draw_points`); ``axes``: that many grid nodes per axis with the axis
+#: alone moved off its levels (:func:`draw_axis_points`). Their draw seeds differ, so no
+#: point of one is in another. The calibration sets fit the error model, the validation
+#: sets check it.
+SETS = {"calibration": ("random", 300, 4801), "calibration_axes": ("axes", 24, 4803),
+        "validation": ("random", 300, 4802), "validation_axes": ("axes", 24, 4804)}
+#: Off-node values per axis for the ``axes`` sets (on the model's lattices).
+AXIS_VALUES = {"L_x": (0.6, 0.75, 1.0, 1.25, 2.0, 2.5, 2.75),
+               "T": (1.152, 1.252, 1.3, 1.452, 1.7, 1.9),
+               "a0": (0.0135, 0.0175, 0.0225),
+               "C_sd": (0.0075, 0.025, 0.075, 0.125, 0.175),
+               "eps": (0.3, 0.5, 0.7),
+               "d_f": (0.007, 0.014, 0.035)}
 #: The lattices the model's T and L_x live on: T/dt a multiple of drag_every (0.001 s x
 #: 4), L_x/dx an integer (dx 0.01 m).
 T_STEP, L_STEP = 0.004, 0.01
@@ -57,6 +68,27 @@ def draw_points(levels: Mapping[str, np.ndarray], n: int, seed: int) -> pd.DataF
     out = pd.DataFrame(cols)[[*AXES, "dispersion"]]
     out["group"] = "offgrid"
     return out
+
+
+def draw_axis_points(levels: Mapping[str, np.ndarray], n: int, seed: int) -> pd.DataFrame:
+    """For each axis, ``n`` grid nodes of the other five axes and the dispersion relation
+    drawn at random, each with the axis at every one of its :data:`AXIS_VALUES`: points
+    where the surrogate interpolates along that axis alone (``group`` = "axis:<name>")."""
+    rng = np.random.default_rng(seed)
+    rows = []
+    for axis in AXES:
+        for _ in range(n):
+            base = {a: float(rng.choice(levels[a])) for a in AXES if a != axis}
+            d = str(rng.choice(np.array(DISPERSIONS)))
+            rows += [{**base, axis: v, "dispersion": d, "group": f"axis:{axis}"}
+                     for v in AXIS_VALUES[axis]]
+    return pd.DataFrame(rows)[[*AXES, "dispersion", "group"]]
+
+
+def draw_set(name: str, levels: Mapping[str, np.ndarray]) -> pd.DataFrame:
+    """The points of the set ``name`` (:data:`SETS`)."""
+    kind, n, seed = SETS[name]
+    return (draw_points if kind == "random" else draw_axis_points)(levels, n, seed)
 
 
 def model_table(runs: pd.DataFrame) -> pd.DataFrame:
