@@ -87,11 +87,12 @@ class Surrogate:
     def column(self, name: str) -> int:
         return self.names.index(name)
 
-    def predict(self, dispersion, detail: bool = False, **params) -> pd.DataFrame:
+    def predict(self, dispersion, detail: bool | str = False, **params) -> pd.DataFrame:
         """The surrogate at the points given by ``params`` (the six axes, scalars or arrays
         broadcast together; ``dispersion`` a name or an array of names): one row per
         point with the parameters and, per quantity, its value and ``_se`` (``detail``:
-        also ``_se_noise`` and ``_se_interp``, relative, and ``W_c`` where p_zone > 0).
+        also ``_se_noise`` and ``_se_interp``, relative; ``detail="terms"``: also each
+        error term before its scale, ``q_term_<name>`` for the names of :meth:`terms`).
         OutsideBox (a ValueError) for a point outside the grid's box or an unknown
         dispersion relation."""
         missing = [a for a in AXES if a not in params]
@@ -136,30 +137,44 @@ class Surrogate:
                         for i, n in enumerate(self.names)}
         return cache[d]
 
-    def _predict_one(self, d: str, q: Mapping[str, np.ndarray], detail: bool
+    def term_names(self) -> tuple[str, ...]:
+        """The interpolation-error terms, each with its own scale per quantity: one per
+        axis, and L_x's upper interval apart from its lower one."""
+        return (*AXES, "L_x:upper")
+
+    def _scale(self, qn: str, name: str) -> float:
+        return float(self.scale.get(f"{qn}:{name}", self.scale.get(qn, 1.0)))
+
+    def _predict_one(self, d: str, q: Mapping[str, np.ndarray], detail: bool | str
                      ) -> dict[str, np.ndarray]:
         col = self._columns(d)
         idx, w, t, h = cell_weights(self.levels, q)
-        pos = (t * (1.0 - t) * h**2) ** 2                      # (n, 6): (t(1-t)h^2)^2
+        if self.meta.get("error_shape", "curvature") == "flat":
+            pos = (4.0 * t * (1.0 - t)) ** 2                   # 1 mid-cell, 0 at nodes
+        else:
+            pos = (t * (1.0 - t) * h**2) ** 2                  # (t(1-t)h^2)^2
+        lx_stride = int(np.prod([len(self.levels[a]) for a in AXES[1:]]))
+        upper = idx[:, 0] // lx_stride >= 1                    # L_x's upper interval
         quad = None
         if any(self.order(qn) == 2 for qn in QUANTITIES):
             quad = quadratic_weights(self.levels, q, "L_x")
-        res: dict[str, np.ndarray] = {"p_zone": np.sum(w * col["zone"][idx], axis=1)}
+        res: dict[str, np.ndarray] = {"p_zone": self._p_zone(np.sum(w * col["zone"][idx],
+                                                                    axis=1))}
         for qn in QUANTITIES:
-            mean, noise2, terms, bad = _linear(col, idx, w, pos, qn)
-            interp2 = self.scale.get(qn, 1.0) ** 2 * terms.sum(axis=1)
+            flat = self.meta.get("error_shape", "curvature") == "flat"
+            mean, noise2, terms, bad = _linear(col, idx, w, pos, qn, flat)
+            named = {a: terms[:, k] for k, a in enumerate(AXES)}
+            named["L_x:upper"] = np.where(upper > 0, named["L_x"], 0.0)
+            named["L_x"] = np.where(upper > 0, 0.0, named["L_x"])
+            interp2 = sum(self._scale(qn, n) ** 2 * v for n, v in named.items())
             if quad is not None and self.order(qn) == 2:
                 y, s = col[f"y_{qn}"][quad[0]], col[f"s_{qn}"][quad[0]]
                 full = np.all(np.isfinite(y) & np.isfinite(s), axis=1)
                 w2 = np.where(full[:, None], quad[1], 0.0)
                 mean2 = np.sum(w2 * np.where(full[:, None], y, 0.0), axis=1)
                 noise2q = np.sum((w2 * np.where(full[:, None], s, 0.0)) ** 2, axis=1)
-                other = terms.sum(axis=1) - terms[:, AXES.index("L_x")]
-                interp2q = (self.scale.get(qn, 1.0) ** 2 * other
-                            + self.scale.get(qn + ":L_x", 1.0) ** 2 * (mean2 - mean) ** 2)
                 mean = np.where(full, mean2, mean)             # linear where a node lacks
                 noise2 = np.where(full, noise2q, noise2)
-                interp2 = np.where(full, interp2q, interp2)
             value = np.exp(mean)
             rel = np.sqrt(noise2 + interp2)
             value[bad], rel[bad] = np.nan, np.nan
@@ -168,11 +183,26 @@ class Surrogate:
             if detail:
                 res[qn + "_se_noise"] = np.where(bad, np.nan, np.sqrt(noise2))
                 res[qn + "_se_interp"] = np.where(bad, np.nan, np.sqrt(interp2))
+            if detail == "terms":
+                for n, v in named.items():
+                    res[f"{qn}_term_{n}"] = np.where(bad, np.nan, v)
         return res
+
+    def _p_zone(self, p: np.ndarray) -> np.ndarray:
+        """The interpolated 0/1 outcome, recalibrated where 0 < p < 1 (``meta["p_zone"]``:
+        a, b of p' = 1 / (1 + exp(-(a + b logit p))), fitted on the calibration sets)."""
+        ab = self.meta.get("p_zone")
+        if not ab:
+            return p
+        inside = (p > 0) & (p < 1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            logit = np.log(p / (1 - p))
+            out = 1.0 / (1.0 + np.exp(-(ab[0] + ab[1] * logit)))
+        return np.where(inside, out, p)
 
 
 def _linear(col: Mapping[str, np.ndarray], idx: np.ndarray, w: np.ndarray, pos: np.ndarray,
-            qn: str):
+            qn: str, flat: bool = False):
     """Multilinear over the corners where ``qn`` has a value (weights renormalised): mean
     of log q, its noise variance, the interpolation-error terms per axis (n, 6), and where
     no corner has a value."""
@@ -188,6 +218,9 @@ def _linear(col: Mapping[str, np.ndarray], idx: np.ndarray, w: np.ndarray, pos: 
         mean = np.sum(wn * (y if every else np.where(m, y, 0.0)), axis=1)
         noise2 = np.sum((wn * (s if every else np.where(m, s, 0.0))) ** 2, axis=1)
         for k, a in enumerate(AXES):
+            if flat:
+                terms[:, k] = pos[:, k]
+                continue
             kappa = col[f"k_{qn}_{a}"][idx]
             mk = m & np.isfinite(kappa)
             if mk.all():

@@ -143,60 +143,76 @@ def _z(cmp: pd.DataFrame, q: str, scale_ratio: float) -> np.ndarray:
     return np.where(ok, z, np.nan)
 
 
-def _residuals(sur: Surrogate, model: pd.DataFrame, q: str, scales: dict) -> tuple:
-    """log residual, the noise variance (nodes' and model point's), and the interpolation
-    variance at ``scales`` (the surrogate's scales for q replaced), where comparable."""
-    keep = dict(sur.scale)
-    try:
-        sur.scale.update(scales)
-        cmp = compare(sur, model)
-    finally:
-        sur.scale.clear()
-        sur.scale.update(keep)
-    ok = np.isfinite(cmp[q + "_z"].to_numpy(float))
-    r = (np.log(cmp[q + "_sur"]) - np.log(cmp[q])).to_numpy(float)[ok]
-    noise = (cmp[q + "_se_noise"].to_numpy(float)[ok] ** 2
-             + (cmp[q + "_se"] / cmp[q]).to_numpy(float)[ok] ** 2)
-    return r, noise, cmp[q + "_se_interp"].to_numpy(float)[ok] ** 2
+#: The fit's pull of each term's log-scale towards their mean (a term with few points
+#: that see it takes about the others' scale).
+RIDGE = 1.0
 
 
 def fit_scale(sur: Surrogate, calibration: pd.DataFrame) -> dict[str, float]:
-    """Fit each quantity's interpolation-error scales on the calibration set: the scale of
-    the curvature terms (``q``) and, where the surrogate is quadratic along L_x, the scale
-    of the quadratic's departure from the line (``q:L_x``). Their ratio by maximum
-    likelihood (normal residuals in log), then one common factor so that the calibration
-    set's RMS z is 1 (0 when the noise alone gives RMS z <= 1). Sets ``sur.scale``."""
+    """Fit the interpolation error's scales on the calibration sets: per quantity one
+    scale per term of :meth:`Surrogate.term_names` (each axis; L_x's two intervals apart),
+    by maximum likelihood of the log residuals as normal with variance noise + sum of
+    scale^2 term (a ridge of :data:`RIDGE` on the log-scales about their mean), then one
+    common factor so that the calibration sets' RMS z is 1. Also p_zone's recalibration
+    (:func:`fit_p_zone`). Sets ``sur.scale`` and ``sur.meta["p_zone"]``; returns the
+    scales."""
     from scipy.optimize import minimize
+    sur.meta.pop("p_zone", None)
+    pred = sur.predict(calibration["dispersion"].astype(str).to_numpy(), detail="terms",
+                       **{a: calibration[a].to_numpy(float) for a in AXES})
+    names = sur.term_names()
     for q in QUANTITIES:
-        two = sur.order(q) == 2
-        r, noise, a = _residuals(sur, calibration, q, {q: 1.0, q + ":L_x": 0.0})
-        b = (_residuals(sur, calibration, q, {q: 0.0, q + ":L_x": 1.0})[2] if two
-             else np.zeros_like(a))
-
-        def var(p):
-            return noise + np.exp(2 * p[0]) * a + np.exp(2 * p[1]) * b
+        y = calibration[q].to_numpy(float)
+        x = pred[q].to_numpy(float)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            r = np.log(x) - np.log(y)
+            noise = (pred[q + "_se_noise"].to_numpy(float) ** 2
+                     + (calibration[q + "_se"].to_numpy(float) / y) ** 2)
+        terms = np.stack([pred[f"{q}_term_{n}"].to_numpy(float) for n in names], axis=1)
+        ok = np.isfinite(r) & np.isfinite(noise) & np.all(np.isfinite(terms), axis=1)
+        if q == "W_c":
+            ok &= calibration["zone"].to_numpy() > 0
+        r, noise, terms = r[ok], noise[ok], terms[ok]
+        seen = terms.sum(axis=0) > 0
 
         def nll(p):
-            v = var(p)
-            return float(np.sum(np.log(v) + r * r / v))
-        p = minimize(nll, np.zeros(2), method="Nelder-Mead",
-                     options={"xatol": 1e-4, "fatol": 1e-6}).x if np.any(a + b > 0) \
-            else np.array([-np.inf, -np.inf])
-        sa, sb = float(np.exp(p[0])), float(np.exp(p[1])) if two else 0.0
+            v = noise + terms @ np.exp(2 * p)
+            return float(np.sum(np.log(v) + r * r / v)
+                         + RIDGE * np.sum((p[seen] - p[seen].mean()) ** 2))
+        p = minimize(nll, np.zeros(len(names)), method="L-BFGS-B").x
+        p[~seen] = p[seen].mean() if seen.any() else 0.0
+        s2 = np.exp(2 * p)
 
         def excess(c):
-            return float(np.mean(r * r / (noise + c * c * (sa * sa * a + sb * sb * b)))) - 1
-        if not np.isfinite(sa) or excess(0.0) <= 0:
+            return float(np.mean(r * r / (noise + c * c * (terms @ s2)))) - 1
+        if excess(0.0) <= 0:
             c = 0.0
         else:
             hi = 1.0
             while excess(hi) > 0 and hi < 1e6:
                 hi *= 2
             c = brentq(excess, 0.0, hi, xtol=1e-8)
-        sur.scale[q] = c * sa if np.isfinite(sa) else 0.0
-        if two:
-            sur.scale[q + ":L_x"] = c * sb
+        sur.scale.pop(q, None)
+        for n, sj in zip(names, np.sqrt(s2), strict=True):
+            sur.scale[f"{q}:{n}"] = float(c * sj)
+    sur.meta["p_zone"] = fit_p_zone(pred["p_zone"].to_numpy(float),
+                                    calibration["zone"].to_numpy(float))
     return dict(sur.scale)
+
+
+def fit_p_zone(p: np.ndarray, zone: np.ndarray) -> list[float]:
+    """(a, b) of p' = 1 / (1 + exp(-(a + b logit p))) by maximum likelihood on the points
+    with 0 < p < 1 (a cell whose corners all agree keeps its 0 or 1)."""
+    from scipy.optimize import minimize
+    m = (p > 0) & (p < 1) & np.isfinite(zone)
+    if m.sum() < 10:
+        return [0.0, 1.0]
+    lg, o = np.log(p[m] / (1 - p[m])), zone[m]
+
+    def nll(ab):
+        z = ab[0] + ab[1] * lg
+        return float(np.sum(np.logaddexp(0, z) - o * z))
+    return [float(v) for v in minimize(nll, np.array([0.0, 1.0]), method="Nelder-Mead").x]
 
 
 def error_table(cmp: pd.DataFrame, quantities: Sequence[str] = QUANTITIES) -> pd.DataFrame:

@@ -236,3 +236,35 @@ def test_along_l_x_the_quadratic_through_its_three_levels_is_exact_for_a_parabol
     nodes = df[list(AXES)].to_dict("list")
     at = build(df).predict("ml", **nodes)
     np.testing.assert_allclose(at["alpha_all_se"], df["alpha_all_stderr"], rtol=1e-12)
+
+
+def test_p_zone_s_recalibration_recovers_a_known_distortion():
+    """Outcomes drawn with probability sigmoid(0.5 + 2 logit p): the fit finds (0.5, 2)."""
+    from herman2019.surrogate.validate import fit_p_zone
+    rng = np.random.default_rng(4)
+    p = rng.uniform(0.01, 0.99, 20000)
+    truth = 1 / (1 + np.exp(-(0.5 + 2.0 * np.log(p / (1 - p)))))
+    a, b = fit_p_zone(p, (rng.random(p.size) < truth).astype(float))
+    assert a == pytest.approx(0.5, abs=0.08) and b == pytest.approx(2.0, abs=0.1)
+
+
+def test_each_axis_gets_its_own_scale():
+    """Model 'runs' whose error along T is 5x the curvature's estimate and along eps 1x:
+    the fit gives T's term the larger scale."""
+    def f(u):
+        return 0.6 * u["T"] ** 2 + 0.5 * u["eps"] ** 2
+    sur = build(synthetic(f, se_rel=0.002))
+    rng = np.random.default_rng(9)
+    q = _query(600, 21)
+    pred = sur.predict("ml", detail="terms", **q)
+    # the model: the surrogate plus a normal error of the terms' size, T's times 5
+    sd = np.sqrt(25 * pred["alpha_all_term_T"] + pred["alpha_all_term_eps"] + 0.002**2)
+    model = pd.DataFrame(q)
+    model["dispersion"], model["zone"] = "ml", 1.0
+    v = pred["alpha_all"].to_numpy() * np.exp(rng.normal(0, sd))
+    for qn in ("alpha_all", "alpha_edge", "a_end_rel"):
+        model[qn], model[qn + "_se"] = v, 0.002 * v
+    model["W_c"], model["W_c_se"] = 20 * v, 0.002 * 20 * v
+    fit_scale(sur, model)
+    s_t, s_e = sur.scale["alpha_all:T"], sur.scale["alpha_all:eps"]
+    assert 3.5 < s_t / s_e < 7.0, (s_t, s_e)
