@@ -127,8 +127,9 @@ def _build(args) -> int:
     sur.save(args.dir / "surrogate.npz")
     print(f"{args.dir / 'surrogate.npz'}: {sur.meta['points']} nodes from {args.grid}"
           f" ({sur.meta['standard_errors']} SEs, model version"
-          f" {', '.join(sur.meta['model_version'])}); interpolation-error scale "
-          + ", ".join(f"{q} {c:.3f}" for q, c in scale.items()))
+          f" {', '.join(sur.meta['model_version'])}); the interpolation error fitted on"
+          f" {len(runs)} off-grid runs (its scales: `herman2019 surrogate --validate`'s"
+          " page)")
     return EXIT_OK
 
 

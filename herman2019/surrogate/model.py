@@ -138,21 +138,29 @@ class Surrogate:
         return cache[d]
 
     def term_names(self) -> tuple[str, ...]:
-        """The interpolation-error terms, each with its own scale per quantity: one per
-        axis, and L_x's upper interval apart from its lower one."""
-        return (*AXES, "L_x:upper")
+        """The interpolation-error terms, each with its own scale per quantity: per axis
+        (L_x's upper interval apart from its lower one) the curvature's term, ``AXIS``,
+        and a flat one, ``AXIS:flat`` ((4 t(1 - t))^2: 1 mid-cell, 0 at the nodes), which
+        keeps an error between the nodes where the curvature seen at them is nil."""
+        base = (*AXES, "L_x:upper")
+        return base + tuple(f"{n}:flat" for n in base)
+
+    def combine_power(self, qn: str) -> float:
+        """How the terms' variances combine: (sum v_n^(p/2))^(2/p); p = 2 adds them, a
+        large p takes the largest (fitted, ``meta["combine"]``)."""
+        return float(self.meta.get("combine", {}).get(qn, 2.0))
 
     def _scale(self, qn: str, name: str) -> float:
-        return float(self.scale.get(f"{qn}:{name}", self.scale.get(qn, 1.0)))
+        """The term's fitted scale; unfitted: 1 for a curvature term, 0 for a flat one."""
+        default = 0.0 if name.endswith(":flat") else self.scale.get(qn, 1.0)
+        return float(self.scale.get(f"{qn}:{name}", default))
 
     def _predict_one(self, d: str, q: Mapping[str, np.ndarray], detail: bool | str
                      ) -> dict[str, np.ndarray]:
         col = self._columns(d)
         idx, w, t, h = cell_weights(self.levels, q)
-        if self.meta.get("error_shape", "curvature") == "flat":
-            pos = (4.0 * t * (1.0 - t)) ** 2                   # 1 mid-cell, 0 at nodes
-        else:
-            pos = (t * (1.0 - t) * h**2) ** 2                  # (t(1-t)h^2)^2
+        pos = (t * (1.0 - t) * h**2) ** 2                      # (t(1-t)h^2)^2
+        flat = (4.0 * t * (1.0 - t)) ** 2                      # 1 mid-cell, 0 at nodes
         lx_stride = int(np.prod([len(self.levels[a]) for a in AXES[1:]]))
         upper = idx[:, 0] // lx_stride >= 1                    # L_x's upper interval
         quad = None
@@ -161,12 +169,15 @@ class Surrogate:
         res: dict[str, np.ndarray] = {"p_zone": self._p_zone(np.sum(w * col["zone"][idx],
                                                                     axis=1))}
         for qn in QUANTITIES:
-            flat = self.meta.get("error_shape", "curvature") == "flat"
-            mean, noise2, terms, bad = _linear(col, idx, w, pos, qn, flat)
-            named = {a: terms[:, k] for k, a in enumerate(AXES)}
-            named["L_x:upper"] = np.where(upper > 0, named["L_x"], 0.0)
-            named["L_x"] = np.where(upper > 0, 0.0, named["L_x"])
-            interp2 = sum(self._scale(qn, n) ** 2 * v for n, v in named.items())
+            mean, noise2, terms, bad = _linear(col, idx, w, pos, qn)
+            named = {}
+            for suffix, arr in (("", terms), (":flat", flat)):
+                named |= {a + suffix: arr[:, k] for k, a in enumerate(AXES)}
+                named["L_x:upper" + suffix] = np.where(upper, arr[:, 0], 0.0)
+                named["L_x" + suffix] = np.where(upper, 0.0, arr[:, 0])
+            interp2 = combine(np.stack([self._scale(qn, n) ** 2 * v
+                                        for n, v in named.items()], axis=1),
+                              self.combine_power(qn))
             if quad is not None and self.order(qn) == 2:
                 y, s = col[f"y_{qn}"][quad[0]], col[f"s_{qn}"][quad[0]]
                 full = np.all(np.isfinite(y) & np.isfinite(s), axis=1)
@@ -201,8 +212,17 @@ class Surrogate:
         return np.where(inside, out, p)
 
 
+def combine(v: np.ndarray, p: float) -> np.ndarray:
+    """(sum_n v_n^(p/2))^(2/p) over the last axis of variances ``v`` >= 0, computed about
+    their largest (no overflow for a large p)."""
+    top = np.max(v, axis=-1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = np.where(top[..., None] > 0, v / np.where(top > 0, top, 1.0)[..., None], 0.0)
+    return top * np.sum(ratio ** (p / 2), axis=-1) ** (2 / p)
+
+
 def _linear(col: Mapping[str, np.ndarray], idx: np.ndarray, w: np.ndarray, pos: np.ndarray,
-            qn: str, flat: bool = False):
+            qn: str):
     """Multilinear over the corners where ``qn`` has a value (weights renormalised): mean
     of log q, its noise variance, the interpolation-error terms per axis (n, 6), and where
     no corner has a value."""
@@ -218,9 +238,6 @@ def _linear(col: Mapping[str, np.ndarray], idx: np.ndarray, w: np.ndarray, pos: 
         mean = np.sum(wn * (y if every else np.where(m, y, 0.0)), axis=1)
         noise2 = np.sum((wn * (s if every else np.where(m, s, 0.0))) ** 2, axis=1)
         for k, a in enumerate(AXES):
-            if flat:
-                terms[:, k] = pos[:, k]
-                continue
             kappa = col[f"k_{qn}_{a}"][idx]
             mk = m & np.isfinite(kappa)
             if mk.all():

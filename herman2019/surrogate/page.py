@@ -10,7 +10,7 @@ import pandas as pd
 
 from herman2019.surrogate.grid import AXES, DISPERSIONS
 from herman2019.surrogate.model import QUANTITIES, Surrogate
-from herman2019.surrogate.validate import brier, by_region, error_table, reliability
+from herman2019.surrogate.validate import SETS, brier, by_region, error_table, reliability
 
 __all__ = ["make_page", "COMMAND", "TARGET_RMS", "TARGET_MEDIAN"]
 
@@ -33,15 +33,32 @@ def _example(sur: Surrogate) -> str:
         + f", p_zone {r['p_zone']:.3f}"
 
 
+def _table(err: pd.DataFrame) -> list[str]:
+    lines = ["| quantity | points | RMS z [95 % CI] | median \\|rel. error\\| | 90th pct |"
+             " median stated rel. SE | median \\|z\\| | \\|z\\| > 2 | \\|z\\| > 4 |"
+             " RMS z target |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in err.itertuples():
+        ok = TARGET_RMS[0] <= r.rms_z <= TARGET_RMS[1]
+        lines.append(f"| {r.quantity} | {r.points} | {_fmt(r.rms_z)} [{_fmt(r.rms_z_lo)},"
+                     f" {_fmt(r.rms_z_hi)}] | {100 * r.median_rel_error:.1f} % |"
+                     f" {100 * r.p90_rel_error:.1f} % | {100 * r.median_rel_se:.1f} % |"
+                     f" {_fmt(r.median_abs_z)} | {100 * r.beyond_2:.1f} % | {r.beyond_4} |"
+                     f" {'met' if ok else 'NOT met'} |")
+    return lines
+
+
 def make_page(sur: Surrogate, cmp: pd.DataFrame, docs: Path | None, source: str) -> str:
     """The page's text; with ``docs``, written to DOCS/surrogate.md with its figure in
     DOCS/surrogate/validation.png."""
-    err = error_table(cmp)
+    rnd = cmp["group"].astype(str).to_numpy() == "offgrid"
+    err = error_table(cmp[rnd])
     meta = sur.meta
     base = float(np.nanmean(np.concatenate([f[:, sur.column("zone")]
                                             for f in sur.fields.values()])))
-    br = brier(cmp, base)
-    rel = reliability(cmp)
+    br = brier(cmp[rnd], base)
+    rel = reliability(cmp[rnd])
+    cal = meta.get("calibration", {})
     lines = [
         "# The surrogate: the released grid as a function",
         "",
@@ -89,44 +106,73 @@ def make_page(sur: Surrogate, cmp: pd.DataFrame, docs: Path | None, source: str)
         "## How it is built",
         "",
         "- **Values**: multilinear interpolation between the grid's nodes, in log(value),"
-        " with L_x, a0, C_sd and d_f on log axes (T and eps linear); at a node it returns"
-        " the node. `p_zone` is the interpolant of the nodes' 0/1 outcome; `W_c` is"
-        " interpolated over the corners with a zone only (NaN where no corner has one).",
+        " with L_x, a0, C_sd and d_f on log axes (T and eps linear); along L_x, which has"
+        " three levels, the quadratic through all three for "
+        + ", ".join(q for q in QUANTITIES if sur.order(q) == 2)
+        + " (measured better: `python benchmarks/surrogate_methods.py`); at a node it"
+        " returns the node. `W_c` is interpolated over the corners with a zone only (NaN"
+        " where no corner has one). `p_zone` is the interpolant of the nodes' 0/1 outcome,"
+        " recalibrated where it is strictly between 0 and 1 by p' = 1 / (1 + exp(-(a + b"
+        " logit p))) fitted on the calibration sets (a, b = "
+        + ", ".join(f"{v:.2f}" for v in meta.get("p_zone", [np.nan, np.nan])) + ").",
         "- **Noise**: each node's calibrated standard error (docs/convergence.md,"
         " \"Calibrated standard errors\") carried through the weights,"
         " sqrt(sum w_i^2 se_i^2).",
-        "- **Interpolation error**: per axis, the curvature of log(value) along it from the"
-        " leave-one-out residual at every interior node (its noise taken out), as the"
-        " error (y''/2) t(1-t) h^2 a linear interpolant makes inside a cell of width h;"
-        " summed in quadrature over the axes, times one scale per quantity fitted so that"
-        f" the RMS z of a *calibration set* ({meta.get('calibration', {}).get('points', '?')}"
-        " off-grid points run for the purpose, draw seed"
-        f" {meta.get('calibration', {}).get('draw_seed', '?')}) is 1: "
-        + ", ".join(f"{q} {sur.scale.get(q, np.nan):.2f}" for q in QUANTITIES) + ".",
-        "- **The points off the grid** (calibration and validation sets): uniform in the"
-        " box in each axis's coordinate (log for L_x, a0, C_sd, d_f), T on the model's"
-        " 4 ms lattice and L_x on its 1 cm one, the dispersion relation uniform, each run"
-        " at the released defaults and seed 0 as the grid's points were"
-        " (`herman2019.surrogate.validate`).",
+        "- **Interpolation error**: per axis, a term that vanishes at the nodes, the"
+        " curvature of log(value) along the axis (from the leave-one-out residual at each"
+        " interior node, its noise taken out) times (t(1-t) h^2)^2 inside a cell of width"
+        " h; each term with its own scale per quantity (L_x's two intervals apart),"
+        " fitted by likelihood on the *calibration sets* "
+        f"({cal.get('points', '?')} off-grid points run for the purpose: "
+        + ", ".join(f"{k}: {v[1]} {'points uniform in the box' if v[0] == 'random' else 'nodes per axis, that axis alone moved'}, draw seed {v[2]}"
+                    for k, v in cal.get("sets", {}).items())
+        + "). The terms' variances v combine as (sum v^(p/2))^(2/p), p fitted too (2 adds"
+        " them, a large p takes the largest); then one common factor so that the"
+        " calibration sets' RMS z is 1. The scales and p:",
         "",
-        f"## Its error on the validation set ({len(cmp)} points, never fitted on)",
+        "| quantity | " + " | ".join(sur.term_names()) + " | p |",
+        "|---|" + "---|" * (len(sur.term_names()) + 1),
+        *[f"| {q} | " + " | ".join(f"{sur.scale.get(f'{q}:{n}', np.nan):.2f}"
+                                   for n in sur.term_names())
+          + f" | {sur.combine_power(q):.1f} |" for q in QUANTITIES],
+        "",
+        "- **The points off the grid**: uniform in the box in each axis's coordinate (log"
+        " for L_x, a0, C_sd, d_f), or one axis at values between its levels with the"
+        " others at random grid nodes; T on the model's 4 ms lattice, L_x on its 1 cm one;"
+        " the dispersion relation at random; each run at the released defaults and seed 0"
+        " as the grid's points were (`herman2019.surrogate.validate`; who ran them:"
+        " `results/surrogate/provenance.json`).",
+        "",
+        "## Its error on the validation sets (never fitted on)",
         "",
         "z = (log q_surrogate - log q_model) / sqrt(se_surrogate^2 + se_model^2), in log"
         " (so relative), with the model point's calibrated SE; W_c where the model point"
         " has a compact zone and the surrogate's cell one at a corner. Target (issue 48):"
         f" RMS z in [{TARGET_RMS[0]}, {TARGET_RMS[1]}] for each quantity, median relative"
-        f" error of alpha_all at most {TARGET_MEDIAN:.0%}.",
+        f" error of alpha_all at most {TARGET_MEDIAN:.0%}. For a normal z, median |z| is"
+        " 0.67 and 4.6 % lie beyond |z| 2.",
         "",
-        "| quantity | points | RMS z [95 % CI] | median \\|rel. error\\| | 90th pct |"
-        " median stated rel. SE | \\|z\\| > 4 | RMS z target |",
-        "|---|---|---|---|---|---|---|---|",
+        f"**Uniform in the box** ({int(rnd.sum())} points):",
+        "",
+        *_table(err),
+        "",
+        f"**Each axis alone** ({int((~rnd).sum())} points: {SETS['validation_axes'][1]}"
+        " grid nodes of the other five axes per axis, the axis at values between its"
+        " levels; the surrogate interpolates along that axis only), per axis:",
+        "",
+        "| axis | points | alpha_all RMS z | median \\|rel. error\\| | a_end_rel RMS z |"
+        " median \\|rel. error\\| | W_c RMS z (points) |",
+        "|---|---|---|---|---|---|---|",
     ]
-    for r in err.itertuples():
-        ok = TARGET_RMS[0] <= r.rms_z <= TARGET_RMS[1]
-        lines.append(f"| {r.quantity} | {r.points} | {_fmt(r.rms_z)} [{_fmt(r.rms_z_lo)},"
-                     f" {_fmt(r.rms_z_hi)}] | {100 * r.median_rel_error:.1f} % |"
-                     f" {100 * r.p90_rel_error:.1f} % | {100 * r.median_rel_se:.1f} % |"
-                     f" {r.beyond_4} | {'met' if ok else 'NOT met'} |")
+    for a in AXES:
+        m = cmp["group"].astype(str).to_numpy() == f"axis:{a}"
+        e = error_table(cmp[m]).set_index("quantity")
+        lines.append(f"| {a} | {int(m.sum())} | {_fmt(e.loc['alpha_all', 'rms_z'])} |"
+                     f" {100 * e.loc['alpha_all', 'median_rel_error']:.1f} % |"
+                     f" {_fmt(e.loc['a_end_rel', 'rms_z'])} |"
+                     f" {100 * e.loc['a_end_rel', 'median_rel_error']:.1f} % |"
+                     f" {_fmt(e.loc['W_c', 'rms_z'])} ({e.loc['W_c', 'points']}) |")
+    cmp = cmp[rnd]
     med = float(err.loc[err["quantity"] == "alpha_all", "median_rel_error"].iloc[0])
     lines += [
         "",

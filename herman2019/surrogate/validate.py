@@ -28,7 +28,7 @@ import pandas as pd
 from scipy.optimize import brentq
 
 from herman2019.surrogate.grid import AXES, DISPERSIONS, coordinate
-from herman2019.surrogate.model import QUANTITIES, Surrogate
+from herman2019.surrogate.model import QUANTITIES, Surrogate, combine
 
 __all__ = ["SETS", "draw_points", "model_table", "compare", "fit_scale", "error_table",
            "reliability", "brier", "by_region"]
@@ -146,14 +146,23 @@ def _z(cmp: pd.DataFrame, q: str, scale_ratio: float) -> np.ndarray:
 #: The fit's pull of each term's log-scale towards their mean (a term with few points
 #: that see it takes about the others' scale).
 RIDGE = 1.0
+#: The largest power p of the terms' combination (sum v^(p/2))^(2/p): about the largest.
+MAX_POWER = 64.0
+
+
+def power(theta: float) -> float:
+    """The combination's power p = 2 + exp(theta) (>= 2: at least as concentrated as a
+    sum of independent variances), at most MAX_POWER."""
+    return float(min(2.0 + np.exp(theta), MAX_POWER))
 
 
 def fit_scale(sur: Surrogate, calibration: pd.DataFrame) -> dict[str, float]:
     """Fit the interpolation error's scales on the calibration sets: per quantity one
-    scale per term of :meth:`Surrogate.term_names` (each axis; L_x's two intervals apart),
-    by maximum likelihood of the log residuals as normal with variance noise + sum of
-    scale^2 term (a ridge of :data:`RIDGE` on the log-scales about their mean), then one
-    common factor so that the calibration sets' RMS z is 1. Also p_zone's recalibration
+    scale per term of :meth:`Surrogate.term_names` (each axis, curvature and flat; L_x's
+    two intervals apart) and the power p of their combination, by maximum likelihood of
+    the log residuals as normal with variance noise + (sum (scale^2 term)^(p/2))^(2/p)
+    (a ridge of :data:`RIDGE` on the log-scales about their mean), then one common factor
+    so that the calibration sets' RMS z is 1. Also p_zone's recalibration
     (:func:`fit_p_zone`). Sets ``sur.scale`` and ``sur.meta["p_zone"]``; returns the
     scales."""
     from scipy.optimize import minimize
@@ -175,23 +184,28 @@ def fit_scale(sur: Surrogate, calibration: pd.DataFrame) -> dict[str, float]:
         r, noise, terms = r[ok], noise[ok], terms[ok]
         seen = terms.sum(axis=0) > 0
 
+        def var(p, c=1.0):
+            return noise + c * c * combine(terms * np.exp(2 * p[:-1]), power(p[-1]))
+
         def nll(p):
-            v = noise + terms @ np.exp(2 * p)
+            v = var(p)
             return float(np.sum(np.log(v) + r * r / v)
-                         + RIDGE * np.sum((p[seen] - p[seen].mean()) ** 2))
-        p = minimize(nll, np.zeros(len(names)), method="L-BFGS-B").x
-        p[~seen] = p[seen].mean() if seen.any() else 0.0
-        s2 = np.exp(2 * p)
+                         + RIDGE * np.sum((p[:-1][seen] - p[:-1][seen].mean()) ** 2))
+        p = minimize(nll, np.zeros(len(names) + 1), method="L-BFGS-B",
+                     bounds=[(-12, 6)] * len(names) + [(-6, np.log(MAX_POWER - 2))]).x
+        p[:-1][~seen] = p[:-1][seen].mean() if seen.any() else 0.0
+        s2 = np.exp(2 * p[:-1])
 
         def excess(c):
-            return float(np.mean(r * r / (noise + c * c * (terms @ s2)))) - 1
+            return float(np.mean(r * r / var(p, c))) - 1
         if excess(0.0) <= 0:
             c = 0.0
         else:
             hi = 1.0
             while excess(hi) > 0 and hi < 1e6:
                 hi *= 2
-            c = brentq(excess, 0.0, hi, xtol=1e-8)
+            c = brentq(excess, 0.0, hi, xtol=1e-8) if excess(hi) <= 0 else hi
+        sur.meta.setdefault("combine", {})[q] = power(p[-1])
         sur.scale.pop(q, None)
         for n, sj in zip(names, np.sqrt(s2), strict=True):
             sur.scale[f"{q}:{n}"] = float(c * sj)
@@ -218,7 +232,8 @@ def fit_p_zone(p: np.ndarray, zone: np.ndarray) -> list[float]:
 def error_table(cmp: pd.DataFrame, quantities: Sequence[str] = QUANTITIES) -> pd.DataFrame:
     """Per quantity on ``cmp`` (:func:`compare`): points, RMS z with its 95 % interval (as
     if z were normal), median and 90th percentile of the relative error, its median
-    stated SE, and points beyond |z| 4."""
+    stated SE, median |z| (0.67 for a normal z), the share beyond |z| 2 (4.6 %) and the
+    points beyond |z| 4."""
     from scipy.stats import chi2
     rows = []
     for q in quantities:
@@ -235,6 +250,8 @@ def error_table(cmp: pd.DataFrame, quantities: Sequence[str] = QUANTITIES) -> pd
                      "median_rel_error": float(np.median(rel)) if n else np.nan,
                      "p90_rel_error": float(np.quantile(rel, 0.9)) if n else np.nan,
                      "median_rel_se": float(np.median(se_rel)) if n else np.nan,
+                     "median_abs_z": float(np.median(np.abs(z[ok]))) if n else np.nan,
+                     "beyond_2": float(np.mean(np.abs(z[ok]) > 2)) if n else np.nan,
                      "beyond_4": int(np.sum(np.abs(z[ok]) > 4))})
     return pd.DataFrame(rows)
 

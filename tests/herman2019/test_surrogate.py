@@ -266,5 +266,51 @@ def test_each_axis_gets_its_own_scale():
         model[qn], model[qn + "_se"] = v, 0.002 * v
     model["W_c"], model["W_c_se"] = 20 * v, 0.002 * 20 * v
     fit_scale(sur, model)
-    s_t, s_e = sur.scale["alpha_all:T"], sur.scale["alpha_all:eps"]
-    assert 3.5 < s_t / s_e < 7.0, (s_t, s_e)
+    fitted = sur.predict("ml", detail="terms", **q)
+
+    def var(axis):
+        return sum(sur.scale[f"alpha_all:{n}"] ** 2 * fitted[f"alpha_all_term_{n}"]
+                   for n in sur.term_names() if n.split(":")[0] == axis).sum()
+    truth_t, truth_e = 25 * pred["alpha_all_term_T"].sum(), pred["alpha_all_term_eps"].sum()
+    assert 0.6 < var("T") / truth_t < 1.6, (var("T"), truth_t)
+    assert 0.4 < var("eps") / truth_e < 2.5, (var("eps"), truth_e)
+
+
+def test_the_shipped_surrogate_is_the_shipped_table_at_every_node():
+    """Issue 48: the surrogate reproduces the released grid at its nodes (values to
+    rounding, SEs the calibrated ones, p_zone the node's 0/1)."""
+    import sweep
+    from herman2019.factors import calibrated
+    from herman2019.surrogate.grid import AXES as AX
+    from herman2019.surrogate.model import SHIPPED
+    df = calibrated(sweep.load(SHIPPED.parents[1] / "herman2019"))
+    p = Surrogate.load().predict(df["dispersion"].astype(str).to_numpy(),
+                                 **{a: df[a].to_numpy(float) for a in AX})
+    for q in ("alpha_all", "alpha_edge", "a_end_rel", "W_c"):
+        # a node with a value and its SE (alpha_edge has no SE at 431 points: the surrogate
+        # leaves those nodes out, as it does a point without a value)
+        have = df[q].notna() & (df[q] > 0) & np.isfinite(df[q + "_stderr_cal"])
+        assert np.isnan(p[q][df[q].notna() & ~have]).all()
+        np.testing.assert_allclose(p[q][have], df[q][have], rtol=1e-12)
+        np.testing.assert_allclose(p[q + "_se"][have], df[q + "_stderr_cal"][have],
+                                   rtol=1e-9)
+    np.testing.assert_array_equal(p["p_zone"], (df["compact_zone"] != "none").astype(float))
+
+
+@pytest.mark.slow
+def test_the_surrogate_page_is_what_its_command_makes(tmp_path):
+    """docs/surrogate.md is what `herman2019 surrogate --validate --docs docs` makes from
+    the shipped files (its runs are stored: nothing is run)."""
+    import shutil
+
+    from herman2019.surrogate.model import SHIPPED
+    root = SHIPPED.parents[2]
+    work = tmp_path / "surrogate"
+    shutil.copytree(SHIPPED.parent, work)
+    assert main(["surrogate", "--validate", "--dir", str(work), "--docs",
+                 str(tmp_path / "docs")]) == 0
+    made = (tmp_path / "docs" / "surrogate.md").read_text()
+    shipped = (root / "docs" / "surrogate.md").read_text()
+    made = made.replace(str(work), "results/surrogate")
+    assert made == shipped, "docs/surrogate.md is stale: run herman2019 surrogate --validate --docs docs"
+    assert (tmp_path / "docs" / "surrogate" / "validation.png").stat().st_size > 10_000
