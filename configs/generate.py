@@ -57,6 +57,18 @@ CONFIGS = {
                 dispersion=["ep", "ow", "ml"]),
         run='name = "herman2019"\ndescription = "Herman, Cheng & Shen (2019) full parameter'
             ' grid"\nprogress_interval = 300.0\ngrace_period = 240.0'),
+    "herman2019_lx": dict(header="""
+# The paper's grid at three more floe lengths (issue 48: the surrogate between the grid's
+# nodes is limited by L_x's three levels): L_x 0.75, 1.0 and 2.0 m with every other list
+# of configs/herman2019.toml, 3 x 7 x 4 x 6 x 4 x 4 x 3 = 24,192 points, so that with it
+# L_x has six levels (0.5, 0.75, 1.0, 1.5, 2.0, 3.0). Every other parameter as there.
+# Cost: see `sweep plan configs/herman2019_lx.toml`.
+""", sweep=dict(L_x=[0.75, 1.0, 2.0], T=[1.1, 1.2, 1.4, 1.5, 1.6, 1.8, 2.0],
+                a0=[0.0125, 0.015, 0.02, 0.025], C_sd=[0.005, 0.01, 0.05, 0.1, 0.15, 0.2],
+                eps=[0.2, 0.4, 0.6, 0.8], d_f=[0.005, 0.010, 0.020, 0.050],
+                dispersion=["ep", "ow", "ml"]),
+        run='name = "herman2019_lx"\ndescription = "Herman, Cheng & Shen (2019) grid at'
+            ' three more floe lengths"\nprogress_interval = 300.0\ngrace_period = 240.0'),
     "demo": dict(header="""
 # A small demonstration campaign: 16 points with reduced numerics (n0 = 2, nT = 2,
 # max_iterations = 30, n_average = 8, ensembles of 4 replicas without the W_c precision

@@ -6,6 +6,8 @@
 #     results/herman2019/run_shard.sh K N > LOG 2>&1
 # then, from any checkout:
 #     herman2019 record STORES/herman2019-sKofN.h5 --shard K/N --log LOG
+# CONFIG (default configs/herman2019.toml, relative to the checkout) runs another campaign
+# file the same way, into STORES/<its name>-sKofN.h5 (e.g. configs/herman2019_lx.toml).
 # Refuses (exit 2) when the checkout's tracked files differ from its commit: a shipped
 # run records one commit and git_dirty false. A stop (SIGTERM or Ctrl-C to mpiexec) ends
 # the run cleanly; the same command resumes it. bash's time reports the CPU of every rank
@@ -17,6 +19,9 @@ done
 [ "$K" -lt "$N" ] || { echo "run_shard.sh: K = $K is not below N = $N" >&2; exit 2; }
 STORES=${STORES:-/work/campaign}
 ROOT="$(cd "$(dirname "$0")/../.." && pwd)"
+CONFIG=${CONFIG:-configs/herman2019.toml}
+[ -f "$ROOT/$CONFIG" ] || { echo "run_shard.sh: CONFIG $CONFIG: no such file in $ROOT" >&2; exit 2; }
+NAME=$(basename "$CONFIG" .toml)
 cd "$ROOT"
 if ! status=$(git status --porcelain --untracked-files=no); then
     echo "run_shard.sh: $ROOT: git status failed" >&2
@@ -29,5 +34,5 @@ fi
 mkdir -p "$STORES"
 export PYTHONPATH="$ROOT${PYTHONPATH:+:$PYTHONPATH}"
 TIMEFORMAT="[time] real %R s, user %U s, sys %S s (all ranks)"
-time nice -n 5 mpiexec -n 3 python -m sweep run configs/herman2019.toml \
-    --store "$STORES/herman2019-s${K}of${N}.h5" --shard "${K}/${N}" --no-bar
+time nice -n 5 mpiexec -n 3 python -m sweep run "$CONFIG" \
+    --store "$STORES/${NAME}-s${K}of${N}.h5" --shard "${K}/${N}" --no-bar
