@@ -191,6 +191,16 @@ def _machines(shards: dict) -> str:
     return "; ".join(parts)
 
 
+def _campaign_file(attrs: dict) -> str | None:
+    """``configs/<name>.toml`` of the store's campaign (its ``[run] name``), if it says."""
+    import tomllib
+    try:
+        name = tomllib.loads(str(attrs.get("campaign_toml", ""))).get("run", {}).get("name")
+    except tomllib.TOMLDecodeError:
+        return None
+    return f"configs/{name}.toml" if name else None
+
+
 def _plain(o):
     """numpy scalars (a store's attributes) as Python values for JSON."""
     return o.item() if hasattr(o, "item") else str(o)
@@ -215,11 +225,19 @@ def command(args: Any) -> int:
         k, n = (int(v) for v in args.shard.split("/"))
     except ValueError:
         raise ConfigError(f"--shard {args.shard}: expected K/N, e.g. 0/8") from None
+    attrs = store_attrs(args.store)
+    campaign = _campaign_file(attrs)
+    prov_path = args.out / "provenance.json"
+    if prov_path.exists():             # another campaign's directory: refuse, write nothing
+        have = json.loads(prov_path.read_text()).get("campaign_hash")
+        if have and have != attrs.get("campaign_hash"):
+            raise ConfigError(f"{args.store} is campaign {campaign or '?'} (hash"
+                              f" {str(attrs.get('campaign_hash'))[:12]}); {args.out} records"
+                              f" campaign hash {have[:12]}: give the --out of its campaign")
     args.out.mkdir(parents=True, exist_ok=True)
     table = args.out / f"shard-{k}-of-{n}.csv.gz"
     rows = export_table(args.store, table)
     df = sweep.load(table)
-    attrs = store_attrs(args.store)
     runs = store_runs(args.store)
     logs = [parse_log(p) for p in args.log]
     keep = ("started", "ended", "outcome", "git_commit", "git_dirty", "host", "mpi_size",
@@ -246,11 +264,10 @@ def command(args: Any) -> int:
     (args.out / "problems").mkdir(exist_ok=True)
     entry["problems"] = problems(args.store, df,
                                  args.out / "problems" / f"problems-{k}-of-{n}.csv")
-    prov_path = args.out / "provenance.json"
     prov = json.loads(prov_path.read_text()) if prov_path.exists() else {}
     if plan is not None:
         prov["plan"] = plan
-    prov.setdefault("campaign", "configs/herman2019.toml")
+    prov["campaign"] = campaign or prov.get("campaign", "configs/herman2019.toml")
     prov["campaign_hash"] = attrs.get("campaign_hash")
     prov.setdefault("shards", {})[f"{k}/{n}"] = entry
     prov_path.write_text(json.dumps(prov, indent=1, sort_keys=True, default=_plain) + "\n")

@@ -88,3 +88,32 @@ def test_each_results_readme_holds_the_summary_of_its_provenance():
             readme
         checked += 1
     assert checked >= 1
+
+
+_ONE = """\
+[base]
+L_sheet = 6.0
+[sweep]
+L_x = [0.5, 1.0]
+T = [1.0, 2.0]
+[run]
+name = "{name}"
+"""
+
+
+def test_record_names_the_campaign_and_refuses_another_campaign_s_directory(
+        power_store, tmp_path, capsys):
+    """A store is recorded into the directory of its own campaign only (the lx extension
+    was once recorded as configs/herman2019.toml, and nothing stopped recording it over
+    the release): another campaign's store exits 2 and writes nothing."""
+    a = power_store(_ONE.format(name="one"), "one.toml")
+    b = power_store(_ONE.format(name="two").replace("2.0]", "1.5]"), "two.toml")
+    out = tmp_path / "out"
+    assert main(["record", str(a), "--shard", "0/1", "--out", str(out)]) == 0
+    prov = json.loads((out / "provenance.json").read_text())
+    assert prov["campaign"] == "configs/one.toml"
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    capsys.readouterr()
+    assert main(["record", str(b), "--shard", "0/1", "--out", str(out)]) == 2
+    assert "give the --out of its campaign" in capsys.readouterr().err
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
