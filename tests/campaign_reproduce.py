@@ -12,7 +12,9 @@ directory's ``provenance.json``) must agree bit for bit (NaN equal to NaN;
 docs/reproducibility.md: one configuration, one result, whatever the rank count, resume
 or JIT cache). A row made on another kind of CPU (another vector width rounds otherwise,
 and a chaotic trajectory then moves) must agree within its error bars: every quantity
-within 4 of sqrt(SE_table^2 + SE_here^2); its largest such z is printed. ``--here``
+within 4 of sqrt(SE_table^2 + SE_here^2); its largest such z is printed (a status that
+differs there, e.g. converged_noisy against not_converged at a point near the stopping
+rule's threshold, is printed and does not fail the row by itself). ``--here``
 draws only rows made on this kind of CPU. Exit status 0 when every row passes its test,
 1 otherwise. Run it from a checkout of the model version that made the table (the commit
 in its ``provenance.json``); another version gives other draws.

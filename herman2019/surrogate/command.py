@@ -7,13 +7,15 @@
     herman2019 surrogate --build [--grid results/herman2019] [--dir results/surrogate] --jobs 2
     herman2019 surrogate --validate [--dir results/surrogate] --jobs 2 [--docs docs]
 
-``--build``: the node arrays from the grid's table (:mod:`.build`), the calibration set's
-points run (resumable, ``DIR/calibration/runs.csv.gz``), the interpolation-error scale
-fitted on them, ``DIR/surrogate.npz`` written. ``--validate``: the validation set's points
-run (``DIR/validation/runs.csv.gz``), compared with the surrogate
+``--build``: the node arrays from the grid's table (:mod:`.build`), the calibration sets'
+points run (resumable, ``DIR/calibration/`` and ``DIR/calibration_axes/runs.csv.gz``),
+the interpolation error's model fitted on them (:func:`.validate.fit_scale`),
+``DIR/surrogate.npz`` written. ``--validate``: the validation sets' points run
+(``DIR/validation/``, ``DIR/validation_axes/``), compared with the surrogate
 (``DIR/validation.csv.gz``: every point's model values beside the surrogate's), the error
 tables printed and, with ``--docs``, ``DOCS/surrogate.md`` and its figure written. Exit
-status 0; 2 for a bad argument or a point outside the box; 3 for a missing file.
+status 0; 2 for a bad argument, a bad CSV or a point outside the box; 3 for a missing
+file.
 """
 from __future__ import annotations
 
@@ -80,11 +82,19 @@ def command(args) -> int:
             raise ConfigError("--csv and point options: give one")
         if not args.csv.is_file():
             raise FileNotFoundError(f"--csv {args.csv}: no such file")
-        pts = pd.read_csv(args.csv)
+        try:
+            pts = pd.read_csv(args.csv)
+        except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError) as exc:
+            raise ConfigError(f"--csv {args.csv}: not a CSV table ({exc})") from None
         missing = [c for c in (*AXES, "dispersion") if c not in pts]
         if missing:
             raise ConfigError(f"--csv {args.csv}: no column {', '.join(missing)}")
-        params = {a: pts[a].to_numpy(float) for a in AXES}
+        params = {}
+        for a in AXES:
+            try:
+                params[a] = pts[a].to_numpy(float)
+            except (TypeError, ValueError):
+                raise ConfigError(f"--csv {args.csv}: column {a} is not numeric") from None
         disp = pts["dispersion"].astype(str).to_numpy()
     else:
         missing = [f"--{a}" for a, v in given.items() if v is None]
@@ -99,6 +109,8 @@ def command(args) -> int:
     except (OutsideBox, ValueError) as exc:
         raise ConfigError(str(exc)) from None
     if args.out is not None:
+        if not args.out.parent.is_dir():
+            raise ConfigError(f"--out {args.out}: no directory {args.out.parent}")
         out.to_csv(args.out, index=False)
         print(f"{args.out}: {len(out)} points")
     else:
@@ -121,6 +133,7 @@ def _build(args) -> int:
     runs = pd.concat([_run_set(name, sur.levels, args.dir, args.jobs)
                       for name in ("calibration", "calibration_axes")], ignore_index=True)
     scale = fit_scale(sur, model_table(runs))
+    sur.meta["git_dirty"] = _dirty()
     sur.meta["calibration"] = {"points": int(len(runs)),
                                "sets": {k: list(SETS[k]) for k in ("calibration",
                                                                     "calibration_axes")}}
@@ -131,6 +144,12 @@ def _build(args) -> int:
           f" {len(runs)} off-grid runs (its scales: `herman2019 surrogate --validate`'s"
           " page)")
     return EXIT_OK
+
+
+def _dirty() -> bool:
+    """Whether this checkout's tracked files differ from its commit."""
+    return subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
+                          cwd=ROOT, capture_output=True, text=True).stdout.strip() != ""
 
 
 def _run_set(name: str, levels, out: Path, jobs: int) -> pd.DataFrame:
@@ -150,8 +169,7 @@ def _run_set(name: str, levels, out: Path, jobs: int) -> pd.DataFrame:
     if len(runs) > before:
         prov_path = out / "provenance.json"
         prov = json.loads(prov_path.read_text()) if prov_path.exists() else {}
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
-                               cwd=ROOT, capture_output=True, text=True).stdout.strip() != ""
+        dirty = _dirty()
         prov[name] = {"points": int(len(runs)), "kind": kind, "draw_seed": seed,
                       "model_version": str(floewave.MODEL_VERSION), "commit": _commit(),
                       "git_dirty": dirty, "machine": machine(),

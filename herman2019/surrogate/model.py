@@ -1,21 +1,25 @@
 """The surrogate: the released grid read as a function of (L_x, T, a0, C_sd, eps, d_f) per
 dispersion relation, with a standard error on every value.
 
-**Values.** Each quantity is interpolated multilinearly between the nodes of the grid
-(:mod:`.grid`: log axes for L_x, a0, C_sd, d_f), in log(value): ``alpha_all``,
-``alpha_edge``, ``a_end_rel`` (a_end/a0) and ``W_c``. ``p_zone``, the probability that a
-compact zone forms, is the multilinear interpolant of the nodes' 0/1 outcome; ``W_c`` (the
-zone's width where one forms) is interpolated over the corners with a zone only, and is
-NaN where no corner of the cell has one.
+**Values.** Each quantity is interpolated between the nodes of the grid (:mod:`.grid`: log
+axes for L_x, a0, C_sd, d_f), in log(value): ``alpha_all``, ``alpha_edge``, ``a_end_rel``
+(a_end/a0) and ``W_c``; multilinearly, except along L_x (three levels) where the
+quantities of ``meta["lx_order"]`` take the quadratic through all three. ``p_zone``, the
+probability that a compact zone forms, is the multilinear interpolant of the nodes' 0/1
+outcome (recalibrated, ``meta["p_zone"]``); ``W_c`` (the zone's width where one forms) is
+interpolated over the corners with a zone only, and is NaN where no corner has one. A node
+without a result weighs nothing.
 
 **Standard errors.** Two parts, added in quadrature (in log, so relative): the nodes'
 stochastic errors carried through the weights, sqrt(sum w_i^2 se_i^2) (the calibrated SEs
 of ``results/calibration/factors.csv`` where the table is of that model version), and the
-interpolation error between the nodes, estimated per axis from the node values' curvature
-along it (the leave-one-out residual at each interior node with its noise taken out,
-:mod:`.build`), scaled by one factor per quantity fitted on off-grid points run for the
-purpose (never on the validation set). At a node both the interpolation error and its
-position term are zero, and the surrogate returns the node's own value and SE.
+interpolation error between the nodes: per axis a curvature term (the node values'
+curvature along it, from the leave-one-out residual at each interior node with its noise
+taken out, :mod:`.build`, times (t(1-t)h^2)^2) and a flat one ((4t(1-t))^2), each with its
+own scale per quantity (L_x's two intervals apart), combined with a power p
+(:func:`combine`); scales and p fitted on off-grid points run for the purpose, never on
+the validation sets (:func:`.validate.fit_scale`). At a node every term is zero, and the
+surrogate returns the node's own value and SE.
 """
 from __future__ import annotations
 
@@ -49,7 +53,7 @@ BLOCK = 8192
 @dataclass
 class Surrogate:
     """Node arrays per dispersion relation (fields in C order over :data:`AXES`) and the
-    interpolation error's scale per quantity. Build with :func:`.build.build`; save and
+    interpolation error's scales (``scale["q:term"]``) and combination (``meta``). Build with :func:`.build.build`; save and
     load with :meth:`save` and :meth:`load`."""
 
     levels: dict[str, np.ndarray]
@@ -139,7 +143,8 @@ class Surrogate:
 
     def term_names(self) -> tuple[str, ...]:
         """The interpolation-error terms, each with its own scale per quantity: per axis
-        (L_x's upper interval apart from its lower one) the curvature's term, ``AXIS``,
+        (L_x's upper interval apart from its lower one; with more than three levels of
+        L_x, ``L_x:upper`` is every interval above the first) the curvature's term, ``AXIS``,
         and a flat one, ``AXIS:flat`` ((4 t(1 - t))^2: 1 mid-cell, 0 at the nodes), which
         keeps an error between the nodes where the curvature seen at them is nil."""
         base = (*AXES, "L_x:upper")
@@ -166,8 +171,12 @@ class Surrogate:
         quad = None
         if any(self.order(qn) == 2 for qn in QUANTITIES):
             quad = quadratic_weights(self.levels, q, "L_x")
-        res: dict[str, np.ndarray] = {"p_zone": self._p_zone(np.sum(w * col["zone"][idx],
-                                                                    axis=1))}
+        zone = col["zone"][idx]                # NaN at a node without a result: left out
+        known = np.isfinite(zone)
+        wz = np.where(known, w, 0.0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            p = np.sum(wz * np.where(known, zone, 0.0), axis=1) / wz.sum(axis=1)
+        res: dict[str, np.ndarray] = {"p_zone": self._p_zone(p)}
         for qn in QUANTITIES:
             mean, noise2, terms, bad = _linear(col, idx, w, pos, qn)
             named = {}

@@ -6,7 +6,8 @@ interpolation coordinate (log for L_x, a0, C_sd, d_f: the coordinate the grid's 
 and the surrogate use, so every cell of the grid is drawn about equally often), rounded
 where the model needs it (T to 4 ms: T/dt an integer multiple of ``drag_every`` = 4
 steps; L_x to 1 cm, a multiple of dx) and elsewhere to 6 significant digits, the
-dispersion relation uniform over the three. Each is run at the model's defaults (the released ones: ``configs/
+dispersion relation uniform over the three. The ``axes`` sets (:func:`draw_axis_points`) move one axis alone, the others at
+grid nodes. Each is run at the model's defaults (the released ones: ``configs/
 herman2019.toml``'s ``[base]``) and ``seed`` 0, as the grid's points were, by
 :func:`herman2019.calibration.run_sample` (resumable; one row per point).
 
@@ -14,9 +15,9 @@ herman2019.toml``'s ``[base]``) and ``seed`` 0, as the grid's points were, by
 z = (log q_surrogate - log q_model) / sqrt(se_surrogate^2 + se_model^2), with the
 model point's calibrated SE (the factor of its nearest calibrated levels); W_c where the
 model point has a compact zone and the surrogate's cell has one at a corner.
-:func:`fit_scale` sets each quantity's interpolation-error scale c so that the RMS z of
-the calibration set is 1. :func:`error_table` gives, on the validation set, RMS z, the
-median and 90th percentile of |q_surrogate / q_model - 1| and the points beyond |z| 4;
+:func:`fit_scale` fits the interpolation error's scales and combination on the
+calibration sets. :func:`error_table` gives, on a validation set, RMS z, the median and
+90th percentile of |q_surrogate / q_model - 1|, median |z|, the shares beyond |z| 2 and 4;
 :func:`reliability` and :func:`brier` check p_zone against the points' outcomes.
 """
 from __future__ import annotations
@@ -35,8 +36,8 @@ __all__ = ["SETS", "draw_points", "model_table", "compare", "fit_scale", "error_
 
 #: The off-grid sets: name -> (kind, size, draw seed). ``random``: that many points uniform
 #: in the box (:func:`draw_points`); ``axes``: that many grid nodes per axis with the axis
-#: alone moved off its levels (:func:`draw_axis_points`). Their draw seeds differ, so no
-#: point of one is in another. The calibration sets fit the error model, the validation
+#: alone moved off its levels (:func:`draw_axis_points`). Their draw seeds differ (no
+#: point is shared: tested). The calibration sets fit the error model, the validation
 #: sets check it.
 SETS = {"calibration": ("random", 300, 4801), "calibration_axes": ("axes", 24, 4803),
         "validation": ("random", 300, 4802), "validation_axes": ("axes", 24, 4804)}
@@ -108,7 +109,8 @@ def model_table(runs: pd.DataFrame) -> pd.DataFrame:
         base = "a_end" if q == "a_end_rel" else q
         f = factors_of(snap.assign(status=out["status"]), fac, base)
         out[q + "_se"] = out[q + "_stderr"].to_numpy(float) * np.nan_to_num(f, nan=1.0)
-    out["zone"] = (out["layout"].astype(str) != "none").astype(float)
+    done = out["status"].astype(str).isin(["converged", "converged_noisy", "not_converged"])
+    out["zone"] = np.where(done, (out["layout"].astype(str) != "none").astype(float), np.nan)
     return out
 
 
@@ -157,19 +159,28 @@ def power(theta: float) -> float:
 
 
 def fit_scale(sur: Surrogate, calibration: pd.DataFrame) -> dict[str, float]:
-    """Fit the interpolation error's scales on the calibration sets: per quantity one
+    """Fit the interpolation error's model on the calibration sets: per quantity one
     scale per term of :meth:`Surrogate.term_names` (each axis, curvature and flat; L_x's
     two intervals apart) and the power p of their combination, by maximum likelihood of
     the log residuals as normal with variance noise + (sum (scale^2 term)^(p/2))^(2/p)
-    (a ridge of :data:`RIDGE` on the log-scales about their mean), then one common factor
-    so that the calibration sets' RMS z is 1. Also p_zone's recalibration
-    (:func:`fit_p_zone`). Sets ``sur.scale`` and ``sur.meta["p_zone"]``; returns the
+    (a ridge of :data:`RIDGE` on the log-scales, the curvature terms' about their mean
+    and the flat terms' about theirs), then one common factor so that the mean over the
+    calibration sets' kinds (``group``: uniform in the box, one axis alone) of their mean
+    z^2 is 1, each kind weighing the same whatever its size. Parameters that end on a
+    bound of the fit are listed in ``sur.meta["at_bound"]``. Also p_zone's
+    recalibration (:func:`fit_p_zone`). Sets ``sur.scale`` and ``sur.meta``; returns the
     scales."""
     from scipy.optimize import minimize
     sur.meta.pop("p_zone", None)
     pred = sur.predict(calibration["dispersion"].astype(str).to_numpy(), detail="terms",
                        **{a: calibration[a].to_numpy(float) for a in AXES})
     names = sur.term_names()
+    flat = np.array([n.endswith(":flat") for n in names])
+    kind_all = np.where(calibration["group"].astype(str).str.startswith("axis:"), "axes",
+                        "random") if "group" in calibration else np.full(len(calibration),
+                                                                         "random")
+    bounds = [(-12.0, 6.0)] * len(names) + [(-6.0, float(np.log(MAX_POWER - 2)))]
+    sur.meta["at_bound"] = []
     for q in QUANTITIES:
         y = calibration[q].to_numpy(float)
         x = pred[q].to_numpy(float)
@@ -181,23 +192,37 @@ def fit_scale(sur: Surrogate, calibration: pd.DataFrame) -> dict[str, float]:
         ok = np.isfinite(r) & np.isfinite(noise) & np.all(np.isfinite(terms), axis=1)
         if q == "W_c":
             ok &= calibration["zone"].to_numpy() > 0
-        r, noise, terms = r[ok], noise[ok], terms[ok]
+        r, noise, terms, kind = r[ok], noise[ok], terms[ok], kind_all[ok]
         seen = terms.sum(axis=0) > 0
 
         def var(p, c=1.0):
             return noise + c * c * combine(terms * np.exp(2 * p[:-1]), power(p[-1]))
 
+        def ridge(s):
+            out = 0.0
+            for group in (seen & ~flat, seen & flat):
+                if group.any():
+                    out += float(np.sum((s[group] - s[group].mean()) ** 2))
+            return RIDGE * out
+
         def nll(p):
             v = var(p)
-            return float(np.sum(np.log(v) + r * r / v)
-                         + RIDGE * np.sum((p[:-1][seen] - p[:-1][seen].mean()) ** 2))
-        p = minimize(nll, np.zeros(len(names) + 1), method="L-BFGS-B",
-                     bounds=[(-12, 6)] * len(names) + [(-6, np.log(MAX_POWER - 2))]).x
-        p[:-1][~seen] = p[:-1][seen].mean() if seen.any() else 0.0
+            return float(np.sum(np.log(v) + r * r / v)) + ridge(p[:-1])
+        p = minimize(nll, np.zeros(len(names) + 1), method="L-BFGS-B", bounds=bounds).x
+        for group in (~flat, flat):
+            fill = p[:-1][seen & group]
+            p[:-1][~seen & group] = fill.mean() if fill.size else 0.0
+        sur.meta["at_bound"] += [f"{q}:{n}" for n, v, (lo, hi)
+                                 in zip((*names, "p"), p, bounds, strict=True)
+                                 if (v <= lo + 1e-6 or v >= hi - 1e-6)
+                                 and (n == "p" or seen[names.index(n)])]
         s2 = np.exp(2 * p[:-1])
+        kinds = [k for k in ("random", "axes") if (kind == k).any()]
 
         def excess(c):
-            return float(np.mean(r * r / var(p, c))) - 1
+            v = var(p, c)
+            return float(np.mean([np.mean(r[kind == k] ** 2 / v[kind == k])
+                                  for k in kinds])) - 1
         if excess(0.0) <= 0:
             c = 0.0
         else:

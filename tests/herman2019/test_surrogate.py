@@ -123,6 +123,22 @@ def test_w_c_is_read_over_the_corners_with_a_zone_and_p_zone_is_their_weight():
     assert np.isnan(p["W_c"][2]) and np.isnan(p["W_c_se"][2])
 
 
+def test_a_node_without_a_result_is_left_out_of_p_zone_and_the_values():
+    """A failed node (no result, NaN zone) weighs nothing: p_zone and W_c are read over
+    the other corners, and at the node itself there is nothing to read."""
+    df = synthetic(lambda u: 0.0, zone=lambda p: p["eps"] > 0.3)
+    at = (df["eps"] == 0.8) & (df["T"] == 1.4) & (df["L_x"] == 1.5) & (df["a0"] == 0.02) \
+        & (df["C_sd"] == 0.05) & (df["d_f"] == 0.02)
+    df.loc[at, "status"] = "failed"
+    sur = build(df)
+    node = dict(L_x=1.5, T=1.4, a0=0.02, C_sd=0.05, d_f=0.02)
+    p = sur.predict("ml", eps=[0.8, 0.65, 0.35], **node)
+    assert np.isnan(p["p_zone"][0]) and np.isnan(p["alpha_all"][0])
+    assert p["p_zone"][1] == 1.0                # its only other corner, eps 0.5, has a zone
+    np.testing.assert_allclose(p["p_zone"][2], 0.5, rtol=1e-12)   # eps 0.2 none, 0.5 zone
+    assert np.isfinite(p["W_c"][1])
+
+
 def test_outside_the_box_it_refuses_naming_the_parameter():
     sur = build(synthetic(lambda u: 0.0))
     ok = dict(L_x=1.0, T=1.3, a0=0.02, C_sd=0.05, eps=0.5, d_f=0.01)
@@ -214,6 +230,17 @@ def test_the_command_predicts_refuses_and_names_what_is_wrong(tmp_path, capsys):
     assert main(["surrogate", "--file", str(tmp_path / "none.npz"), "--csv",
                  str(tmp_path / "p.csv")]) == 3
     assert "no surrogate file" in capsys.readouterr().err
+    s = ["surrogate", "--file", str(tmp_path / "s.npz"), "--csv"]
+    (tmp_path / "empty.csv").write_text("")
+    assert main(s + [str(tmp_path / "empty.csv")]) == 2
+    assert "not a CSV table" in capsys.readouterr().err
+    bad = pd.read_csv(tmp_path / "p.csv").astype({"L_x": object})
+    bad.loc[0, "L_x"] = "long"
+    bad.to_csv(tmp_path / "bad.csv", index=False)
+    assert main(s + [str(tmp_path / "bad.csv")]) == 2
+    assert "column L_x is not numeric" in capsys.readouterr().err
+    assert main(s + [str(tmp_path / "p.csv"), "--out", str(tmp_path / "no" / "o.csv")]) == 2
+    assert "no directory" in capsys.readouterr().err
 
 
 def test_along_l_x_the_quadratic_through_its_three_levels_is_exact_for_a_parabola():
@@ -314,3 +341,17 @@ def test_the_surrogate_page_is_what_its_command_makes(tmp_path):
     made = made.replace(str(work), "results/surrogate")
     assert made == shipped, "docs/surrogate.md is stale: run herman2019 surrogate --validate --docs docs"
     assert (tmp_path / "docs" / "surrogate" / "validation.png").stat().st_size > 10_000
+
+
+def test_no_off_grid_point_is_in_two_sets():
+    """The calibration and validation sets share no point (the axes sets draw from a
+    finite set of nodes: a shared point would be fitted and checked at once)."""
+    from herman2019.surrogate.validate import SETS, draw_set
+    levels = {a: np.asarray(v, float) for a, v in {
+        "L_x": [0.5, 1.5, 3.0], "T": [1.1, 1.2, 1.4, 1.5, 1.6, 1.8, 2.0],
+        "a0": [0.0125, 0.015, 0.02, 0.025], "C_sd": [0.005, 0.01, 0.05, 0.1, 0.15, 0.2],
+        "eps": [0.2, 0.4, 0.6, 0.8], "d_f": [0.005, 0.01, 0.02, 0.05]}.items()}
+    keys = {name: set(map(tuple, draw_set(name, levels)[[*AXES, "dispersion"]]
+                          .astype(str).to_numpy())) for name in SETS}
+    for a, b in itertools.combinations(SETS, 2):
+        assert not keys[a] & keys[b], (a, b)
