@@ -355,3 +355,27 @@ def test_no_off_grid_point_is_in_two_sets():
                           .astype(str).to_numpy())) for name in SETS}
     for a, b in itertools.combinations(SETS, 2):
         assert not keys[a] & keys[b], (a, b)
+
+
+@pytest.mark.slow
+def test_the_shipped_surrogate_is_what_its_build_makes():
+    """results/surrogate/surrogate.npz is `herman2019 surrogate --build` of the shipped
+    grid and the stored calibration runs (nothing is run): the same node fields, scales,
+    combination powers and p_zone recalibration."""
+    import sweep
+    from herman2019.surrogate.model import SHIPPED
+    from herman2019.surrogate.validate import fit_scale, model_table
+    shipped = Surrogate.load()
+    sur = build(sweep.load(SHIPPED.parents[1] / "herman2019"))
+    runs = pd.concat([pd.read_csv(SHIPPED.parent / n / "runs.csv.gz")
+                      for n in ("calibration", "calibration_axes")], ignore_index=True)
+    fit_scale(sur, model_table(runs))
+    # (another CPU's libm may round a log differently in the last bit, and the fit's
+    # optimiser then end a hair elsewhere: tolerances well below any printed digit)
+    for d in shipped.fields:
+        np.testing.assert_allclose(sur.fields[d], shipped.fields[d], rtol=1e-12, atol=1e-15)
+    assert sur.scale.keys() == shipped.scale.keys()
+    for k, v in shipped.scale.items():
+        assert sur.scale[k] == pytest.approx(v, rel=1e-4, abs=1e-6), k
+    assert sur.meta["combine"] == pytest.approx(shipped.meta["combine"], rel=1e-4)
+    assert sur.meta["p_zone"] == pytest.approx(shipped.meta["p_zone"], rel=1e-4)
