@@ -178,15 +178,19 @@ class Surrogate:
             p = np.sum(wz * np.where(known, zone, 0.0), axis=1) / wz.sum(axis=1)
         res: dict[str, np.ndarray] = {"p_zone": self._p_zone(p)}
         for qn in QUANTITIES:
-            mean, noise2, terms, bad = _linear(col, idx, w, pos, qn)
+            every = detail == "terms"           # else a term of scale 0 is not computed
+            need = {a for a in AXES if every or self._scale(qn, a) > 0
+                    or (a == "L_x" and self._scale(qn, "L_x:upper") > 0)}
+            mean, noise2, terms, bad = _linear(col, idx, w, pos, qn, need)
             named = {}
             for suffix, arr in (("", terms), (":flat", flat)):
                 named |= {a + suffix: arr[:, k] for k, a in enumerate(AXES)}
                 named["L_x:upper" + suffix] = np.where(upper, arr[:, 0], 0.0)
                 named["L_x" + suffix] = np.where(upper, 0.0, arr[:, 0])
-            interp2 = combine(np.stack([self._scale(qn, n) ** 2 * v
-                                        for n, v in named.items()], axis=1),
-                              self.combine_power(qn))
+            used = [self._scale(qn, n) ** 2 * v for n, v in named.items()
+                    if every or self._scale(qn, n) > 0]
+            interp2 = (combine(np.stack(used, axis=1), self.combine_power(qn)) if used
+                       else np.zeros(len(mean)))
             if quad is not None and self.order(qn) == 2:
                 y, s = col[f"y_{qn}"][quad[0]], col[f"s_{qn}"][quad[0]]
                 full = np.all(np.isfinite(y) & np.isfinite(s), axis=1)
@@ -231,7 +235,7 @@ def combine(v: np.ndarray, p: float) -> np.ndarray:
 
 
 def _linear(col: Mapping[str, np.ndarray], idx: np.ndarray, w: np.ndarray, pos: np.ndarray,
-            qn: str):
+            qn: str, need=AXES):
     """Multilinear over the corners where ``qn`` has a value (weights renormalised): mean
     of log q, its noise variance, the interpolation-error terms per axis (n, 6), and where
     no corner has a value."""
@@ -247,6 +251,9 @@ def _linear(col: Mapping[str, np.ndarray], idx: np.ndarray, w: np.ndarray, pos: 
         mean = np.sum(wn * (y if every else np.where(m, y, 0.0)), axis=1)
         noise2 = np.sum((wn * (s if every else np.where(m, s, 0.0))) ** 2, axis=1)
         for k, a in enumerate(AXES):
+            if a not in need:
+                terms[:, k] = 0.0
+                continue
             kappa = col[f"k_{qn}_{a}"][idx]
             mk = m & np.isfinite(kappa)
             if mk.all():
