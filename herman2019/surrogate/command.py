@@ -49,8 +49,9 @@ def add_arguments(p) -> None:
     p.add_argument("--build", action="store_true", help="build it from --grid")
     p.add_argument("--validate", action="store_true", help="run and compare the"
                    " validation set")
-    p.add_argument("--grid", default=str(ROOT / "results" / "herman2019"),
-                   help="the grid's table (default: results/herman2019)")
+    p.add_argument("--grid", nargs="+", default=[str(ROOT / "results" / "herman2019")],
+                   help="the grid's tables, read together (default: results/herman2019;"
+                   " e.g. also results/herman2019-lx, the grid at more floe lengths)")
     p.add_argument("--dir", type=Path, default=DIR, help="where the surrogate, its runs"
                    " and its validation go (default: results/surrogate)")
     p.add_argument("--docs", type=Path, help="with --validate: write DOCS/surrogate.md")
@@ -126,10 +127,11 @@ def _build(args) -> int:
     from herman2019.surrogate.build import build
     from herman2019.surrogate.validate import SETS, fit_scale, model_table
     try:
-        table = sweep.load(args.grid)
-        sur = build(table, source=_relative(args.grid), commit=_commit())
+        table = pd.concat([sweep.load(g) for g in args.grid], ignore_index=True)
+        sur = build(table, source=" + ".join(_relative(g) for g in args.grid),
+                    commit=_commit())
     except (FileNotFoundError, ValueError) as exc:
-        raise ConfigError(f"--grid {args.grid}: {exc}") from None
+        raise ConfigError(f"--grid {' '.join(map(str, args.grid))}: {exc}") from None
     runs = pd.concat([_run_set(name, sur.levels, args.dir, args.jobs)
                       for name in ("calibration", "calibration_axes")], ignore_index=True)
     scale = fit_scale(sur, model_table(runs))
@@ -138,7 +140,8 @@ def _build(args) -> int:
                                "sets": {k: list(SETS[k]) for k in ("calibration",
                                                                     "calibration_axes")}}
     sur.save(args.dir / "surrogate.npz")
-    print(f"{args.dir / 'surrogate.npz'}: {sur.meta['points']} nodes from {args.grid}"
+    print(f"{args.dir / 'surrogate.npz'}: {sur.meta['points']} nodes from"
+          f" {' + '.join(map(str, args.grid))}"
           f" ({sur.meta['standard_errors']} SEs, model version"
           f" {', '.join(sur.meta['model_version'])}); the interpolation error fitted on"
           f" {len(runs)} off-grid runs (its scales: `herman2019 surrogate --validate`'s"

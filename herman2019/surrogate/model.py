@@ -143,12 +143,17 @@ class Surrogate:
 
     def term_names(self) -> tuple[str, ...]:
         """The interpolation-error terms, each with its own scale per quantity: per axis
-        (L_x's upper interval apart from its lower one; with more than three levels of
-        L_x, ``L_x:upper`` is every interval above the first) the curvature's term, ``AXIS``,
-        and a flat one, ``AXIS:flat`` ((4 t(1 - t))^2: 1 mid-cell, 0 at the nodes), which
-        keeps an error between the nodes where the curvature seen at them is nil."""
-        base = (*AXES, "L_x:upper")
+        the curvature's term, ``AXIS``, and a flat one, ``AXIS:flat`` ((4 t(1 - t))^2: 1
+        mid-cell, 0 at the nodes), which keeps an error between the nodes where the
+        curvature seen at them is nil. L_x's intervals each have their own: ``L_x`` the
+        first, then ``L_x:upper`` (three levels) or ``L_x:i1``, ``L_x:i2``... (more)."""
+        base = (*AXES, *self._lx_names()[1:])
         return base + tuple(f"{n}:flat" for n in base)
+
+    def _lx_names(self) -> list[str]:
+        """The name of the L_x term of each of its intervals."""
+        n = len(self.levels["L_x"]) - 1
+        return ["L_x", "L_x:upper"] if n == 2 else ["L_x"] + [f"L_x:i{j}" for j in range(1, n)]
 
     def combine_power(self, qn: str) -> float:
         """How the terms' variances combine: (sum v_n^(p/2))^(2/p); p = 2 adds them, a
@@ -167,7 +172,8 @@ class Surrogate:
         pos = (t * (1.0 - t) * h**2) ** 2                      # (t(1-t)h^2)^2
         flat = (4.0 * t * (1.0 - t)) ** 2                      # 1 mid-cell, 0 at nodes
         lx_stride = int(np.prod([len(self.levels[a]) for a in AXES[1:]]))
-        upper = idx[:, 0] // lx_stride >= 1                    # L_x's upper interval
+        interval = idx[:, 0] // lx_stride                      # L_x's interval, from 0
+        lx_names = self._lx_names()
         quad = None
         if any(self.order(qn) == 2 for qn in QUANTITIES):
             quad = quadratic_weights(self.levels, q, "L_x")
@@ -180,13 +186,13 @@ class Surrogate:
         for qn in QUANTITIES:
             every = detail == "terms"           # else a term of scale 0 is not computed
             need = {a for a in AXES if every or self._scale(qn, a) > 0
-                    or (a == "L_x" and self._scale(qn, "L_x:upper") > 0)}
+                    or (a == "L_x" and any(self._scale(qn, n) > 0 for n in lx_names))}
             mean, noise2, terms, bad = _linear(col, idx, w, pos, qn, need)
             named = {}
             for suffix, arr in (("", terms), (":flat", flat)):
                 named |= {a + suffix: arr[:, k] for k, a in enumerate(AXES)}
-                named["L_x:upper" + suffix] = np.where(upper, arr[:, 0], 0.0)
-                named["L_x" + suffix] = np.where(upper, 0.0, arr[:, 0])
+                for j, name in enumerate(lx_names):          # L_x: one per interval
+                    named[name + suffix] = np.where(interval == j, arr[:, 0], 0.0)
             used = [self._scale(qn, n) ** 2 * v for n, v in named.items()
                     if every or self._scale(qn, n) > 0]
             interp2 = (combine(np.stack(used, axis=1), self.combine_power(qn)) if used

@@ -28,12 +28,12 @@ def _u(a, v):
     return coordinate(a, v)
 
 
-def synthetic(f, se_rel=0.0, zone=None, dispersions=("ml",)):
-    """A full grid table over LEVELS with every quantity = f(coordinates) (log-space
+def synthetic(f, se_rel=0.0, zone=None, dispersions=("ml",), levels=None):
+    """A full grid table over ``levels`` (default LEVELS) with every quantity = f(coordinates) (log-space
     value: q = exp(f)), relative SE ``se_rel``, compact zone where ``zone`` says."""
     rows = []
     for d in dispersions:
-        for combo in itertools.product(*(LEVELS[a] for a in AXES)):
+        for combo in itertools.product(*((levels or LEVELS)[a] for a in AXES)):
             p = dict(zip(AXES, combo, strict=True))
             u = {a: float(_u(a, p[a])) for a in AXES}
             v = math.exp(f(u))
@@ -379,3 +379,29 @@ def test_the_shipped_surrogate_is_what_its_build_makes():
         assert sur.scale[k] == pytest.approx(v, rel=1e-4, abs=1e-6), k
     assert sur.meta["combine"] == pytest.approx(shipped.meta["combine"], rel=1e-4)
     assert sur.meta["p_zone"] == pytest.approx(shipped.meta["p_zone"], rel=1e-4)
+
+
+def test_more_floe_lengths_read_linearly_with_a_term_per_interval():
+    """A grid with four levels of L_x (as with results/herman2019-lx): the quadratic
+    (through exactly three) gives way to the line, each L_x interval has its own error
+    term, and a parabola in log L_x is read with the error the line makes there."""
+    levels = LEVELS | {"L_x": [0.5, 1.0, 1.5, 3.0]}
+
+    def f(u):
+        return 0.9 * u["L_x"] ** 2 + 0.2 * u["eps"]
+    sur = build(synthetic(f, levels=levels))
+    assert set(sur.meta["lx_order"].values()) == {1}
+    names = sur.term_names()
+    assert {"L_x", "L_x:i1", "L_x:i2", "L_x:i2:flat"} <= set(names)
+    assert "L_x:upper" not in names
+    q = _query(200, seed=5)
+    p = sur.predict("ml", detail="terms", **q)
+    x = np.log(q["L_x"])
+    interval = np.searchsorted(np.log(levels["L_x"]), x, side="right") - 1
+    for j, name in enumerate(["L_x", "L_x:i1", "L_x:i2"]):
+        m = np.minimum(interval, 2) == j
+        assert (p.loc[m, f"alpha_all_term_{name}"] > 0).any()
+        assert (p.loc[~m, f"alpha_all_term_{name}"] == 0).all()
+    want = np.exp([f({a: float(_u(a, q[a][i])) for a in AXES}) for i in range(200)])
+    err = np.abs(np.log(p["alpha_all"] / want))
+    np.testing.assert_allclose(p["alpha_all_se_interp"], err, rtol=1e-6, atol=1e-9)
