@@ -125,20 +125,20 @@ def _build(args) -> int:
     from sweep.errors import EXIT_OK, ConfigError
 
     from herman2019.surrogate.build import build
-    from herman2019.surrogate.validate import SETS, fit_scale, model_table
+    from herman2019.surrogate.validate import fit_scale, model_table, set_names, set_spec
     try:
         table = pd.concat([sweep.load(g) for g in args.grid], ignore_index=True)
         sur = build(table, source=" + ".join(_relative(g) for g in args.grid),
                     commit=_commit())
     except (FileNotFoundError, ValueError) as exc:
         raise ConfigError(f"--grid {' '.join(map(str, args.grid))}: {exc}") from None
-    runs = pd.concat([_run_set(name, sur.levels, args.dir, args.jobs)
-                      for name in ("calibration", "calibration_axes")], ignore_index=True)
+    names = set_names(sur.levels, "calibration")
+    runs = pd.concat([_run_set(name, sur.levels, args.dir, args.jobs) for name in names],
+                     ignore_index=True)
     scale = fit_scale(sur, model_table(runs))
     sur.meta["git_dirty"] = _dirty()
     sur.meta["calibration"] = {"points": int(len(runs)),
-                               "sets": {k: list(SETS[k]) for k in ("calibration",
-                                                                    "calibration_axes")}}
+                               "sets": {k: list(set_spec(k)) for k in names}}
     sur.save(args.dir / "surrogate.npz")
     print(f"{args.dir / 'surrogate.npz'}: {sur.meta['points']} nodes from"
           f" {' + '.join(map(str, args.grid))}"
@@ -164,8 +164,8 @@ def _run_set(name: str, levels, out: Path, jobs: int) -> pd.DataFrame:
     import floewave
     from herman2019.calibration import run_sample
     from herman2019.numbers import machine
-    from herman2019.surrogate.validate import SETS, draw_set
-    kind, n, seed = SETS[name]
+    from herman2019.surrogate.validate import draw_set, set_spec
+    kind, n, seed = set_spec(name)
     path = out / name / "runs.csv.gz"
     before = len(pd.read_csv(path)) if path.exists() else 0
     runs = run_sample(draw_set(name, levels), [0], out / name, jobs)
@@ -192,10 +192,10 @@ def _validate(args) -> int:
     from sweep.errors import EXIT_OK
 
     from herman2019.surrogate.page import make_page
-    from herman2019.surrogate.validate import compare, model_table
+    from herman2019.surrogate.validate import compare, model_table, set_names
     sur = Surrogate.load(args.dir / "surrogate.npz")
     runs = pd.concat([_run_set(name, sur.levels, args.dir, args.jobs)
-                      for name in ("validation", "validation_axes")], ignore_index=True)
+                      for name in set_names(sur.levels, "validation")], ignore_index=True)
     cmp = compare(sur, model_table(runs))
     keep = [*AXES, "dispersion", "group", "status", "zone", "p_zone"] + [
         c for q in QUANTITIES for c in (q, q + "_se", q + "_sur", q + "_sur_se", q + "_z")]

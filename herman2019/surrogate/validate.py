@@ -82,13 +82,33 @@ def draw_axis_points(levels: Mapping[str, np.ndarray], n: int, seed: int) -> pd.
             base = {a: float(rng.choice(levels[a])) for a in AXES if a != axis}
             d = str(rng.choice(np.array(DISPERSIONS)))
             rows += [{**base, axis: v, "dispersion": d, "group": f"axis:{axis}"}
-                     for v in AXIS_VALUES[axis]]
+                     for v in AXIS_VALUES[axis]
+                     if not np.any(np.isclose(v, levels[axis]))]   # off the nodes only
     return pd.DataFrame(rows)[[*AXES, "dispersion", "group"]]
 
 
+def set_names(levels: Mapping[str, np.ndarray], role: str) -> tuple[str, str]:
+    """The sets of ``role`` ("calibration" or "validation") for a grid of these levels:
+    the random one, and the axes one of the paper's grid (three levels of L_x) or, for a
+    grid with more floe lengths, its own (``<role>_axes_lx<n>``: its base nodes are drawn
+    from other levels, and its L_x values must lie off them)."""
+    n = len(levels["L_x"])
+    return role, f"{role}_axes" if n == 3 else f"{role}_axes_lx{n}"
+
+
+def set_spec(name: str) -> tuple[str, int, int]:
+    """(kind, size, draw seed) of the set ``name``: :data:`SETS`, or an ``_axes_lx<n>``
+    set (24 nodes per axis, the seed of its role's axes set + 100 n)."""
+    if name in SETS:
+        return SETS[name]
+    base, _, n = name.rpartition("_lx")
+    kind, size, seed = SETS[base]
+    return kind, size, seed + 100 * int(n)
+
+
 def draw_set(name: str, levels: Mapping[str, np.ndarray]) -> pd.DataFrame:
-    """The points of the set ``name`` (:data:`SETS`)."""
-    kind, n, seed = SETS[name]
+    """The points of the set ``name`` (:func:`set_spec`)."""
+    kind, n, seed = set_spec(name)
     return (draw_points if kind == "random" else draw_axis_points)(levels, n, seed)
 
 

@@ -405,3 +405,18 @@ def test_more_floe_lengths_read_linearly_with_a_term_per_interval():
     want = np.exp([f({a: float(_u(a, q[a][i])) for a in AXES}) for i in range(200)])
     err = np.abs(np.log(p["alpha_all"] / want))
     np.testing.assert_allclose(p["alpha_all_se_interp"], err, rtol=1e-6, atol=1e-9)
+
+
+def test_a_grid_with_six_floe_lengths_has_its_own_axis_sets_off_its_nodes():
+    from herman2019.surrogate.validate import draw_set, set_names, set_spec
+    six = {a: np.asarray(v, float) for a, v in (LEVELS | {
+        "L_x": [0.5, 0.75, 1.0, 1.5, 2.0, 3.0]}).items()}
+    three = {a: np.asarray(v, float) for a, v in LEVELS.items()}
+    assert set_names(three, "validation") == ("validation", "validation_axes")
+    names = set_names(six, "calibration")
+    assert names == ("calibration", "calibration_axes_lx6")
+    assert set_spec(names[1])[2] != set_spec("calibration_axes")[2]
+    pts = draw_set(names[1], six)
+    moved = pts[pts["group"] == "axis:L_x"]["L_x"].to_numpy()
+    assert len(moved) and not np.any(np.isclose(moved[:, None], six["L_x"][None, :]))
+    assert sorted(set(moved)) == [0.6, 1.25, 2.5, 2.75]
