@@ -203,7 +203,3 @@ def _validate(args) -> int:
     text = make_page(sur, cmp, args.docs, _relative(args.dir))
     print(text)
     return EXIT_OK
-
-
-def meta_json(sur: Surrogate) -> str:
-    return json.dumps(sur.meta, sort_keys=True)

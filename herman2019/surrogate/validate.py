@@ -147,17 +147,17 @@ def compare(sur: Surrogate, model: pd.DataFrame) -> pd.DataFrame:
         out[q + "_sur_se"] = pred[q + "_se"].to_numpy()
         out[q + "_se_noise"] = pred[q + "_se_noise"].to_numpy()
         out[q + "_se_interp"] = pred[q + "_se_interp"].to_numpy()
-        out[q + "_z"] = _z(out, q, 1.0)
+        out[q + "_z"] = _z(out, q)
     return out
 
 
-def _z(cmp: pd.DataFrame, q: str, scale_ratio: float) -> np.ndarray:
-    """z of ``q`` with the interpolation part of the surrogate's SE times ``scale_ratio``."""
+def _z(cmp: pd.DataFrame, q: str) -> np.ndarray:
+    """z of ``q``: the log residual over the surrogate's and the model point's SEs."""
     x, y = cmp[q + "_sur"].to_numpy(float), cmp[q].to_numpy(float)
     noise, interp = cmp[q + "_se_noise"].to_numpy(float), cmp[q + "_se_interp"].to_numpy(float)
     rel_model = cmp[q + "_se"].to_numpy(float) / y
     with np.errstate(invalid="ignore", divide="ignore"):
-        z = (np.log(x) - np.log(y)) / np.sqrt(noise**2 + (scale_ratio * interp)**2
+        z = (np.log(x) - np.log(y)) / np.sqrt(noise**2 + interp**2
                                                 + rel_model**2)
     ok = np.isfinite(z) & (y > 0)
     if q == "W_c":
