@@ -21,7 +21,7 @@ import pandas as pd
 from herman2019.calibration import AXES, QUANTITIES, SHIPPED, ZONE_QUANTITIES
 
 __all__ = ["FEATURES", "FACTORS", "CALIBRATED_VERSION", "HONEST", "CAP", "point_chi",
-           "fit_factors", "factors_of", "with_calibrated_stderr", "calibrated_factors",
+           "fit_factors", "factors_of", "factors_between", "with_calibrated_stderr", "calibrated_factors",
            "calibrated", "cross_validated", "format_check", "format_factors", "command"]
 
 #: What a point's calibration factor depends on: four swept parameters (levels) and whether
@@ -162,13 +162,65 @@ def factors_of(df: pd.DataFrame, factors: pd.DataFrame, q: str) -> np.ndarray:
     return out
 
 
-def with_calibrated_stderr(df: pd.DataFrame, factors: pd.DataFrame) -> pd.DataFrame:
+#: The swept parameters whose factor :func:`factors_between` reads between the levels.
+BETWEEN = ("L_x", "C_sd", "d_f")
+
+
+def factors_between(df: pd.DataFrame, factors: pd.DataFrame, q: str) -> np.ndarray:
+    """Each row's factor for ``q`` as :func:`factors_of`, and at a value of L_x, C_sd or d_f
+    between the calibration's levels (the grid's, e.g. the surrogate's off-grid points or
+    another grid's floe lengths) the log of the factor read linearly in the log of the
+    parameter between the two levels around it (multilinearly when several are off their
+    levels; the end level's factor beyond the levels). A row on the levels gets exactly
+    :func:`factors_of`'s factor."""
+    f = factors[factors["quantity"] == q]
+    rows = df.reset_index(drop=True)
+    out = factors_of(rows, factors, q)
+    lows, weights = {}, {}
+    off = np.zeros(len(rows), bool)
+    for feat in BETWEEN:
+        if feat not in rows:
+            continue
+        lv = np.array(sorted({float(x) for x in f.loc[f["term"] == feat, "level"]}))
+        x = np.log(rows[feat].to_numpy(float))
+        u = np.log(lv)
+        i = np.clip(np.searchsorted(u, x, side="right") - 1, 0, len(lv) - 2)
+        w = np.clip((x - u[i]) / (u[i + 1] - u[i]), 0.0, 1.0)
+        on = np.isclose(rows[feat].to_numpy(float)[:, None], lv[None, :]).any(axis=1)
+        w[on] = 0.0
+        i[on] = np.argmin(np.abs(x[on, None] - u[None, :]), axis=1) if on.any() else i[on]
+        lows[feat] = (lv, i)
+        weights[feat] = w
+        off |= ~on
+    if not off.any():
+        return out
+    sub = rows[off]
+    feats = list(lows)
+    logf = np.zeros(int(off.sum()))
+    for corner in range(2 ** len(feats)):
+        snap, wt = sub.copy(), np.ones(len(sub))
+        for k, feat in enumerate(feats):
+            lv, i = lows[feat]
+            up = (corner >> k) & 1
+            j = np.minimum(i[off] + up, len(lv) - 1)
+            snap[feat] = lv[j]
+            wt *= weights[feat][off] if up else 1.0 - weights[feat][off]
+        if not (wt > 0).any():
+            continue
+        logf += wt * np.log(factors_of(snap, factors, q))
+    out[off] = np.exp(logf)
+    return out
+
+
+def with_calibrated_stderr(df: pd.DataFrame, factors: pd.DataFrame, between: bool = False
+                           ) -> pd.DataFrame:
     """``df`` with ``q_stderr_cal`` = ``q_stderr`` times the row's factor, for every
     quantity of ``factors`` (and ``a_end_rel_stderr_cal`` with a_end's); NaN for a row at
-    a parameter value the calibration never saw."""
+    a parameter value the calibration never saw, or with ``between`` the factor read
+    between its levels (:func:`factors_between`)."""
     out = df.copy()
     for q in dict.fromkeys(factors["quantity"]):
-        f = factors_of(out, factors, q)
+        f = (factors_between if between else factors_of)(out, factors, q)
         out[q + "_stderr_cal"] = out[q + "_stderr"].to_numpy(float) * f
         if q == "a_end" and "a_end_rel_stderr" in out:
             out["a_end_rel_stderr_cal"] = out["a_end_rel_stderr"].to_numpy(float) * f
@@ -181,13 +233,15 @@ def calibrated_factors(path: str | Path | None = None) -> pd.DataFrame:
                        keep_default_na=False)
 
 
-def calibrated(df: pd.DataFrame, factors: str | Path | pd.DataFrame | None = None
-               ) -> pd.DataFrame:
+def calibrated(df: pd.DataFrame, factors: str | Path | pd.DataFrame | None = None,
+               between: bool = False) -> pd.DataFrame:
     """``df`` (a table of the grid at the calibration's model version, e.g. the release's
     ``sweep.load("results/herman2019")``) with the calibrated standard errors
     ``q_stderr_cal`` of the shipped factors (``results/calibration/factors.csv``, or
     ``factors``: a file or its table). ValueError for a table of another model version
-    (its ``provenance``) than the factors' ``model_version``."""
+    (its ``provenance``) than the factors' ``model_version``. A row at a value of L_x, C_sd
+    or d_f the calibration never saw has no calibrated SE (NaN), or with ``between`` one
+    of the factor read between the levels around it (:func:`factors_between`)."""
     import json as _json
     if not isinstance(factors, pd.DataFrame):
         factors = calibrated_factors(factors)
@@ -198,7 +252,7 @@ def calibrated(df: pd.DataFrame, factors: str | Path | pd.DataFrame | None = Non
             raise ValueError(f"the factors were calibrated at model version {want}; this"
                              f" table is version {', '.join(have)}: its SEs cannot be"
                              " calibrated with them")
-    return with_calibrated_stderr(df, factors)
+    return with_calibrated_stderr(df, factors, between)
 
 
 def cross_validated(runs: pd.DataFrame, quantities: Sequence[str] = QUANTITIES[:7],

@@ -48,7 +48,7 @@ def se_columns(table: pd.DataFrame) -> tuple[pd.DataFrame, str]:
     if "provenance" not in table:
         return stated, "stated"
     try:
-        cal = calibrated(table)
+        cal = calibrated(table, between=True)
     except ValueError:
         return stated, "stated"
     return cal.assign(**{f"{q}_se_use": cal[f"{q}_stderr_cal"] for q in QUANTITIES}), \

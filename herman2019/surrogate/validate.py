@@ -13,7 +13,7 @@ herman2019.toml``'s ``[base]``) and ``seed`` 0, as the grid's points were, by
 
 **The statistic** (:func:`compare`): per quantity, in log (so relative),
 z = (log q_surrogate - log q_model) / sqrt(se_surrogate^2 + se_model^2), with the
-model point's calibrated SE (the factor of its nearest calibrated levels); W_c where the
+model point's calibrated SE (its factor read between the calibrated levels); W_c where the
 model point has a compact zone and the surrogate's cell has one at a corner.
 :func:`fit_scale` fits the interpolation error's scales and combination on the
 calibration sets. :func:`error_table` gives, on a validation set, RMS z, the median and
@@ -41,8 +41,10 @@ __all__ = ["SETS", "draw_points", "model_table", "compare", "fit_scale", "error_
 #: sets check it.
 SETS = {"calibration": ("random", 300, 4801), "calibration_axes": ("axes", 24, 4803),
         "validation": ("random", 300, 4802), "validation_axes": ("axes", 24, 4804)}
-#: Off-node values per axis for the ``axes`` sets (on the model's lattices).
-AXIS_VALUES = {"L_x": (0.6, 0.75, 1.0, 1.25, 2.0, 2.5, 2.75),
+#: Off-node values per axis for the ``axes`` sets (on the model's lattices; those on a
+#: grid's nodes are left out: for L_x 0.75, 1.0, 2.0 in a grid with those floe lengths,
+#: whose every interval then holds one or two values).
+AXIS_VALUES = {"L_x": (0.6, 0.75, 0.87, 1.0, 1.25, 1.73, 2.0, 2.5, 2.75),
                "T": (1.152, 1.252, 1.3, 1.452, 1.7, 1.9),
                "a0": (0.0135, 0.0175, 0.0225),
                "C_sd": (0.0075, 0.025, 0.075, 0.125, 0.175),
@@ -113,21 +115,17 @@ def draw_set(name: str, levels: Mapping[str, np.ndarray]) -> pd.DataFrame:
 
 
 def model_table(runs: pd.DataFrame) -> pd.DataFrame:
-    """The runs' rows with ``a_end_rel`` and every quantity's calibrated SE ``q_se`` (the
-    factor of the nearest calibrated level of L_x, C_sd, d_f: off the grid's levels)."""
-    from herman2019.factors import calibrated_factors, factors_of
+    """The runs' rows with ``a_end_rel`` and every quantity's calibrated SE ``q_se`` (off
+    the grid's levels of L_x, C_sd, d_f the factor read between the calibrated levels
+    around the point: :func:`herman2019.factors.factors_between`)."""
+    from herman2019.factors import calibrated_factors, factors_between
     fac = calibrated_factors()
     out = runs.copy()
     out["a_end_rel"] = out["a_end"] / out["a0"]
     out["a_end_rel_stderr"] = out["a_end_stderr"] / out["a0"]
-    snap = out.copy()
-    for feat in ("L_x", "C_sd", "d_f"):
-        lv = np.array(sorted({float(x) for x in fac.loc[fac["term"] == feat, "level"]}))
-        x = np.log(out[feat].to_numpy(float))
-        snap[feat] = lv[np.argmin(np.abs(x[:, None] - np.log(lv)[None, :]), axis=1)]
     for q in QUANTITIES:
         base = "a_end" if q == "a_end_rel" else q
-        f = factors_of(snap.assign(status=out["status"]), fac, base)
+        f = factors_between(out, fac, base)
         out[q + "_se"] = out[q + "_stderr"].to_numpy(float) * np.nan_to_num(f, nan=1.0)
     done = out["status"].astype(str).isin(["converged", "converged_noisy", "not_converged"])
     out["zone"] = np.where(done, (out["layout"].astype(str) != "none").astype(float), np.nan)

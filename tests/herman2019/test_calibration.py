@@ -206,3 +206,41 @@ def test_calibrated_refuses_another_model_version_and_an_unseen_level():
     with pytest.raises(ValueError, match="calibrated at model version 9; this table is"
                                          " version 8"):
         fx.calibrated(df.assign(provenance=json.dumps({"model_version": "8"})))
+
+
+def test_between_the_levels_the_factor_is_read_log_linearly_and_on_them_exactly():
+    """A value of L_x, C_sd, d_f off the calibrated levels (another grid's floe lengths,
+    the surrogate's off-grid points): its log-factor lies on the line in log(parameter)
+    between its neighbours' (each parameter alone, and two at once multilinearly); on
+    the levels it is the fitted factor itself."""
+    fac = fx.calibrated_factors()
+    base = {"L_x": 1.5, "T": 1.2, "a0": 0.0125, "C_sd": 0.05, "eps": 0.6, "d_f": 0.02,
+            "dispersion": "ml", "status": "converged_noisy"}
+
+    def f(**kw):
+        return fx.factors_between(pd.DataFrame([{**base, **kw}]), fac, "alpha_all")[0]
+
+    def node(**kw):
+        return fx.factors_of(pd.DataFrame([{**base, **kw}]), fac, "alpha_all")[0]
+    for feat, lo, hi in (("L_x", 0.5, 1.5), ("L_x", 1.5, 3.0), ("C_sd", 0.01, 0.05),
+                         ("d_f", 0.02, 0.05)):
+        for t in (0.25, 0.5):
+            v = float(np.exp((1 - t) * np.log(lo) + t * np.log(hi)))
+            want = np.exp((1 - t) * np.log(node(**{feat: lo})) + t * np.log(node(**{feat: hi})))
+            assert f(**{feat: v}) == pytest.approx(want, rel=1e-12), (feat, v)
+        assert f(**{feat: lo}) == node(**{feat: lo})      # exactly, on a level
+    # two at once: the product of the weights over the four corners
+    lx, cs = float(np.sqrt(0.5 * 1.5)), float(np.sqrt(0.01 * 0.05))
+    corners = [np.log(node(L_x=a, C_sd=b)) for a in (0.5, 1.5) for b in (0.01, 0.05)]
+    assert f(L_x=lx, C_sd=cs) == pytest.approx(np.exp(np.mean(corners)), rel=1e-12)
+    # beyond the levels: the end level's
+    assert f(L_x=3.5) == pytest.approx(node(L_x=3.0), rel=1e-12)
+    # and a table at L_x = 1.0 (herman2019-lx) gets a finite calibrated SE with between
+    import json
+    row = {**base, "L_x": 1.0, "provenance": json.dumps({"model_version": "9"})}
+    for q in cal.QUANTITIES[:7]:
+        row[q], row[q + "_stderr"] = 1.0, 0.1
+    df = pd.DataFrame([row])
+    assert np.isnan(fx.calibrated(df)["alpha_all_stderr_cal"][0])
+    assert fx.calibrated(df, between=True)["alpha_all_stderr_cal"][0] == pytest.approx(
+        0.1 * f(L_x=1.0), rel=1e-12)
