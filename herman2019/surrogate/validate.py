@@ -42,9 +42,9 @@ __all__ = ["SETS", "draw_points", "model_table", "compare", "fit_scale", "error_
 SETS = {"calibration": ("random", 300, 4801), "calibration_axes": ("axes", 24, 4803),
         "validation": ("random", 300, 4802), "validation_axes": ("axes", 24, 4804)}
 #: Off-node values per axis for the ``axes`` sets (on the model's lattices; those on a
-#: grid's nodes are left out: for L_x 0.75, 1.0, 2.0 in a grid with those floe lengths,
-#: whose every interval then holds one or two values).
-AXIS_VALUES = {"L_x": (0.6, 0.75, 0.87, 1.0, 1.25, 1.73, 2.0, 2.5, 2.75),
+#: grid's nodes are left out: for L_x 0.75, 1.0, 1.25, 2.0, 2.5 in a grid with those
+#: floe lengths, whose every interval then still holds one value or more).
+AXIS_VALUES = {"L_x": (0.6, 0.75, 0.87, 1.0, 1.12, 1.25, 1.37, 1.73, 2.0, 2.24, 2.5, 2.75),
                "T": (1.152, 1.252, 1.3, 1.452, 1.7, 1.9),
                "a0": (0.0135, 0.0175, 0.0225),
                "C_sd": (0.0075, 0.025, 0.075, 0.125, 0.175),
