@@ -1,6 +1,6 @@
 """Which interpolation for the surrogate: measured on off-grid points run with the model.
 
-    python benchmarks/surrogate_methods.py [--grid results/herman2019]
+    python benchmarks/surrogate_methods.py [--grid results/herman2019 [results/herman2019-lx ...]]
         [--runs results/surrogate/calibration/runs.csv.gz]
 
 Interpolates alpha_all, alpha_edge and a_end/a0 (defined at every node) of the grid's
@@ -11,12 +11,15 @@ prints per method the median and 90th percentile of |q_interp / q_model - 1|:
 - ``linear, log q, log axes``: the surrogate's choice (L_x, a0, C_sd, d_f on log axes);
 - ``linear, q, linear axes``: the plain reading of the table;
 - ``linear, log q, linear axes``;
-- ``linear x quadratic L_x``: linear over the other five axes, the quadratic through
-  L_x's three levels;
+- ``linear x quadratic L_x``: linear over the other five axes, along L_x the quadratic
+  through its three levels (more levels: the mean of the quadratics through the cell and
+  each neighbour, :func:`join_lx`);
 - ``pchip`` and ``cubic`` (``RegularGridInterpolator``, log q, log axes): they need four
   nodes per axis and L_x has three, so each is applied over the other five axes at each
   of L_x's three levels, then joined along L_x by the quadratic through the three (and,
-  as a check, linearly).
+  as a check, linearly);
+- with four or more levels of L_x (``--grid`` with the grid's extensions): ``pchip`` along
+  L_x too.
 
 The model values are one 8-replica ensemble each (stochastic): the medians include their
 noise (median stated SE printed), so a method can only be told from another where they
@@ -64,25 +67,50 @@ def interp(method, values, levels, pts, log_q, log_axes, join="quadratic"):
             for i in range(len(levels["L_x"]))], axis=1)            # (n, 3)
         u = coord("L_x", levels["L_x"], log_axes)
         x = coord("L_x", pts["L_x"], log_axes)
-        if join == "quadratic":
-            lag = np.stack([np.prod([(x - u[m]) / (u[k] - u[m]) for m in range(3) if m != k],
-                                    axis=0) for k in range(3)], axis=1)
-            out = np.sum(lag * at, axis=1)
-        else:
-            j = np.clip(np.searchsorted(u, x, side="right") - 1, 0, len(u) - 2)
-            t = (x - u[j]) / (u[j + 1] - u[j])
-            out = (1 - t) * at[np.arange(len(x)), j] + t * at[np.arange(len(x)), j + 1]
+        out = join_lx(join, at, u, x)
     return np.exp(out) if log_q else out
+
+
+def join_lx(join, at, u, x):
+    """Along L_x, from the values ``at`` (n, levels) at its levels ``u``: ``linear``, the
+    line through the cell's two; ``quadratic``, the mean of the quadratics through the
+    cell's two nodes and each neighbour (one at an end cell; with three levels, the
+    quadratic through all three: the surrogate's ``lx_order`` 2); ``pchip``, scipy's
+    monotone cubic."""
+    n = len(u)
+    j = np.clip(np.searchsorted(u, x, side="right") - 1, 0, n - 2)
+    rows = np.arange(len(x))
+    if join == "linear":
+        t = (x - u[j]) / (u[j + 1] - u[j])
+        return (1 - t) * at[rows, j] + t * at[rows, j + 1]
+    if join == "pchip":
+        from scipy.interpolate import PchipInterpolator
+        return np.array([PchipInterpolator(u, at[i])(x[i]) for i in rows])
+    total, count = np.zeros(len(x)), np.zeros(len(x))
+    for k in (j - 1, j):                   # the quadratic through nodes k, k+1, k+2
+        ok = (k >= 0) & (k + 2 <= n - 1)
+        kk = np.clip(k, 0, n - 3)
+        val = np.zeros(len(x))
+        for a in range(3):
+            w = np.ones(len(x))
+            for b in range(3):
+                if b != a:
+                    w *= (x - u[kk + b]) / (u[kk + a] - u[kk + b])
+            val += w * at[rows, kk + a]
+        total += np.where(ok, val, 0.0)
+        count += ok
+    return total / count
 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--grid", default=str(ROOT / "results" / "herman2019"))
+    ap.add_argument("--grid", nargs="+", default=[str(ROOT / "results" / "herman2019")],
+                    help="the grid's tables, read together (e.g. also results/herman2019-lx)")
     ap.add_argument("--runs", default=str(ROOT / "results" / "surrogate" / "calibration"
                                           / "runs.csv.gz"))
     args = ap.parse_args()
     import sweep
-    table = sweep.load(args.grid)
+    table = pd.concat([sweep.load(g) for g in args.grid], ignore_index=True)
     table["a_end_rel"] = table["a_end"] / table["a0"]
     runs = pd.read_csv(args.runs)
     runs["a_end_rel"] = runs["a_end"] / runs["a0"]
@@ -95,7 +123,11 @@ def main() -> int:
                ("pchip x quadratic L_x, log q, log axes", "pchip", True, LOG, "quadratic"),
                ("pchip x linear L_x, log q, log axes", "pchip", True, LOG, "linear"),
                ("cubic x quadratic L_x, log q, log axes", "cubic", True, LOG, "quadratic")]
-    print(f"{len(runs)} off-grid points of {args.runs}; grid {args.grid}")
+    if len(levels["L_x"]) >= 4:         # enough floe lengths for a cubic along L_x too
+        methods += [("linear x pchip L_x, log q, log axes", "linear", True, LOG, "pchip"),
+                    ("pchip (all axes), log q, log axes", "pchip", True, LOG, "pchip")]
+    print(f"{len(runs)} off-grid points of {args.runs}; grid {' + '.join(args.grid)}"
+          f" ({len(levels['L_x'])} levels of L_x)")
     print(f"{'method':42s} " + " ".join(f"{q + ' med':>15s} {'p90':>6s}" for q in QS))
     for name, method, log_q, log_axes, join in methods:
         cells = []

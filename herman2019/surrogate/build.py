@@ -32,8 +32,9 @@ __all__ = ["FIELD_NAMES", "build", "loo_kappa2", "se_columns"]
 #: The node fields, in the arrays' column order.
 FIELD_NAMES = ("zone",) + tuple(f"{p}_{q}" for q in QUANTITIES for p in ("y", "s")) + \
     tuple(f"k_{q}_{a}" for q in QUANTITIES for a in AXES)
-#: Along L_x (three levels): the quadratic through them (2) or the line through the cell's
-#: two (1), per quantity; chosen by measured error (``benchmarks/surrogate_methods.py``).
+#: Along L_x: quadratic (2: :func:`.grid.quadratic_weights`) or the line through the
+#: cell's two nodes (1), per quantity; chosen by measured error
+#: (``benchmarks/surrogate_methods.py``).
 LX_ORDER = {"alpha_all": 2, "alpha_edge": 2, "a_end_rel": 2, "W_c": 1}
 #: Statuses with results.
 DONE = ("converged", "converged_noisy", "not_converged")
@@ -115,6 +116,4 @@ def build(table: pd.DataFrame, source: str = "", commit: str = "",
     meta = {"source": source, "commit": commit, "model_version": versions,
             "standard_errors": which, "points": int(sum(len(f) for f in fields.values())),
             "lx_order": dict(LX_ORDER if lx_order is None else lx_order)}
-    if len(levels["L_x"]) != 3:        # the quadratic is through exactly three levels
-        meta["lx_order"] = {q: 1 for q in QUANTITIES}
     return Surrogate(levels, fields, FIELD_NAMES, {q: 1.0 for q in QUANTITIES}, meta)

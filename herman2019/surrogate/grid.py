@@ -87,27 +87,45 @@ def node_levels(table, axes: Sequence[str] = AXES) -> dict[str, np.ndarray]:
 
 def quadratic_weights(levels: Mapping[str, np.ndarray], query: Mapping[str, np.ndarray],
                       axis: str = "L_x") -> tuple[np.ndarray, np.ndarray]:
-    """As :func:`cell_weights`, but along ``axis`` (which must have exactly three levels)
-    the quadratic through all three (Lagrange weights, which may be negative) instead of
-    the line through the cell's two: corners (n, 96) and weights (n, 96), summing to 1.
-    Linear along the other axes; at a node it is the node."""
+    """As :func:`cell_weights`, but along ``axis`` (three levels or more) quadratic instead
+    of the line through the cell's two nodes: the mean of the quadratics through the
+    cell's two nodes and each of its neighbours (Lagrange weights, which may be negative;
+    an end cell has one neighbour, and with three levels every cell reads the quadratic
+    through all three). Corners (n, 32 m) and weights (n, 32 m), summing to 1, over the
+    m = min(levels, 4) nodes of the window around the cell; linear along the other axes;
+    at a node it is the node."""
     k = AXES.index(axis)
     u = coordinate(axis, levels[axis])
-    if len(u) != 3:
-        raise ValueError(f"{axis}: a quadratic needs exactly three levels, not {len(u)}")
+    n_lv = len(u)
+    if n_lv < 3:
+        raise ValueError(f"{axis}: a quadratic needs three levels or more, not {n_lv}")
     idx, w, _, _ = cell_weights(levels, query)
     shape = [len(levels[a]) for a in AXES]
     stride = int(np.prod(shape[k + 1:]))
     x = coordinate(axis, np.asarray(query[axis], dtype=float).ravel())
-    lag = np.stack([np.prod([(x - u[m]) / (u[j] - u[m]) for m in range(3) if m != j], axis=0)
-                    for j in range(3)], axis=1)                               # (n, 3)
+    x = np.clip(x, u[0], u[-1])
+    j = np.clip(np.searchsorted(u, x, side="right") - 1, 0, n_lv - 2)    # the cell
+    m = min(n_lv, 4)
+    start = np.clip(j - 1, 0, n_lv - m)                        # the window's first node
+    lag = np.zeros((x.size, m))
+    count = np.zeros(x.size)
+    for first in (j - 1, j):             # the quadratic through nodes first .. first + 2
+        ok = (first >= 0) & (first + 2 <= n_lv - 1)
+        f = np.clip(first, 0, n_lv - 3)
+        for a in range(3):
+            wa = np.prod([(x - u[f + b]) / (u[f + a] - u[f + b]) for b in range(3) if b != a],
+                         axis=0)
+            col = f + a - start                                # its place in the window
+            for c in range(m):
+                lag[:, c] += np.where(ok & (col == c), wa, 0.0)
+        count += ok
+    lag /= count[:, None]
     # the 32 corners of the other axes: those with this axis's bit 0
     keep = _CORNERS[:, k] == 0
-    base_idx = idx[:, keep]                                   # at this axis's lower node
-    j0 = (base_idx[:, :1] // stride) % shape[k]                # its level index (n, 1)
-    base_idx = base_idx - j0 * stride                          # at level 0
+    base_idx = idx[:, keep]                                   # at the cell's lower node
+    base_idx = base_idx + (start - j)[:, None] * stride        # at the window's first
     # the other axes' linear weights: the 64 weights summed over this axis's bit
     w_other = w[:, keep] + w[:, ~keep]
-    idx_q = np.concatenate([base_idx + j * stride for j in range(3)], axis=1)
-    w_q = np.concatenate([w_other * lag[:, j:j + 1] for j in range(3)], axis=1)
+    idx_q = np.concatenate([base_idx + c * stride for c in range(m)], axis=1)
+    w_q = np.concatenate([w_other * lag[:, c:c + 1] for c in range(m)], axis=1)
     return idx_q, w_q

@@ -3,8 +3,10 @@ dispersion relation, with a standard error on every value.
 
 **Values.** Each quantity is interpolated between the nodes of the grid (:mod:`.grid`: log
 axes for L_x, a0, C_sd, d_f), in log(value): ``alpha_all``, ``alpha_edge``, ``a_end_rel``
-(a_end/a0) and ``W_c``; multilinearly, except along L_x (three levels) where the
-quantities of ``meta["lx_order"]`` take the quadratic through all three. ``p_zone``, the
+(a_end/a0) and ``W_c``; multilinearly, except along L_x where the quantities of
+``meta["lx_order"]`` take the quadratic (with three levels the one through all three,
+with more the mean of those through the cell and each neighbour:
+:func:`.grid.quadratic_weights`). ``p_zone``, the
 probability that a compact zone forms, is the multilinear interpolant of the nodes' 0/1
 outcome (recalibrated, ``meta["p_zone"]``); ``W_c`` (the zone's width where one forms) is
 interpolated over the corners with a zone only, and is NaN where no corner has one. A node
@@ -129,7 +131,7 @@ class Surrogate:
         return out
 
     def order(self, q: str) -> int:
-        """Along L_x: 1 (linear) or 2 (the quadratic through its three levels)."""
+        """Along L_x: 1 (linear) or 2 (quadratic: :func:`.grid.quadratic_weights`)."""
         return int(self.meta.get("lx_order", {}).get(q, 1))
 
     def _columns(self, d: str) -> dict[str, np.ndarray]:

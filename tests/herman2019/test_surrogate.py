@@ -265,6 +265,40 @@ def test_along_l_x_the_quadratic_through_its_three_levels_is_exact_for_a_parabol
     np.testing.assert_allclose(at["alpha_all_se"], df["alpha_all_stderr"], rtol=1e-12)
 
 
+def test_with_more_floe_lengths_the_quadratic_is_local_and_exact_for_a_parabola():
+    """Six levels of L_x (the grid with its extensions): lx_order 2 reads the mean of the
+    quadratics through the cell and each neighbour (four nodes at most): exact for log q
+    quadratic in log L_x, the node itself at a node, and between the nodes of a cubic
+    closer than the line (whose error there is about a quarter of the cubic's)."""
+    from herman2019.surrogate.grid import quadratic_weights
+    levels = LEVELS | {"L_x": [0.5, 0.75, 1.0, 1.5, 2.0, 3.0]}
+    q = _query(300, seed=9)
+    idx, w = quadratic_weights({a: np.asarray(v, float) for a, v in levels.items()}, q)
+    assert idx.shape == w.shape == (300, 4 * 32)
+    np.testing.assert_allclose(w.sum(axis=1), 1.0, rtol=0, atol=1e-13)
+    quad = {qn: 2 for qn in ("alpha_all", "alpha_edge", "a_end_rel", "W_c")}
+    line = {qn: 1 for qn in quad}
+
+    def parabola(u):
+        return 0.9 * u["L_x"] ** 2 - 0.4 * u["L_x"] + 0.2 * u["eps"]
+
+    def cubic(u):
+        return 0.5 * u["L_x"] ** 3 + 0.2 * u["eps"]
+    for f, exact in ((parabola, True), (cubic, False)):
+        df = synthetic(f, levels=levels)
+        want = np.exp([f({a: float(_u(a, q[a][i])) for a in AXES}) for i in range(300)])
+        got = build(df, lx_order=quad).predict("ml", **q)["alpha_all"]
+        if exact:
+            np.testing.assert_allclose(got, want, rtol=1e-12)
+        else:
+            lin = build(df, lx_order=line).predict("ml", **q)["alpha_all"]
+            e_q, e_l = np.abs(np.log(got / want)), np.abs(np.log(lin / want))
+            assert np.median(e_q) < 0.5 * np.median(e_l), (np.median(e_q), np.median(e_l))
+        nodes = df[list(AXES)].to_dict("list")
+        np.testing.assert_allclose(build(df, lx_order=quad).predict("ml", **nodes)["alpha_all"],
+                                   df["alpha_all"], rtol=1e-12)
+
+
 def test_p_zone_s_recalibration_recovers_a_known_distortion():
     """Outcomes drawn with probability sigmoid(0.5 + 2 logit p): the fit finds (0.5, 2)."""
     from herman2019.surrogate.validate import fit_p_zone
@@ -381,16 +415,16 @@ def test_the_shipped_surrogate_is_what_its_build_makes():
     assert sur.meta["p_zone"] == pytest.approx(shipped.meta["p_zone"], rel=1e-4)
 
 
-def test_more_floe_lengths_read_linearly_with_a_term_per_interval():
-    """A grid with four levels of L_x (as with results/herman2019-lx): the quadratic
-    (through exactly three) gives way to the line, each L_x interval has its own error
-    term, and a parabola in log L_x is read with the error the line makes there."""
+def test_more_floe_lengths_have_a_term_per_interval_and_the_line_states_its_error():
+    """A grid with four levels of L_x (as with results/herman2019-lx): each L_x interval
+    has its own error term, and read linearly a parabola in log L_x is read with the
+    error the line makes there."""
     levels = LEVELS | {"L_x": [0.5, 1.0, 1.5, 3.0]}
 
     def f(u):
         return 0.9 * u["L_x"] ** 2 + 0.2 * u["eps"]
-    sur = build(synthetic(f, levels=levels))
-    assert set(sur.meta["lx_order"].values()) == {1}
+    sur = build(synthetic(f, levels=levels),
+                lx_order={qn: 1 for qn in ("alpha_all", "alpha_edge", "a_end_rel", "W_c")})
     names = sur.term_names()
     assert {"L_x", "L_x:i1", "L_x:i2", "L_x:i2:flat"} <= set(names)
     assert "L_x:upper" not in names
