@@ -142,7 +142,8 @@ def main() -> int:
                 got = interp(method, v, levels, pts, log_q, log_axes, join)
                 rel[m] = np.abs(got / runs.loc[m, q].to_numpy(float) - 1)
             ok = np.isfinite(rel)
-            cells.append(f"{100 * np.median(rel[ok]):14.1f}% {100 * np.quantile(rel[ok], 0.9):5.1f}%")
+            med, p90 = 100 * np.median(rel[ok]), 100 * np.quantile(rel[ok], 0.9)
+            cells.append(f"{med:14.1f}% {p90:5.1f}%")
         print(f"{name:42s} " + " ".join(cells))
     se = " ".join(f"{q} {100 * np.nanmedian(runs[q + '_stderr'] / runs[q]):.1f} %"
                   for q in QS)

@@ -21,7 +21,8 @@ import pandas as pd
 from herman2019.calibration import AXES, QUANTITIES, SHIPPED, ZONE_QUANTITIES
 
 __all__ = ["FEATURES", "FACTORS", "CALIBRATED_VERSION", "HONEST", "CAP", "point_chi",
-           "fit_factors", "factors_of", "factors_between", "with_calibrated_stderr", "calibrated_factors",
+           "fit_factors", "factors_of", "factors_between", "with_calibrated_stderr",
+           "calibrated_factors",
            "calibrated", "cross_validated", "format_check", "format_factors", "command"]
 
 #: What a point's calibration factor depends on: four swept parameters (levels) and whether

@@ -122,10 +122,9 @@ def command(args) -> int:
 
 def _build(args) -> int:
     import sweep
-    from sweep.errors import EXIT_OK, ConfigError
-
     from herman2019.surrogate.build import build
     from herman2019.surrogate.validate import fit_scale, model_table, set_names, set_spec
+    from sweep.errors import EXIT_OK, ConfigError
     try:
         table = pd.concat([sweep.load(g) for g in args.grid], ignore_index=True)
         sur = build(table, source=" + ".join(_relative(g) for g in args.grid),
@@ -135,7 +134,7 @@ def _build(args) -> int:
     names = set_names(sur.levels, "calibration")
     runs = pd.concat([_run_set(name, sur.levels, args.dir, args.jobs) for name in names],
                      ignore_index=True)
-    scale = fit_scale(sur, model_table(runs))
+    fit_scale(sur, model_table(runs))
     sur.meta["git_dirty"] = _dirty()
     sur.meta["calibration"] = {"points": int(len(runs)),
                                "sets": {k: list(set_spec(k)) for k in names}}
@@ -189,10 +188,9 @@ def _relative(path) -> str:
 
 
 def _validate(args) -> int:
-    from sweep.errors import EXIT_OK
-
     from herman2019.surrogate.page import make_page
     from herman2019.surrogate.validate import compare, model_table, set_names
+    from sweep.errors import EXIT_OK
     sur = Surrogate.load(args.dir / "surrogate.npz")
     runs = pd.concat([_run_set(name, sur.levels, args.dir, args.jobs)
                       for name in set_names(sur.levels, "validation")], ignore_index=True)

@@ -55,7 +55,8 @@ BLOCK = 8192
 @dataclass
 class Surrogate:
     """Node arrays per dispersion relation (fields in C order over :data:`AXES`) and the
-    interpolation error's scales (``scale["q:term"]``) and combination (``meta``). Build with :func:`.build.build`; save and
+    interpolation error's scales (``scale["q:term"]``) and combination (``meta``). Build
+    with :func:`.build.build`; save and
     load with :meth:`save` and :meth:`load`."""
 
     levels: dict[str, np.ndarray]

@@ -22,6 +22,9 @@ LABEL = {"alpha_all": "alpha_all [1/m]", "alpha_edge": "alpha_edge [1/m]",
          "a_end_rel": "a_end/a0", "W_c": "W_c [m]"}
 
 
+_KIND = {"random": "points uniform in the box", "axes": "nodes per axis, that axis alone moved"}
+
+
 def _fmt(v, nd=2) -> str:
     return "–" if v is None or (isinstance(v, float) and not np.isfinite(v)) else f"{v:.{nd}f}"
 
@@ -31,6 +34,22 @@ def _example(sur: Surrogate) -> str:
     r = p.iloc[0]
     return ", ".join(f"{q} {r[q]:.4g} ± {r[q + '_se']:.2g}" for q in QUANTITIES) \
         + f", p_zone {r['p_zone']:.3f}"
+
+
+def _shape(sur: Surrogate) -> str:
+    """The grid's shape, e.g. ``8 x 7 x 4 x 6 x 4 x 4 x 3 = 64,512 points``."""
+    n = [len(sur.levels[a]) for a in AXES] + [len(sur.fields)]
+    return " x ".join(map(str, n)) + f" = {int(np.prod(n)):,} points"
+
+
+def _grid_words(sur: Surrogate) -> str:
+    """Where the grid's nodes come from, and its floe lengths."""
+    src = str(sur.meta.get("source", ""))
+    lx = ", ".join(f"{v:g}" for v in sur.levels["L_x"])
+    if " + " not in src:
+        return f"`{src}`, floe lengths {lx} m"
+    return ("the paper's grid and its extensions in floe length, `"
+            + "`, `".join(src.split(" + ")) + f"`, floe lengths {lx} m")
 
 
 def _table(err: pd.DataFrame) -> list[str]:
@@ -67,11 +86,12 @@ def make_page(sur: Surrogate, cmp: pd.DataFrame, docs: Path | None, source: str)
         f" {', '.join(meta.get('model_version', []))}, {meta.get('points'):,} nodes, their"
         f" {meta.get('standard_errors')} standard errors; commit"
         f" {str(meta.get('commit'))[:12] or 'unknown'}"
-        f"{', uncommitted changes' if meta.get('git_dirty') else ', a clean tree'}). **Stochastic**: the nodes and the"
+        f"{', uncommitted changes' if meta.get('git_dirty') else ', a clean tree'})."
+        " **Stochastic**: the nodes and the"
         " validation points are 8-replica ensembles; another seed or CPU gives other"
         " values within their error bars.",
         "",
-        "The paper's grid (3 x 7 x 4 x 6 x 4 x 4 x 3 points) is a full tensor product, so"
+        f"The grid ({_shape(sur)}: {_grid_words(sur)}) is a full tensor product, so"
         " it can be read as a function of six continuous parameters per dispersion"
         " relation. The surrogate gives, anywhere inside the grid's box, `alpha_all`,"
         " `alpha_edge` (1/m), `a_end_rel` (a/a0 at the far end), `p_zone` (the"
@@ -109,9 +129,12 @@ def make_page(sur: Surrogate, cmp: pd.DataFrame, docs: Path | None, source: str)
         "## How it is built",
         "",
         "- **Values**: multilinear interpolation between the grid's nodes, in log(value),"
-        " with L_x, a0, C_sd and d_f on log axes (T and eps linear); along L_x, which has"
-        " three levels, the quadratic through all three for "
-        + ", ".join(q for q in QUANTITIES if sur.order(q) == 2)
+        " with L_x, a0, C_sd and d_f on log axes (T and eps linear); along L_x ("
+        + f"{len(sur.levels['L_x'])} levels) "
+        + ("the quadratic through all three"
+           if len(sur.levels["L_x"]) == 3 else
+           "the mean of the quadratics through the cell's two nodes and each neighbour")
+        + " for " + ", ".join(q for q in QUANTITIES if sur.order(q) == 2)
         + " (measured better: `python benchmarks/surrogate_methods.py`); at a node it"
         " returns the node. `W_c` is interpolated over the corners with a zone only (NaN"
         " where no corner has one). `p_zone` is the interpolant of the nodes' 0/1 outcome,"
@@ -124,10 +147,10 @@ def make_page(sur: Surrogate, cmp: pd.DataFrame, docs: Path | None, source: str)
         "- **Interpolation error**: per axis, a term that vanishes at the nodes, the"
         " curvature of log(value) along the axis (from the leave-one-out residual at each"
         " interior node, its noise taken out) times (t(1-t) h^2)^2 inside a cell of width"
-        " h; each term with its own scale per quantity (L_x's two intervals apart),"
+        " h; each term with its own scale per quantity (each of L_x's intervals apart),"
         " fitted by likelihood on the *calibration sets* "
         f"({cal.get('points', '?')} off-grid points run for the purpose: "
-        + ", ".join(f"{k}: {v[1]} {'points uniform in the box' if v[0] == 'random' else 'nodes per axis, that axis alone moved'}, draw seed {v[2]}"
+        + ", ".join(f"{k}: {v[1]} {_KIND[v[0]]}, draw seed {v[2]}"
                     for k, v in cal.get("sets", {}).items())
         + "). The terms' variances v combine as (sum v^(p/2))^(2/p), p fitted too (2 adds"
         " them, a large p takes the largest); then one common factor so that the two"
@@ -137,11 +160,12 @@ def make_page(sur: Surrogate, cmp: pd.DataFrame, docs: Path | None, source: str)
         + (", ".join(f"`{b}`" for b in meta.get("at_bound", [])) or "none")
         + " (a flat scale at its lower bound is none; p at 64 is the largest):",
         "",
-        "| quantity | " + " | ".join(sur.term_names()) + " | p |",
-        "|---|" + "---|" * (len(sur.term_names()) + 1),
-        *[f"| {q} | " + " | ".join(f"{sur.scale.get(f'{q}:{n}', np.nan):.2f}"
-                                   for n in sur.term_names())
-          + f" | {sur.combine_power(q):.1f} |" for q in QUANTITIES],
+        "| term | " + " | ".join(QUANTITIES) + " |",
+        "|---|" + "---|" * len(QUANTITIES),
+        *[f"| `{n}` | " + " | ".join(f"{sur.scale.get(f'{q}:{n}', np.nan):.2f}"
+                                     for q in QUANTITIES) + " |"
+          for n in sur.term_names()],
+        "| p | " + " | ".join(f"{sur.combine_power(q):.1f}" for q in QUANTITIES) + " |",
         "",
         "- **The points off the grid**: uniform in the box in each axis's coordinate (log"
         " for L_x, a0, C_sd, d_f), or one axis at values between its levels with the"
@@ -175,9 +199,11 @@ def make_page(sur: Surrogate, cmp: pd.DataFrame, docs: Path | None, source: str)
         " alpha_all median \\|rel. error\\| |",
         "|---|---|---|---|---|---|---|",
     ]
+    along = {}
     for a in AXES:
         m = cmp["group"].astype(str).to_numpy() == f"axis:{a}"
         e = error_table(cmp[m]).set_index("quantity")
+        along[a] = float(e.loc["alpha_all", "median_rel_error"])
 
         def cell(q, e=e):
             v = e.loc[q, "rms_z"]
@@ -235,10 +261,11 @@ def make_page(sur: Surrogate, cmp: pd.DataFrame, docs: Path | None, source: str)
         " not at every corner of the box (the tables above show where they hold less"
         " well, and the errors are heavier-tailed than normal: more points beyond |z| 4"
         " than a normal z would give).",
-        "- Fine in L_x: the grid has three floe lengths, and along L_x alone the"
-        " surrogate's median error in alpha_all is about 9 %, against at most 2 % along"
-        " any other axis. The grid at three more floe lengths"
-        " (`configs/herman2019_lx.toml`, `results/herman2019-lx`) is being run for it.",
+        f"- As fine in L_x as in the other axes: the grid has {len(sur.levels['L_x'])} floe"
+        " lengths, and along L_x alone the surrogate's median error in alpha_all is"
+        f" {100 * along['L_x']:.1f} %, against at most"
+        f" {100 * max(v for a, v in along.items() if a != 'L_x'):.1f} % along any other"
+        " axis (the table above).",
         "- A model of other defaults: every node and every off-grid point runs at the"
         " released defaults (L_sheet 42 m, 8 replicas...).",
     ]

@@ -6,7 +6,8 @@ interpolation coordinate (log for L_x, a0, C_sd, d_f: the coordinate the grid's 
 and the surrogate use, so every cell of the grid is drawn about equally often), rounded
 where the model needs it (T to 4 ms: T/dt an integer multiple of ``drag_every`` = 4
 steps; L_x to 1 cm, a multiple of dx) and elsewhere to 6 significant digits, the
-dispersion relation uniform over the three. The ``axes`` sets (:func:`draw_axis_points`) move one axis alone, the others at
+dispersion relation uniform over the three. The ``axes`` sets (:func:`draw_axis_points`)
+move one axis alone, the others at
 grid nodes. Each is run at the model's defaults (the released ones: ``configs/
 herman2019.toml``'s ``[base]``) and ``seed`` 0, as the grid's points were, by
 :func:`herman2019.calibration.run_sample` (resumable; one row per point).
@@ -213,17 +214,17 @@ def fit_scale(sur: Surrogate, calibration: pd.DataFrame) -> dict[str, float]:
         r, noise, terms, kind = r[ok], noise[ok], terms[ok], kind_all[ok]
         seen = terms.sum(axis=0) > 0
 
-        def var(p, c=1.0):
+        def var(p, c=1.0, noise=noise, terms=terms):
             return noise + c * c * combine(terms * np.exp(2 * p[:-1]), power(p[-1]))
 
-        def ridge(s):
+        def ridge(s, seen=seen):
             out = 0.0
             for group in (seen & ~flat, seen & flat):
                 if group.any():
                     out += float(np.sum((s[group] - s[group].mean()) ** 2))
             return RIDGE * out
 
-        def nll(p):
+        def nll(p, r=r, var=var, ridge=ridge):
             v = var(p)
             return float(np.sum(np.log(v) + r * r / v)) + ridge(p[:-1])
         p = minimize(nll, np.zeros(len(names) + 1), method="L-BFGS-B", bounds=bounds).x
@@ -237,7 +238,7 @@ def fit_scale(sur: Surrogate, calibration: pd.DataFrame) -> dict[str, float]:
         s2 = np.exp(2 * p[:-1])
         kinds = [k for k in ("random", "axes") if (kind == k).any()]
 
-        def excess(c):
+        def excess(c, p=p, r=r, kind=kind, kinds=kinds, var=var):
             v = var(p, c)
             return float(np.mean([np.mean(r[kind == k] ** 2 / v[kind == k])
                                   for k in kinds])) - 1

@@ -6,7 +6,6 @@ shipped surrogate against the shipped table at every node."""
 from __future__ import annotations
 
 import itertools
-import json
 import math
 
 import numpy as np
@@ -29,7 +28,8 @@ def _u(a, v):
 
 
 def synthetic(f, se_rel=0.0, zone=None, dispersions=("ml",), levels=None):
-    """A full grid table over ``levels`` (default LEVELS) with every quantity = f(coordinates) (log-space
+    """A full grid table over ``levels`` (default LEVELS) with every quantity =
+    f(coordinates) (log-space
     value: q = exp(f)), relative SE ``se_rel``, compact zone where ``zone`` says."""
     rows = []
     for d in dispersions:
@@ -337,15 +337,24 @@ def test_each_axis_gets_its_own_scale():
     assert 0.4 < var("eps") / truth_e < 2.5, (var("eps"), truth_e)
 
 
+def _shipped_grid(sur) -> pd.DataFrame:
+    """The tables the shipped surrogate was built from (its ``meta["source"]``: the
+    released grid and its extensions in L_x), read together."""
+    import sweep
+    from herman2019.surrogate.model import SHIPPED
+    return pd.concat([sweep.load(SHIPPED.parents[2] / g)
+                      for g in sur.meta["source"].split(" + ")], ignore_index=True)
+
+
 def test_the_shipped_surrogate_is_the_shipped_table_at_every_node():
     """Issue 48: the surrogate reproduces the released grid at its nodes (values to
     rounding, SEs the calibrated ones, p_zone the node's 0/1)."""
-    import sweep
     from herman2019.factors import calibrated
     from herman2019.surrogate.grid import AXES as AX
-    from herman2019.surrogate.model import SHIPPED
-    df = calibrated(sweep.load(SHIPPED.parents[1] / "herman2019"))
-    p = Surrogate.load().predict(df["dispersion"].astype(str).to_numpy(),
+    sur = Surrogate.load()
+    df = calibrated(_shipped_grid(sur), between=True)
+    assert len(df) == sur.meta["points"]
+    p = sur.predict(df["dispersion"].astype(str).to_numpy(),
                                  **{a: df[a].to_numpy(float) for a in AX})
     for q in ("alpha_all", "alpha_edge", "a_end_rel", "W_c"):
         # a node with a value and its SE (alpha_edge has no SE at 431 points: the surrogate
@@ -373,7 +382,8 @@ def test_the_surrogate_page_is_what_its_command_makes(tmp_path):
     made = (tmp_path / "docs" / "surrogate.md").read_text()
     shipped = (root / "docs" / "surrogate.md").read_text()
     made = made.replace(str(work), "results/surrogate")
-    assert made == shipped, "docs/surrogate.md is stale: run herman2019 surrogate --validate --docs docs"
+    assert made == shipped, \
+        "docs/surrogate.md is stale: run herman2019 surrogate --validate --docs docs"
     assert (tmp_path / "docs" / "surrogate" / "validation.png").stat().st_size > 10_000
 
 
@@ -396,13 +406,12 @@ def test_the_shipped_surrogate_is_what_its_build_makes():
     """results/surrogate/surrogate.npz is `herman2019 surrogate --build` of the shipped
     grid and the stored calibration runs (nothing is run): the same node fields, scales,
     combination powers and p_zone recalibration."""
-    import sweep
     from herman2019.surrogate.model import SHIPPED
-    from herman2019.surrogate.validate import fit_scale, model_table
+    from herman2019.surrogate.validate import fit_scale, model_table, set_names
     shipped = Surrogate.load()
-    sur = build(sweep.load(SHIPPED.parents[1] / "herman2019"))
+    sur = build(_shipped_grid(shipped))
     runs = pd.concat([pd.read_csv(SHIPPED.parent / n / "runs.csv.gz")
-                      for n in ("calibration", "calibration_axes")], ignore_index=True)
+                      for n in set_names(sur.levels, "calibration")], ignore_index=True)
     fit_scale(sur, model_table(runs))
     # (another CPU's libm may round a log differently in the last bit, and the fit's
     # optimiser then end a hair elsewhere: tolerances well below any printed digit)
