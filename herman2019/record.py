@@ -31,6 +31,7 @@ import sweep
 from herman2019.numbers import machine
 from sweep.analysis.export import export_profiles, export_table
 from sweep.analysis.load import load_profile, store_attrs, store_runs
+from sweep.config import load_campaign, parse_campaign
 from sweep.errors import ConfigError
 
 __all__ = ["RESULTS", "parse_log", "parse_plan", "problems", "summary", "command"]
@@ -114,13 +115,31 @@ def parse_plan(path: Path) -> dict:
             "log": path.name, "machine": machine()}
 
 
+def campaign_points(prov: dict) -> int | None:
+    """How many points the campaign of a ``provenance.json`` has: its ``grid_points``
+    (recorded from the store's campaign), else the size of its ``campaign`` file in this
+    checkout, else None."""
+    if prov.get("grid_points"):
+        return int(prov["grid_points"])
+    path = Path(__file__).resolve().parents[1] / str(prov.get("campaign", ""))
+    if prov.get("campaign") and path.is_file():
+        try:
+            return load_campaign(path).size
+        except ConfigError:
+            return None
+    return None
+
+
 def summary(prov: dict, grid_points: int | None = None) -> str:
     """The run of a shipped campaign from its ``provenance.json`` as a Markdown table:
-    shards and points, statuses, runs (stops and resumes), commits and clean trees, CPU
-    of all ranks against the projection, wall time, master share, sizes, machines."""
+    shards and points (of ``grid_points``, default its campaign's: :func:`campaign_points`),
+    statuses, runs (stops and resumes), commits and clean trees, CPU of all ranks against
+    the projection, wall time, master share, sizes, machines."""
     shards = prov.get("shards", {})
     if not shards:
         return "no shard recorded"
+    if grid_points is None:
+        grid_points = campaign_points(prov)
     n_total = {int(k.split("/")[1]) for k in shards}
     points = sum(s["points"] for s in shards.values())
     status: dict[str, int] = {}
@@ -172,7 +191,7 @@ def remake_readme(out: Path) -> bool:
     i = text.index(SUMMARY_START) + len(SUMMARY_START)
     j = text.index(SUMMARY_END, i)
     prov = json.loads((out / "provenance.json").read_text())
-    readme.write_text(text[:i] + summary(prov, 24192) + "\n" + text[j:])
+    readme.write_text(text[:i] + summary(prov) + "\n" + text[j:])
     return True
 
 
@@ -213,7 +232,7 @@ def command(args: Any) -> int:
         prov_path = args.out / "provenance.json"
         if not prov_path.exists():
             raise ConfigError(f"--summary: no {prov_path}")
-        print(summary(json.loads(prov_path.read_text()), 24192))
+        print(summary(json.loads(prov_path.read_text())))
         return 0
     if args.store is None or args.shard is None:
         raise ConfigError("herman2019 record: give STORE and --shard K/N (or --summary)")
@@ -269,6 +288,10 @@ def command(args: Any) -> int:
         prov["plan"] = plan
     prov["campaign"] = campaign or prov.get("campaign", "configs/herman2019.toml")
     prov["campaign_hash"] = attrs.get("campaign_hash")
+    try:
+        prov["grid_points"] = parse_campaign(str(attrs.get("campaign_toml", ""))).size
+    except ConfigError:
+        prov.pop("grid_points", None)
     prov.setdefault("shards", {})[f"{k}/{n}"] = entry
     prov_path.write_text(json.dumps(prov, indent=1, sort_keys=True, default=_plain) + "\n")
     remake_readme(args.out)

@@ -84,7 +84,7 @@ def test_each_results_readme_holds_the_summary_of_its_provenance():
             continue
         path = readme.parent / "provenance.json"     # none before its first shard
         prov = json.loads(path.read_text()) if path.exists() else {}
-        assert text[text.index(start) + len(start):text.index(end)] == summary(prov, 24192), \
+        assert text[text.index(start) + len(start):text.index(end)] == summary(prov), \
             readme
         checked += 1
     assert checked >= 1
@@ -112,6 +112,9 @@ def test_record_names_the_campaign_and_refuses_another_campaign_s_directory(
     assert main(["record", str(a), "--shard", "0/1", "--out", str(out)]) == 0
     prov = json.loads((out / "provenance.json").read_text())
     assert prov["campaign"] == "configs/one.toml"
+    # the campaign's own size (2 x 2 points), not the paper grid's 24,192
+    assert prov["grid_points"] == 4
+    assert "| points | " in summary(prov) and " of 4 |" in summary(prov)
     before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
     capsys.readouterr()
     assert main(["record", str(b), "--shard", "0/1", "--out", str(out)]) == 2
