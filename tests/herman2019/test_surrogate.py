@@ -463,3 +463,47 @@ def test_a_grid_with_six_floe_lengths_has_its_own_axis_sets_off_its_nodes():
     moved = pts[pts["group"] == "axis:L_x"]["L_x"].to_numpy()
     assert len(moved) and not np.any(np.isclose(moved[:, None], six["L_x"][None, :]))
     assert sorted(set(moved)) == [0.6, 0.87, 1.12, 1.25, 1.37, 1.73, 2.24, 2.5, 2.75]
+
+
+def test_the_grid_extensions_reproduce_the_off_grid_runs_at_the_configurations_they_share():
+    """One configuration, one result: an off-grid set's point at a floe length that a grid
+    extension (results/herman2019-lx...) later made a node was run twice, once by
+    ``herman2019.calibration.run_sample`` and once by an MPI campaign's shard. Where both
+    ran on a CPU of one kind (provenance), every value is the same bit for bit."""
+    import json
+    from pathlib import Path
+
+    from herman2019.surrogate.model import SHIPPED
+    root = Path(SHIPPED).parents[2] / "results"
+    sets = json.loads((root / "surrogate" / "provenance.json").read_text())
+    keycols = [*AXES, "dispersion"]
+
+    def keys(df):
+        return pd.MultiIndex.from_frame(df[keycols].astype(str))
+    compared = 0
+    for ext in sorted(root.glob("herman2019-lx*")):
+        if not (ext / "provenance.json").exists():      # none before its first shard
+            continue
+        prov = json.loads((ext / "provenance.json").read_text())
+        for shard, entry in prov["shards"].items():
+            grid = pd.read_csv(ext / entry["table"])
+            grid.index = keys(grid)
+            for name, meta in sets.items():
+                if meta["machine"] != entry["machine"]:
+                    continue
+                runs = pd.read_csv(root / "surrogate" / name / "runs.csv.gz")
+                runs.index = keys(runs)
+                both = runs.index.intersection(grid.index)
+                for q in ("alpha_all", "alpha_edge", "alpha_inner", "alpha_exp", "a_end",
+                          "W_c", "W_c_gap", "collision_rate", "alpha_all_stderr",
+                          "a_end_stderr", "W_c_stderr", "iterations"):
+                    a = grid.loc[both, q].to_numpy(float)
+                    b = runs.loc[both, q].to_numpy(float)
+                    same = (a == b) | (np.isnan(a) & np.isnan(b))
+                    assert same.all(), (ext.name, shard, name, q, a[~same], b[~same])
+                assert (grid.loc[both, "status"].astype(str)
+                        == runs.loc[both, "status"].astype(str)).all()
+                assert (grid.loc[both, "compact_zone"].astype(str)
+                        == runs.loc[both, "layout"].astype(str)).all()
+                compared += len(both)
+    assert compared >= 100, compared
