@@ -15,9 +15,9 @@ prints per method the median and 90th percentile of |q_interp / q_model - 1|:
   through its three levels (more levels: the mean of the quadratics through the cell and
   each neighbour, :func:`join_lx`);
 - ``pchip`` and ``cubic`` (``RegularGridInterpolator``, log q, log axes): they need four
-  nodes per axis and L_x has three, so each is applied over the other five axes at each
-  of L_x's three levels, then joined along L_x by the quadratic through the three (and,
-  as a check, linearly);
+  nodes per axis and the paper's grid has three of L_x, so each is applied over the other
+  five axes at each level of L_x, then joined along L_x by the quadratic (and, as a
+  check, linearly);
 - with four or more levels of L_x (``--grid`` with the grid's extensions): ``pchip`` along
   L_x too.
 
@@ -64,7 +64,7 @@ def interp(method, values, levels, pts, log_q, log_axes, join="quadratic"):
         xs = np.stack([coord(a, pts[a], log_axes) for a in rest], axis=1)
         at = np.stack([RegularGridInterpolator(
             [coord(a, levels[a], log_axes) for a in rest], y[i], method=method)(xs)
-            for i in range(len(levels["L_x"]))], axis=1)            # (n, 3)
+            for i in range(len(levels["L_x"]))], axis=1)            # (n, L_x levels)
         u = coord("L_x", levels["L_x"], log_axes)
         x = coord("L_x", pts["L_x"], log_axes)
         out = join_lx(join, at, u, x)

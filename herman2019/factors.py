@@ -179,11 +179,17 @@ def factors_between(df: pd.DataFrame, factors: pd.DataFrame, q: str) -> np.ndarr
     out = factors_of(rows, factors, q)
     lows, weights = {}, {}
     off = np.zeros(len(rows), bool)
+    bad = np.zeros(len(rows), bool)
     for feat in BETWEEN:
         if feat not in rows:
             continue
         lv = np.array(sorted({float(x) for x in f.loc[f["term"] == feat, "level"]}))
-        x = np.log(rows[feat].to_numpy(float))
+        if len(lv) < 2:
+            continue
+        v = rows[feat].to_numpy(float)
+        bad |= ~(np.isfinite(v) & (v > 0))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            x = np.log(np.where(np.isfinite(v) & (v > 0), v, lv[0]))
         u = np.log(lv)
         i = np.clip(np.searchsorted(u, x, side="right") - 1, 0, len(lv) - 2)
         w = np.clip((x - u[i]) / (u[i + 1] - u[i]), 0.0, 1.0)
@@ -193,6 +199,8 @@ def factors_between(df: pd.DataFrame, factors: pd.DataFrame, q: str) -> np.ndarr
         lows[feat] = (lv, i)
         weights[feat] = w
         off |= ~on
+    off &= ~bad
+    out[bad] = np.nan                   # no parameter value, no factor
     if not off.any():
         return out
     sub = rows[off]
@@ -208,7 +216,8 @@ def factors_between(df: pd.DataFrame, factors: pd.DataFrame, q: str) -> np.ndarr
             wt *= weights[feat][off] if up else 1.0 - weights[feat][off]
         if not (wt > 0).any():
             continue
-        logf += wt * np.log(factors_of(snap, factors, q))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            logf += np.where(wt > 0, wt * np.log(factors_of(snap, factors, q)), 0.0)
     out[off] = np.exp(logf)
     return out
 

@@ -116,4 +116,6 @@ def build(table: pd.DataFrame, source: str = "", commit: str = "",
     meta = {"source": source, "commit": commit, "model_version": versions,
             "standard_errors": which, "points": int(sum(len(f) for f in fields.values())),
             "lx_order": dict(LX_ORDER if lx_order is None else lx_order)}
+    if len(levels["L_x"]) < 3:         # a quadratic needs three levels
+        meta["lx_order"] = {q: 1 for q in QUANTITIES}
     return Surrogate(levels, fields, FIELD_NAMES, {q: 1.0 for q in QUANTITIES}, meta)

@@ -18,7 +18,7 @@ of ``results/calibration/factors.csv`` where the table is of that model version)
 interpolation error between the nodes: per axis a curvature term (the node values'
 curvature along it, from the leave-one-out residual at each interior node with its noise
 taken out, :mod:`.build`, times (t(1-t)h^2)^2) and a flat one ((4t(1-t))^2), each with its
-own scale per quantity (L_x's two intervals apart), combined with a power p
+own scale per quantity (each of L_x's intervals apart), combined with a power p
 (:func:`combine`); scales and p fitted on off-grid points run for the purpose, never on
 the validation sets (:func:`.validate.fit_scale`). At a node every term is zero, and the
 surrogate returns the node's own value and SE.
@@ -202,10 +202,12 @@ class Surrogate:
                        else np.zeros(len(mean)))
             if quad is not None and self.order(qn) == 2:
                 y, s = col[f"y_{qn}"][quad[0]], col[f"s_{qn}"][quad[0]]
-                full = np.all(np.isfinite(y) & np.isfinite(s), axis=1)
+                # (a node of the window that weighs nothing, e.g. an end cell's fourth,
+                # need not have a value)
+                full = np.all((np.isfinite(y) & np.isfinite(s)) | (quad[1] == 0), axis=1)
                 w2 = np.where(full[:, None], quad[1], 0.0)
-                mean2 = np.sum(w2 * np.where(full[:, None], y, 0.0), axis=1)
-                noise2q = np.sum((w2 * np.where(full[:, None], s, 0.0)) ** 2, axis=1)
+                mean2 = np.sum(w2 * np.where(w2 != 0, y, 0.0), axis=1)
+                noise2q = np.sum((w2 * np.where(w2 != 0, s, 0.0)) ** 2, axis=1)
                 mean = np.where(full, mean2, mean)             # linear where a node lacks
                 noise2 = np.where(full, noise2q, noise2)
             value = np.exp(mean)

@@ -43,14 +43,16 @@ __all__ = ["SETS", "draw_points", "model_table", "compare", "fit_scale", "error_
 SETS = {"calibration": ("random", 300, 4801), "calibration_axes": ("axes", 24, 4803),
         "validation": ("random", 300, 4802), "validation_axes": ("axes", 24, 4804)}
 #: Off-node values per axis for the ``axes`` sets (on the model's lattices; those on a
-#: grid's nodes are left out: for L_x 0.75, 1.0, 1.25, 2.0, 2.5 in a grid with those
-#: floe lengths, whose every interval then still holds one value or more).
-AXIS_VALUES = {"L_x": (0.6, 0.75, 0.87, 1.0, 1.12, 1.25, 1.37, 1.73, 2.0, 2.24, 2.5, 2.75),
+#: grid's nodes are left out).
+AXIS_VALUES = {"L_x": (0.6, 0.75, 1.0, 1.25, 2.0, 2.5, 2.75),
                "T": (1.152, 1.252, 1.3, 1.452, 1.7, 1.9),
                "a0": (0.0135, 0.0175, 0.0225),
                "C_sd": (0.0075, 0.025, 0.075, 0.125, 0.175),
                "eps": (0.3, 0.5, 0.7),
                "d_f": (0.007, 0.014, 0.035)}
+#: More floe lengths for the ``_axes_lx<n>`` sets of a grid with more levels of L_x (with
+#: L_x 0.75, 1.0, 1.25, 2.0, 2.5 among them, each of its intervals keeps a value or more).
+MORE_LX = (0.87, 1.12, 1.37, 1.73, 2.24)
 #: The lattices the model's T and L_x live on: T/dt a multiple of drag_every (0.001 s x
 #: 4), L_x/dx an integer (dx 0.01 m).
 T_STEP, L_STEP = 0.004, 0.01
@@ -74,20 +76,46 @@ def draw_points(levels: Mapping[str, np.ndarray], n: int, seed: int) -> pd.DataF
     return out
 
 
-def draw_axis_points(levels: Mapping[str, np.ndarray], n: int, seed: int) -> pd.DataFrame:
+def draw_axis_points(levels: Mapping[str, np.ndarray], n: int, seed: int,
+                     values: Mapping[str, Sequence[float]] | None = None,
+                     exclude: frozenset = frozenset()) -> pd.DataFrame:
     """For each axis, ``n`` grid nodes of the other five axes and the dispersion relation
-    drawn at random, each with the axis at every one of its :data:`AXIS_VALUES`: points
-    where the surrogate interpolates along that axis alone (``group`` = "axis:<name>")."""
+    drawn at random, each with the axis at every one of its ``values`` (default
+    :data:`AXIS_VALUES`) off the grid's levels: points where the surrogate interpolates
+    along that axis alone (``group`` = "axis:<name>"). A node already drawn for the axis,
+    or in ``exclude`` (pairs (axis, node) of :func:`axis_nodes`: another set's), is drawn
+    again."""
     rng = np.random.default_rng(seed)
+    values = AXIS_VALUES if values is None else values
     rows = []
     for axis in AXES:
+        taken = set()
         for _ in range(n):
-            base = {a: float(rng.choice(levels[a])) for a in AXES if a != axis}
-            d = str(rng.choice(np.array(DISPERSIONS)))
+            while True:
+                base = {a: float(rng.choice(levels[a])) for a in AXES if a != axis}
+                d = str(rng.choice(np.array(DISPERSIONS)))
+                key = (axis, _node_key(base, d))
+                if key not in taken and key not in exclude:
+                    break
+            taken.add(key)
             rows += [{**base, axis: v, "dispersion": d, "group": f"axis:{axis}"}
-                     for v in AXIS_VALUES[axis]
+                     for v in values[axis]
                      if not np.any(np.isclose(v, levels[axis]))]   # off the nodes only
     return pd.DataFrame(rows)[[*AXES, "dispersion", "group"]]
+
+
+def _node_key(base: Mapping[str, float], d: str) -> tuple:
+    return (*(repr(float(base[a])) for a in AXES if a in base), d)
+
+
+def axis_nodes(points: pd.DataFrame) -> frozenset:
+    """The (axis, node) pairs of an ``axes`` set's points (:func:`draw_axis_points`)."""
+    out = set()
+    for row in points.itertuples(index=False):
+        axis = str(row.group).removeprefix("axis:")
+        base = {a: float(getattr(row, a)) for a in AXES if a != axis}
+        out.add((axis, _node_key(base, str(row.dispersion))))
+    return frozenset(out)
 
 
 def set_names(levels: Mapping[str, np.ndarray], role: str) -> tuple[str, str]:
@@ -110,9 +138,20 @@ def set_spec(name: str) -> tuple[str, int, int]:
 
 
 def draw_set(name: str, levels: Mapping[str, np.ndarray]) -> pd.DataFrame:
-    """The points of the set ``name`` (:func:`set_spec`)."""
+    """The points of the set ``name`` (:func:`set_spec`). An ``_axes_lx<n>`` set moves L_x
+    over :data:`MORE_LX` too; a validation ``axes`` set draws none of the nodes of its
+    calibration set (so that no point is fitted and checked at once)."""
     kind, n, seed = set_spec(name)
-    return (draw_points if kind == "random" else draw_axis_points)(levels, n, seed)
+    if kind == "random":
+        return draw_points(levels, n, seed)
+    values = dict(AXIS_VALUES)
+    if "_lx" in name:
+        values["L_x"] = tuple(sorted(set(AXIS_VALUES["L_x"]) | set(MORE_LX)))
+    exclude = frozenset()
+    if name.startswith("validation"):
+        exclude = axis_nodes(draw_set("calibration" + name.removeprefix("validation"),
+                                      levels))
+    return draw_axis_points(levels, n, seed, values, exclude)
 
 
 def model_table(runs: pd.DataFrame) -> pd.DataFrame:
@@ -179,8 +218,8 @@ def power(theta: float) -> float:
 
 def fit_scale(sur: Surrogate, calibration: pd.DataFrame) -> dict[str, float]:
     """Fit the interpolation error's model on the calibration sets: per quantity one
-    scale per term of :meth:`Surrogate.term_names` (each axis, curvature and flat; L_x's
-    two intervals apart) and the power p of their combination, by maximum likelihood of
+    scale per term of :meth:`Surrogate.term_names` (each axis, curvature and flat; each
+    of L_x's intervals apart) and the power p of their combination, by maximum likelihood of
     the log residuals as normal with variance noise + (sum (scale^2 term)^(p/2))^(2/p)
     (a ridge of :data:`RIDGE` on the log-scales, the curvature terms' about their mean
     and the flat terms' about theirs), then one common factor so that the mean over the

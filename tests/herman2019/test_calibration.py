@@ -214,8 +214,9 @@ def test_between_the_levels_the_factor_is_read_log_linearly_and_on_them_exactly(
     between its neighbours' (each parameter alone, and two at once multilinearly); on
     the levels it is the fitted factor itself."""
     fac = fx.calibrated_factors()
-    base = {"L_x": 1.5, "T": 1.2, "a0": 0.0125, "C_sd": 0.05, "eps": 0.6, "d_f": 0.02,
-            "dispersion": "ml", "status": "converged_noisy"}
+    # (a point whose factors differ at every level around it, none at the floor of 1)
+    base = {"L_x": 1.5, "T": 1.2, "a0": 0.0125, "C_sd": 0.05, "eps": 0.6, "d_f": 0.05,
+            "dispersion": "ow", "status": "not_converged"}
 
     def f(**kw):
         return fx.factors_between(pd.DataFrame([{**base, **kw}]), fac, "alpha_all")[0]
@@ -224,6 +225,8 @@ def test_between_the_levels_the_factor_is_read_log_linearly_and_on_them_exactly(
         return fx.factors_of(pd.DataFrame([{**base, **kw}]), fac, "alpha_all")[0]
     for feat, lo, hi in (("L_x", 0.5, 1.5), ("L_x", 1.5, 3.0), ("C_sd", 0.01, 0.05),
                          ("d_f", 0.02, 0.05)):
+        assert min(node(**{feat: lo}), node(**{feat: hi})) > 1.0
+        assert abs(np.log(node(**{feat: lo}) / node(**{feat: hi}))) > 0.005, feat
         for t in (0.25, 0.5):
             v = float(np.exp((1 - t) * np.log(lo) + t * np.log(hi)))
             want = np.exp((1 - t) * np.log(node(**{feat: lo})) + t * np.log(node(**{feat: hi})))
@@ -233,8 +236,15 @@ def test_between_the_levels_the_factor_is_read_log_linearly_and_on_them_exactly(
     lx, cs = float(np.sqrt(0.5 * 1.5)), float(np.sqrt(0.01 * 0.05))
     corners = [np.log(node(L_x=a, C_sd=b)) for a in (0.5, 1.5) for b in (0.01, 0.05)]
     assert f(L_x=lx, C_sd=cs) == pytest.approx(np.exp(np.mean(corners)), rel=1e-12)
+    assert len({round(float(c), 6) for c in corners}) == 4
     # beyond the levels: the end level's
     assert f(L_x=3.5) == pytest.approx(node(L_x=3.0), rel=1e-12)
+    # no value, no factor, whatever else is in the call; the rows keep their own index
+    df = pd.DataFrame([{**base, "L_x": np.nan}, {**base, "L_x": 1.0}, base], index=[7, 3, 11])
+    got = fx.factors_between(df, fac, "alpha_all")
+    assert np.isnan(got[0]) and got[1] == pytest.approx(f(L_x=1.0), rel=1e-12)
+    assert got[2] == node()
+    assert np.isnan(fx.factors_between(df.iloc[:1], fac, "alpha_all")[0])
     # and a table at L_x = 1.0 (herman2019-lx) gets a finite calibrated SE with between
     import json
     row = {**base, "L_x": 1.0, "provenance": json.dumps({"model_version": "9"})}

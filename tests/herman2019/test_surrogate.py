@@ -297,6 +297,42 @@ def test_with_more_floe_lengths_the_quadratic_is_local_and_exact_for_a_parabola(
         nodes = df[list(AXES)].to_dict("list")
         np.testing.assert_allclose(build(df, lx_order=quad).predict("ml", **nodes)["alpha_all"],
                                    df["alpha_all"], rtol=1e-12)
+    # the rule itself, against a scalar reading on one line of L_x (the other axes at a
+    # node): in cell j the mean of the quadratics through nodes j-1..j+1 and j..j+2 (the
+    # one that exists at an end cell), at points in every cell and at both ends
+    def quartic(u):
+        return u["L_x"] ** 4 - 0.3 * u["L_x"] ** 3 + 0.2 * u["eps"]
+    df = synthetic(quartic, levels=levels)
+    u = np.log(levels["L_x"])
+    xs = np.concatenate([np.linspace(u[0], u[-1], 41), u[[0, -1]]])
+    fixed = {a: levels[a][1] for a in AXES if a != "L_x"}
+    got = build(df, lx_order=quad).predict("ml", L_x=np.exp(xs), **fixed)["alpha_all"]
+    yn = np.array([quartic({"L_x": v, "eps": _u("eps", fixed["eps"])}) for v in u])
+    for x, g in zip(xs, np.log(got.to_numpy()), strict=True):
+        j = min(int(np.searchsorted(u, x, side="right")) - 1, len(u) - 2)
+        fits = [np.polyval(np.polyfit(u[k:k + 3], yn[k:k + 3], 2), x)
+                for k in (j - 1, j) if 0 <= k and k + 2 < len(u)]
+        assert g == pytest.approx(np.mean(fits), abs=1e-9), (x, j)
+
+
+def test_a_node_the_quadratic_does_not_use_may_lack_a_value_and_two_levels_read_linearly():
+    """Four levels of L_x with no value at the last: the first cell's quadratic (through
+    the first three) is still read, exact for a parabola; a grid with two floe lengths
+    reads L_x linearly whatever ``lx_order`` asks."""
+    levels = LEVELS | {"L_x": [0.5, 1.0, 1.5, 3.0]}
+
+    def parabola(u):
+        return 0.9 * u["L_x"] ** 2 - 0.4 * u["L_x"] + 0.2 * u["eps"]
+    df = synthetic(parabola, levels=levels)
+    df.loc[df["L_x"] == 3.0, "alpha_all"] = np.nan
+    q = _query(50, seed=3) | {"L_x": np.linspace(0.5, 0.99, 50)}
+    got = build(df).predict("ml", **q)["alpha_all"]
+    want = np.exp([parabola({a: float(_u(a, q[a][i])) for a in AXES}) for i in range(50)])
+    np.testing.assert_allclose(got, want, rtol=1e-12)
+    two = synthetic(parabola, levels=LEVELS | {"L_x": [0.5, 3.0]})
+    sur = build(two)
+    assert set(sur.meta["lx_order"].values()) == {1}
+    assert np.isfinite(sur.predict("ml", **_query(20))["alpha_all"]).all()
 
 
 def test_p_zone_s_recalibration_recovers_a_known_distortion():
@@ -399,6 +435,16 @@ def test_no_off_grid_point_is_in_two_sets():
                           .astype(str).to_numpy())) for name in SETS}
     for a, b in itertools.combinations(SETS, 2):
         assert not keys[a] & keys[b], (a, b)
+    # and the sets of a grid with eight floe lengths (whose axes sets once shared a node:
+    # a validation axes set now draws none of its calibration set's), none twice in a set
+    from herman2019.surrogate.validate import set_names
+    levels8 = levels | {"L_x": np.array([0.5, 0.75, 1.0, 1.25, 1.5, 2.0, 2.5, 3.0])}
+    names = [*set_names(levels8, "calibration"), *set_names(levels8, "validation")]
+    drawn = {n: draw_set(n, levels8)[[*AXES, "dispersion"]].astype(str) for n in names}
+    assert all(not d.duplicated().any() for d in drawn.values())
+    keys8 = {n: set(map(tuple, d.to_numpy())) for n, d in drawn.items()}
+    for a, b in itertools.combinations(names, 2):
+        assert not keys8[a] & keys8[b], (a, b)
 
 
 @pytest.mark.slow
