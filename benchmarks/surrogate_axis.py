@@ -62,10 +62,11 @@ def main() -> int:
     print(f"along {args.axis}: {args.n} nodes of the other axes x {len(VALUES[args.axis])}"
           f" values; per value: median |rel. error| / 90th pct / RMS z")
     readings = [("surrogate", sur)]
-    if args.axis == "L_x" and any(sur.order(q) == 2 for q in QS):
+    if any(args.axis in sur.quadratic_axes(q) for q in QS):
+        quad = {q: [a for a in sur.quadratic_axes(q) if a != args.axis] for q in (*QS, "W_c")}
         line = Surrogate(sur.levels, sur.fields, sur.names, dict(sur.scale),
-                         {**sur.meta, "lx_order": {q: 1 for q in (*QS, "W_c")}})
-        readings.append(("linear along L_x", line))
+                         {**sur.meta, "quadratic": quad})
+        readings.append((f"linear along {args.axis}", line))
     for name, s in readings:
         cmp = compare(s, model)
         print(f"-- {name}")

@@ -1,6 +1,7 @@
 """Which interpolation for the surrogate: measured on off-grid points run with the model.
 
     python benchmarks/surrogate_methods.py [--grid results/herman2019 [results/herman2019-lx ...]]
+    python benchmarks/surrogate_methods.py --grid ... --quadratic 3   # the surrogate's axes
         [--runs results/surrogate/calibration/runs.csv.gz]
 
 Interpolates alpha_all, alpha_edge and a_end/a0 (defined at every node) of the grid's
@@ -75,7 +76,7 @@ def join_lx(join, at, u, x):
     """Along L_x, from the values ``at`` (n, levels) at its levels ``u``: ``linear``, the
     line through the cell's two; ``quadratic``, the mean of the quadratics through the
     cell's two nodes and each neighbour (one at an end cell; with three levels, the
-    quadratic through all three: the surrogate's ``lx_order`` 2); ``pchip``, scipy's
+    quadratic through all three: the surrogate's quadratic reading); ``pchip``, scipy's
     monotone cubic."""
     n = len(u)
     j = np.clip(np.searchsorted(u, x, side="right") - 1, 0, n - 2)
@@ -102,15 +103,60 @@ def join_lx(join, at, u, x):
     return total / count
 
 
+def quadratic_axes(table, runs, k_max, grids) -> int:
+    """Along which axes to read each quantity quadratically: the surrogate built from the
+    table (``herman2019.surrogate.build``, its own reading: multilinear in log q on log
+    axes, quadratic along the axes chosen), at the runs' points; from none, the axis whose
+    quadratic reading lowers the median |q_sur / q_model - 1| most is added, up to
+    ``k_max`` axes (each costs the prediction a factor of up to 2 in corners)."""
+    from herman2019.surrogate.build import build
+    from herman2019.surrogate.model import QUANTITIES, Surrogate
+    from herman2019.surrogate.validate import model_table
+    sur = build(table)
+    model = model_table(runs)
+    print(f"{len(runs)} off-grid points; grid {' + '.join(grids)}"
+          f" ({len(sur.levels['L_x'])} levels of L_x); median (90th pct) |rel. error|")
+
+    def errors(q, axes):
+        s = Surrogate(sur.levels, sur.fields, sur.names, dict(sur.scale),
+                      {**sur.meta, "quadratic": {q: list(axes)}})
+        p = s.predict(model["dispersion"].astype(str).to_numpy(),
+                      **{a: model[a].to_numpy(float) for a in AXES})
+        rel = np.abs(p[q].to_numpy(float) / model[q].to_numpy(float) - 1)
+        if q == "W_c":
+            rel = rel[model["zone"].to_numpy() > 0]
+        rel = rel[np.isfinite(rel)]
+        return float(np.median(rel)), float(np.quantile(rel, 0.9))
+    for q in QUANTITIES:
+        chosen: list[str] = []
+        med, p90 = errors(q, chosen)
+        line = [f"linear {100 * med:.2f}% ({100 * p90:.1f}%)"]
+        while len(chosen) < k_max:
+            trial = {a: errors(q, [*chosen, a]) for a in AXES if a not in chosen}
+            best = min(trial, key=lambda a: trial[a][0])
+            if trial[best][0] >= med:
+                break
+            chosen.append(best)
+            med, p90 = trial[best]
+            line.append(f"+{best} {100 * med:.2f}% ({100 * p90:.1f}%)")
+        print(f"{q:10s} " + ", ".join(line))
+    return 0
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--grid", nargs="+", default=[str(ROOT / "results" / "herman2019")],
                     help="the grid's tables, read together (e.g. also results/herman2019-lx)")
     ap.add_argument("--runs", default=str(ROOT / "results" / "surrogate" / "calibration"
                                           / "runs.csv.gz"))
+    ap.add_argument("--quadratic", type=int, default=0, metavar="K",
+                    help="instead: per quantity, the surrogate itself read quadratically"
+                    " along up to K axes, chosen greedily (quadratic_axes)")
     args = ap.parse_args()
     import sweep
     table = pd.concat([sweep.load(g) for g in args.grid], ignore_index=True)
+    if args.quadratic:
+        return quadratic_axes(table, pd.read_csv(args.runs), args.quadratic, args.grid)
     table["a_end_rel"] = table["a_end"] / table["a0"]
     runs = pd.read_csv(args.runs)
     runs["a_end_rel"] = runs["a_end"] / runs["a0"]

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Sequence
 
 import numpy as np
 import pandas as pd
@@ -32,10 +33,11 @@ __all__ = ["FIELD_NAMES", "build", "loo_kappa2", "se_columns"]
 #: The node fields, in the arrays' column order.
 FIELD_NAMES = ("zone",) + tuple(f"{p}_{q}" for q in QUANTITIES for p in ("y", "s")) + \
     tuple(f"k_{q}_{a}" for q in QUANTITIES for a in AXES)
-#: Along L_x: quadratic (2: :func:`.grid.quadratic_weights`) or the line through the
-#: cell's two nodes (1), per quantity; chosen by measured error
-#: (``benchmarks/surrogate_methods.py``).
-LX_ORDER = {"alpha_all": 2, "alpha_edge": 2, "a_end_rel": 2, "W_c": 1}
+#: The axes along which each quantity is read quadratically (:func:`.grid.window_weights`;
+#: linearly along the others), chosen by measured error on the calibration set
+#: (``benchmarks/surrogate_methods.py --quadratic``).
+QUADRATIC = {"alpha_all": ("L_x",), "alpha_edge": ("L_x",), "a_end_rel": ("L_x",),
+             "W_c": ()}
 #: Statuses with results.
 DONE = ("converged", "converged_noisy", "not_converged")
 
@@ -77,10 +79,13 @@ def loo_kappa2(y: np.ndarray, s: np.ndarray, u: np.ndarray, axis: int) -> np.nda
 
 
 def build(table: pd.DataFrame, source: str = "", commit: str = "",
-          lx_order: dict[str, int] | None = None) -> Surrogate:
+          lx_order: dict[str, int] | None = None,
+          quadratic: dict[str, Sequence[str]] | None = None) -> Surrogate:
     """The surrogate of ``table`` (``sweep.load`` of a full grid), interpolation-error
-    scale 1 (fit it with :func:`.validate.fit_scale`). ValueError when a dispersion
-    relation's rows are not the full tensor product of the axes."""
+    scale 1 (fit it with :func:`.validate.fit_scale`), read quadratically along the axes
+    of ``quadratic`` per quantity (default :data:`QUADRATIC`; ``lx_order`` q: 2 says
+    along L_x alone, 1 linear). ValueError when a dispersion relation's rows are not the
+    full tensor product of the axes."""
     table, which = se_columns(table)
     levels = node_levels(table)
     shape = tuple(len(levels[a]) for a in AXES)
@@ -115,7 +120,11 @@ def build(table: pd.DataFrame, source: str = "", commit: str = "",
         fields[d] = np.stack([cols[name] for name in FIELD_NAMES], axis=1)
     meta = {"source": source, "commit": commit, "model_version": versions,
             "standard_errors": which, "points": int(sum(len(f) for f in fields.values())),
-            "lx_order": dict(LX_ORDER if lx_order is None else lx_order)}
-    if len(levels["L_x"]) < 3:         # a quadratic needs three levels
-        meta["lx_order"] = {q: 1 for q in QUANTITIES}
+            }
+    quad = {q: tuple(v) for q, v in (QUADRATIC if quadratic is None else quadratic).items()}
+    if lx_order is not None:
+        quad = {q: ("L_x",) if lx_order.get(q, 1) == 2 else () for q in QUANTITIES}
+    # (a quadratic needs three levels)
+    meta["quadratic"] = {q: [a for a in AXES if a in quad.get(q, ()) and len(levels[a]) >= 3]
+                         for q in QUANTITIES}
     return Surrogate(levels, fields, FIELD_NAMES, {q: 1.0 for q in QUANTITIES}, meta)

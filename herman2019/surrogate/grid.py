@@ -16,7 +16,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 __all__ = ["AXES", "LOG_AXES", "DISPERSIONS", "OutsideBox", "coordinate", "cell_weights",
-           "check_box"]
+           "check_box", "axis_weights", "window_weights"]
 
 #: The six continuous axes of the paper's grid, in the table's order.
 AXES = ("L_x", "T", "a0", "C_sd", "eps", "d_f")
@@ -80,33 +80,22 @@ def cell_weights(levels: Mapping[str, np.ndarray], query: Mapping[str, np.ndarra
     return idx, w, t, h
 
 
-def node_levels(table, axes: Sequence[str] = AXES) -> dict[str, np.ndarray]:
-    """Each axis's sorted distinct values in ``table`` (a DataFrame)."""
-    return {a: np.sort(table[a].unique().astype(float)) for a in axes}
-
-
-def quadratic_weights(levels: Mapping[str, np.ndarray], query: Mapping[str, np.ndarray],
-                      axis: str = "L_x") -> tuple[np.ndarray, np.ndarray]:
-    """As :func:`cell_weights`, but along ``axis`` (three levels or more) quadratic instead
-    of the line through the cell's two nodes: the mean of the quadratics through the
-    cell's two nodes and each of its neighbours (Lagrange weights, which may be negative;
-    an end cell has one neighbour, and with three levels every cell reads the quadratic
-    through all three). Corners (n, 32 m) and weights (n, 32 m), summing to 1, over the
-    m = min(levels, 4) nodes of the window around the cell; linear along the other axes;
-    at a node it is the node."""
-    k = AXES.index(axis)
-    u = coordinate(axis, levels[axis])
+def axis_weights(u: np.ndarray, x: np.ndarray, quadratic: bool
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Along one axis of node coordinates ``u`` at points ``x`` (clipped to the range):
+    the first node of each point's window, (n,), and the window's weights, (n, m). Linear
+    (m = 2: the cell's two nodes) or, with ``quadratic`` and three levels or more, the
+    mean of the quadratics through the cell's two nodes and each neighbour (one at an end
+    cell; with three levels the quadratic through all three), m = min(levels, 4)
+    (Lagrange weights, which may be negative); at a node, the node."""
     n_lv = len(u)
-    if n_lv < 3:
-        raise ValueError(f"{axis}: a quadratic needs three levels or more, not {n_lv}")
-    idx, w, _, _ = cell_weights(levels, query)
-    shape = [len(levels[a]) for a in AXES]
-    stride = int(np.prod(shape[k + 1:]))
-    x = coordinate(axis, np.asarray(query[axis], dtype=float).ravel())
     x = np.clip(x, u[0], u[-1])
-    j = np.clip(np.searchsorted(u, x, side="right") - 1, 0, n_lv - 2)    # the cell
+    j = np.clip(np.searchsorted(u, x, side="right") - 1, 0, n_lv - 2)     # the cell
+    if not quadratic or n_lv < 3:
+        t = (x - u[j]) / (u[j + 1] - u[j])
+        return j, np.stack([1.0 - t, t], axis=1)
     m = min(n_lv, 4)
-    start = np.clip(j - 1, 0, n_lv - m)                        # the window's first node
+    start = np.clip(j - 1, 0, n_lv - m)
     lag = np.zeros((x.size, m))
     count = np.zeros(x.size)
     for first in (j - 1, j):             # the quadratic through nodes first .. first + 2
@@ -119,13 +108,31 @@ def quadratic_weights(levels: Mapping[str, np.ndarray], query: Mapping[str, np.n
             for c in range(m):
                 lag[:, c] += np.where(ok & (col == c), wa, 0.0)
         count += ok
-    lag /= count[:, None]
-    # the 32 corners of the other axes: those with this axis's bit 0
-    keep = _CORNERS[:, k] == 0
-    base_idx = idx[:, keep]                                   # at the cell's lower node
-    base_idx = base_idx + (start - j)[:, None] * stride        # at the window's first
-    # the other axes' linear weights: the 64 weights summed over this axis's bit
-    w_other = w[:, keep] + w[:, ~keep]
-    idx_q = np.concatenate([base_idx + c * stride for c in range(m)], axis=1)
-    w_q = np.concatenate([w_other * lag[:, c:c + 1] for c in range(m)], axis=1)
-    return idx_q, w_q
+    return start, lag / count[:, None]
+
+
+def window_weights(levels: Mapping[str, np.ndarray], query: Mapping[str, np.ndarray],
+                   quadratic: Sequence[str] = ()) -> tuple[np.ndarray, np.ndarray]:
+    """The tensor product of :func:`axis_weights` over :data:`AXES`, quadratic along the
+    axes of ``quadratic`` and linear along the others: for ``n`` query points the flat
+    node index of each corner of their windows and its weight, both (n, prod m), the
+    weights summing to 1. With ``quadratic`` empty, :func:`cell_weights`' corners (in
+    another order); at a node, the node."""
+    shape = [len(levels[a]) for a in AXES]
+    strides = np.cumprod([1] + shape[::-1][:-1])[::-1]
+    n = np.asarray(query[AXES[0]], dtype=float).size
+    idx = np.zeros((n, 1), dtype=np.int64)
+    w = np.ones((n, 1))
+    for k, axis in enumerate(AXES):
+        u = coordinate(axis, levels[axis])
+        x = coordinate(axis, np.asarray(query[axis], dtype=float).ravel())
+        start, wa = axis_weights(u, x, axis in quadratic)
+        offs = (start[:, None] + np.arange(wa.shape[1])[None, :]) * strides[k]   # (n, m)
+        idx = (idx[:, :, None] + offs[:, None, :]).reshape(n, -1)
+        w = (w[:, :, None] * wa[:, None, :]).reshape(n, -1)
+    return idx, w
+
+
+def node_levels(table, axes: Sequence[str] = AXES) -> dict[str, np.ndarray]:
+    """Each axis's sorted distinct values in ``table`` (a DataFrame)."""
+    return {a: np.sort(table[a].unique().astype(float)) for a in axes}

@@ -3,10 +3,10 @@ dispersion relation, with a standard error on every value.
 
 **Values.** Each quantity is interpolated between the nodes of the grid (:mod:`.grid`: log
 axes for L_x, a0, C_sd, d_f), in log(value): ``alpha_all``, ``alpha_edge``, ``a_end_rel``
-(a_end/a0) and ``W_c``; multilinearly, except along L_x where the quantities of
-``meta["lx_order"]`` take the quadratic (with three levels the one through all three,
-with more the mean of those through the cell and each neighbour:
-:func:`.grid.quadratic_weights`). ``p_zone``, the
+(a_end/a0) and ``W_c``; multilinearly, except along the axes of ``meta["quadratic"]``
+(per quantity) where the value is read quadratically: with three levels the quadratic
+through all three, with more the mean of those through the cell and each neighbour
+(:func:`.grid.window_weights`; where a node it needs has no value, linearly). ``p_zone``, the
 probability that a compact zone forms, is the multilinear interpolant of the nodes' 0/1
 outcome (recalibrated, ``meta["p_zone"]``); ``W_c`` (the zone's width where one forms) is
 interpolated over the corners with a zone only, and is NaN where no corner has one. A node
@@ -39,7 +39,7 @@ from herman2019.surrogate.grid import (
     OutsideBox,
     cell_weights,
     check_box,
-    quadratic_weights,
+    window_weights,
 )
 
 __all__ = ["QUANTITIES", "Surrogate", "SHIPPED"]
@@ -131,9 +131,13 @@ class Surrogate:
             out[k] = v
         return out
 
-    def order(self, q: str) -> int:
-        """Along L_x: 1 (linear) or 2 (quadratic: :func:`.grid.quadratic_weights`)."""
-        return int(self.meta.get("lx_order", {}).get(q, 1))
+    def quadratic_axes(self, q: str) -> tuple[str, ...]:
+        """The axes along which ``q``'s value is read quadratically (the others linearly:
+        :func:`.grid.window_weights`), ``meta["quadratic"]``; a file of the first
+        surrogates says ``meta["lx_order"]`` (2: along L_x)."""
+        if "quadratic" in self.meta:
+            return tuple(a for a in AXES if a in self.meta["quadratic"].get(q, ()))
+        return ("L_x",) if int(self.meta.get("lx_order", {}).get(q, 1)) == 2 else ()
 
     def _columns(self, d: str) -> dict[str, np.ndarray]:
         """Dispersion ``d``'s node fields as contiguous columns, cached (a prediction
@@ -177,9 +181,7 @@ class Surrogate:
         lx_stride = int(np.prod([len(self.levels[a]) for a in AXES[1:]]))
         interval = idx[:, 0] // lx_stride                      # L_x's interval, from 0
         lx_names = self._lx_names()
-        quad = None
-        if any(self.order(qn) == 2 for qn in QUANTITIES):
-            quad = quadratic_weights(self.levels, q, "L_x")
+        windows: dict[tuple[str, ...], tuple[np.ndarray, np.ndarray]] = {}
         zone = col["zone"][idx]                # NaN at a node without a result: left out
         known = np.isfinite(zone)
         wz = np.where(known, w, 0.0)
@@ -200,7 +202,11 @@ class Surrogate:
                     if every or self._scale(qn, n) > 0]
             interp2 = (combine(np.stack(used, axis=1), self.combine_power(qn)) if used
                        else np.zeros(len(mean)))
-            if quad is not None and self.order(qn) == 2:
+            axes = self.quadratic_axes(qn)
+            if axes:
+                if axes not in windows:
+                    windows[axes] = window_weights(self.levels, q, axes)
+                quad = windows[axes]
                 y, s = col[f"y_{qn}"][quad[0]], col[f"s_{qn}"][quad[0]]
                 # (a node of the window that weighs nothing, e.g. an end cell's fourth,
                 # need not have a value)

@@ -129,12 +129,11 @@ def make_page(sur: Surrogate, cmp: pd.DataFrame, docs: Path | None, source: str)
         "## How it is built",
         "",
         "- **Values**: multilinear interpolation between the grid's nodes, in log(value),"
-        " with L_x, a0, C_sd and d_f on log axes (T and eps linear); along L_x ("
-        + f"{len(sur.levels['L_x'])} levels) "
-        + ("the quadratic through all three"
-           if len(sur.levels["L_x"]) == 3 else
-           "the mean of the quadratics through the cell's two nodes and each neighbour")
-        + " for " + ", ".join(q for q in QUANTITIES if sur.order(q) == 2)
+        " with L_x, a0, C_sd and d_f on log axes (T and eps linear); quadratic along "
+        + "; ".join(f"{', '.join(ax)} for {q}" for q in QUANTITIES
+                    if (ax := sur.quadratic_axes(q)))
+        + " (with three levels the quadratic through all three, with more the mean of the"
+        " quadratics through the cell's two nodes and each neighbour)"
         + " (measured better: `python benchmarks/surrogate_methods.py`); at a node it"
         " returns the node. `W_c` is interpolated over the corners with a zone only (NaN"
         " where no corner has one). `p_zone` is the interpolant of the nodes' 0/1 outcome,"

@@ -266,14 +266,14 @@ def test_along_l_x_the_quadratic_through_its_three_levels_is_exact_for_a_parabol
 
 
 def test_with_more_floe_lengths_the_quadratic_is_local_and_exact_for_a_parabola():
-    """Six levels of L_x (the grid with its extensions): lx_order 2 reads the mean of the
+    """Six levels of L_x (the grid with its extensions): read quadratically, the mean of the
     quadratics through the cell and each neighbour (four nodes at most): exact for log q
     quadratic in log L_x, the node itself at a node, and between the nodes of a cubic
     closer than the line (whose error there is about a quarter of the cubic's)."""
-    from herman2019.surrogate.grid import quadratic_weights
+    from herman2019.surrogate.grid import window_weights
     levels = LEVELS | {"L_x": [0.5, 0.75, 1.0, 1.5, 2.0, 3.0]}
     q = _query(300, seed=9)
-    idx, w = quadratic_weights({a: np.asarray(v, float) for a, v in levels.items()}, q)
+    idx, w = window_weights({a: np.asarray(v, float) for a, v in levels.items()}, q, ["L_x"])
     assert idx.shape == w.shape == (300, 4 * 32)
     np.testing.assert_allclose(w.sum(axis=1), 1.0, rtol=0, atol=1e-13)
     quad = {qn: 2 for qn in ("alpha_all", "alpha_edge", "a_end_rel", "W_c")}
@@ -315,6 +315,38 @@ def test_with_more_floe_lengths_the_quadratic_is_local_and_exact_for_a_parabola(
         assert g == pytest.approx(np.mean(fits), abs=1e-9), (x, j)
 
 
+def test_quadratic_along_every_axis_is_exact_for_a_tensor_quadratic_and_linear_is_scipy_s():
+    """window_weights: quadratic along all six axes reproduces a function quadratic in
+    each axis coordinate (products of them too), at 4^6 corners; along none it is the
+    multilinear reading (scipy's); along some the value is read quadratically there only."""
+    from scipy.interpolate import RegularGridInterpolator
+
+    from herman2019.surrogate.grid import window_weights
+    levels = {a: np.asarray(v, float) for a, v in (LEVELS | {
+        "L_x": [0.5, 0.75, 1.0, 1.5, 2.0, 3.0], "T": [1.1, 1.2, 1.4, 1.6, 2.0]}).items()}
+    shape = [len(levels[a]) for a in AXES]
+    grids = np.meshgrid(*[_u(a, levels[a]) for a in AXES], indexing="ij")
+
+    def f(u):
+        return (u[0] ** 2 - u[1] ** 2 * u[2] + 3 * u[3] * u[4] ** 2 + u[5] ** 2 * u[0]
+                + 0.5 * u[4])
+    values = f(grids).ravel()
+    q = _query(400, seed=12)
+    x = [_u(a, q[a]) for a in AXES]
+    idx, w = window_weights(levels, q, AXES)
+    assert idx.shape[1] == 4 * 4 * 3 * 3 * 3 * 3
+    np.testing.assert_allclose((values[idx] * w).sum(axis=1), f(x), rtol=1e-10, atol=1e-10)
+    idx, w = window_weights(levels, q, ())
+    rgi = RegularGridInterpolator([_u(a, levels[a]) for a in AXES], values.reshape(shape))
+    np.testing.assert_allclose((values[idx] * w).sum(axis=1), rgi(np.stack(x, axis=1)),
+                               rtol=1e-12, atol=1e-12)
+    # quadratic along L_x alone: exact for a function quadratic in L_x, linear elsewhere
+    g = (grids[0] ** 2 + grids[1] * grids[3]).ravel()
+    idx, w = window_weights(levels, q, ["L_x"])
+    np.testing.assert_allclose((g[idx] * w).sum(axis=1), x[0] ** 2 + x[1] * x[3], rtol=1e-10,
+                               atol=1e-10)
+
+
 def test_a_node_the_quadratic_does_not_use_may_lack_a_value_and_two_levels_read_linearly():
     """Four levels of L_x with no value at the last: the first cell's quadratic (through
     the first three) is still read, exact for a parabola; a grid with two floe lengths
@@ -331,7 +363,7 @@ def test_a_node_the_quadratic_does_not_use_may_lack_a_value_and_two_levels_read_
     np.testing.assert_allclose(got, want, rtol=1e-12)
     two = synthetic(parabola, levels=LEVELS | {"L_x": [0.5, 3.0]})
     sur = build(two)
-    assert set(sur.meta["lx_order"].values()) == {1}
+    assert all("L_x" not in sur.quadratic_axes(qn) for qn in sur.meta["quadratic"])
     assert np.isfinite(sur.predict("ml", **_query(20))["alpha_all"]).all()
 
 
