@@ -4,8 +4,7 @@
         --dispersion ml                          # one point (each option takes several
                                                  # values, broadcast as numpy does)
     herman2019 surrogate --csv points.csv [--out predictions.csv]
-    herman2019 surrogate --build [--grid results/herman2019 ...] [--dir results/surrogate] \
-        --jobs 2
+    herman2019 surrogate --build [--grid TABLE ...] [--dir results/surrogate] --jobs 2
     herman2019 surrogate --validate [--dir results/surrogate] --jobs 2 [--docs docs]
 
 ``--build``: the node arrays from the grid's tables read together (:mod:`.build`; the
@@ -37,6 +36,9 @@ __all__ = ["command", "add_arguments", "DIR"]
 
 ROOT = Path(__file__).resolve().parents[2]
 #: The shipped surrogate's directory.
+#: The tables the shipped surrogate is built from: the released grid (three floe
+#: lengths) and its extensions to eight (configs/herman2019_lx*.toml).
+GRIDS = ("herman2019", "herman2019-lx", "herman2019-lx125", "herman2019-lx25")
 DIR = SHIPPED.parent
 
 
@@ -53,9 +55,9 @@ def add_arguments(p) -> None:
     p.add_argument("--build", action="store_true", help="build it from --grid")
     p.add_argument("--validate", action="store_true", help="run and compare the"
                    " validation set")
-    p.add_argument("--grid", nargs="+", default=[str(ROOT / "results" / "herman2019")],
-                   help="the grid's tables, read together (default: results/herman2019;"
-                   " e.g. also results/herman2019-lx, the grid at more floe lengths)")
+    p.add_argument("--grid", nargs="+", default=[str(ROOT / "results" / g) for g in GRIDS],
+                   help="the grid's tables, read together (default: the paper's grid and"
+                   f" its extensions in floe length, {', '.join(GRIDS)} under results/)")
     p.add_argument("--dir", type=Path, default=DIR, help="where the surrogate, its runs"
                    " and its validation go (default: results/surrogate)")
     p.add_argument("--docs", type=Path, help="with --validate: write DOCS/surrogate.md")
