@@ -103,12 +103,17 @@ def join_lx(join, at, u, x):
     return total / count
 
 
+#: An axis is read quadratically only if that lowers the median error by this share.
+MIN_GAIN = 0.05
+
+
 def quadratic_axes(table, runs, k_max, grids) -> int:
     """Along which axes to read each quantity quadratically: the surrogate built from the
     table (``herman2019.surrogate.build``, its own reading: multilinear in log q on log
     axes, quadratic along the axes chosen), at the runs' points; from none, the axis whose
-    quadratic reading lowers the median |q_sur / q_model - 1| most is added, up to
-    ``k_max`` axes (each costs the prediction a factor of up to 2 in corners)."""
+    quadratic reading lowers the median |q_sur / q_model - 1| most is added while that
+    lowers it by :data:`MIN_GAIN` of itself or more, up to ``k_max`` axes (each costs the
+    prediction a factor of up to 2 in corners)."""
     from herman2019.surrogate.build import build
     from herman2019.surrogate.model import QUANTITIES, Surrogate
     from herman2019.surrogate.validate import model_table
@@ -134,7 +139,7 @@ def quadratic_axes(table, runs, k_max, grids) -> int:
         while len(chosen) < k_max:
             trial = {a: errors(q, [*chosen, a]) for a in AXES if a not in chosen}
             best = min(trial, key=lambda a: trial[a][0])
-            if trial[best][0] >= med:
+            if trial[best][0] > (1 - MIN_GAIN) * med:
                 break
             chosen.append(best)
             med, p90 = trial[best]
