@@ -1,7 +1,7 @@
 """Which interpolation for the surrogate: measured on off-grid points run with the model.
 
-    python benchmarks/surrogate_methods.py [--grid results/herman2019 [results/herman2019-lx ...]]
-    python benchmarks/surrogate_methods.py --grid ... --quadratic 3   # the surrogate's axes
+    python benchmarks/surrogate_methods.py [--grid TABLE ...]   # default: the surrogate's four
+    python benchmarks/surrogate_methods.py --quadratic 3        # the surrogate's quadratic axes
         [--runs results/surrogate/calibration/runs.csv.gz]
 
 Interpolates alpha_all, alpha_edge and a_end/a0 (defined at every node) of the grid's
@@ -150,8 +150,10 @@ def quadratic_axes(table, runs, k_max, grids) -> int:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--grid", nargs="+", default=[str(ROOT / "results" / "herman2019")],
-                    help="the grid's tables, read together (e.g. also results/herman2019-lx)")
+    from herman2019.surrogate.command import GRIDS
+    ap.add_argument("--grid", nargs="+", default=[str(ROOT / "results" / g) for g in GRIDS],
+                    help="the grid's tables, read together (default: the surrogate's, the"
+                    " paper's grid and its extensions in floe length)")
     ap.add_argument("--runs", default=str(ROOT / "results" / "surrogate" / "calibration"
                                           / "runs.csv.gz"))
     ap.add_argument("--quadratic", type=int, default=0, metavar="K",
