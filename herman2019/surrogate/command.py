@@ -138,10 +138,11 @@ def _build(args) -> int:
     except (FileNotFoundError, ValueError) as exc:
         raise ConfigError(f"--grid {' '.join(map(str, args.grid))}: {exc}") from None
     names = set_names(sur.levels, "calibration")
+    dirty = _dirty(args.dir)           # as the build starts (it writes args.dir), and ends
     runs = pd.concat([_run_set(name, sur.levels, args.dir, args.jobs) for name in names],
                      ignore_index=True)
     fit_scale(sur, model_table(runs))
-    sur.meta["git_dirty"] = _dirty()
+    sur.meta["git_dirty"] = dirty or _dirty(args.dir)
     sur.meta["calibration"] = {"points": int(len(runs)),
                                "sets": {k: list(set_spec(k)) for k in names}}
     sur.save(args.dir / "surrogate.npz")
@@ -154,9 +155,16 @@ def _build(args) -> int:
     return EXIT_OK
 
 
-def _dirty() -> bool:
-    """Whether this checkout's tracked files differ from its commit."""
-    return subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
+def _dirty(out: Path | None = None) -> bool:
+    """Whether this checkout's tracked files differ from its commit, those under ``out``
+    (the surrogate's own directory, which a build or a validation writes) apart."""
+    spec = ["--", "."]
+    if out is not None:
+        try:
+            spec.append(f":(exclude){Path(out).resolve().relative_to(ROOT)}")
+        except ValueError:             # outside the checkout: nothing to leave out
+            pass
+    return subprocess.run(["git", "status", "--porcelain", "--untracked-files=no", *spec],
                           cwd=ROOT, capture_output=True, text=True).stdout.strip() != ""
 
 
@@ -173,11 +181,12 @@ def _run_set(name: str, levels, out: Path, jobs: int) -> pd.DataFrame:
     kind, n, seed = set_spec(name)
     path = out / name / "runs.csv.gz"
     before = len(pd.read_csv(path)) if path.exists() else 0
+    dirty = _dirty(out)                # as the runs start, and as they end
     runs = run_sample(draw_set(name, levels), [0], out / name, jobs)
     if len(runs) > before:
         prov_path = out / "provenance.json"
         prov = json.loads(prov_path.read_text()) if prov_path.exists() else {}
-        dirty = _dirty()
+        dirty = dirty or _dirty(out)
         prov[name] = {"points": int(len(runs)), "kind": kind, "draw_seed": seed,
                       "model_version": str(floewave.MODEL_VERSION), "commit": _commit(),
                       "git_dirty": dirty, "machine": machine(),

@@ -127,9 +127,7 @@ class Surrogate:
                 got = self._predict_one(d, {a: q[a][part] for a in AXES}, detail)
                 for k, v in got.items():
                     cols.setdefault(k, np.full(disp.size, np.nan))[part] = v
-        for k, v in cols.items():
-            out[k] = v
-        return out
+        return pd.concat([out, pd.DataFrame(cols, index=out.index)], axis=1)
 
     def quadratic_axes(self, q: str) -> tuple[str, ...]:
         """The axes along which ``q``'s value is read quadratically (the others linearly:

@@ -589,3 +589,30 @@ def test_the_grid_extensions_reproduce_the_off_grid_runs_at_the_configurations_t
                         == runs.loc[both, "layout"].astype(str)).all()
                 compared += len(both)
     assert compared >= 100, compared
+
+
+def test_a_build_s_own_output_does_not_make_its_tree_dirty(tmp_path, monkeypatch):
+    """The surrogate's directory is what --build and --validate write (a set's runs, the
+    npz, provenance.json): a change there is not a change of the code that made them;
+    any other tracked change is (the first build on eight floe lengths recorded
+    git_dirty true for its own provenance.json)."""
+    import subprocess
+
+    from herman2019.surrogate import command
+    repo = tmp_path / "repo"
+    (repo / "results" / "surrogate").mkdir(parents=True)
+    (repo / "code.py").write_text("x = 1\n")
+    (repo / "results" / "surrogate" / "provenance.json").write_text("{}\n")
+
+    def git(*a):
+        subprocess.run(["git", *a], cwd=repo, check=True, capture_output=True)
+    git("init", "-q")
+    git("add", "-A")
+    git("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-qm", "one")
+    monkeypatch.setattr(command, "ROOT", repo)
+    out = repo / "results" / "surrogate"
+    assert not command._dirty(out) and not command._dirty()
+    (out / "provenance.json").write_text('{"a": 1}\n')
+    assert not command._dirty(out) and command._dirty()
+    (repo / "code.py").write_text("x = 2\n")
+    assert command._dirty(out)
