@@ -213,6 +213,11 @@ def _validate(args) -> int:
     keep = [*AXES, "dispersion", "group", "status", "zone", "p_zone"] + [
         c for q in QUANTITIES for c in (q, q + "_se", q + "_sur", q + "_sur_se", q + "_z")]
     cmp[keep].to_csv(args.dir / "validation.csv.gz", index=False)
-    text = make_page(sur, cmp, args.docs, _relative(args.dir))
+    prov_path = args.dir / "provenance.json"
+    prov = json.loads(prov_path.read_text()) if prov_path.exists() else None
+    names = list(set_names(sur.levels, "validation"))
+    prov = {k: v for k, v in (prov or {}).items()
+            if k in names or k in sur.meta.get("calibration", {}).get("sets", {})}
+    text = make_page(sur, cmp, args.docs, _relative(args.dir), prov or None)
     print(text)
     return EXIT_OK

@@ -36,6 +36,19 @@ def _example(sur: Surrogate) -> str:
         + f", p_zone {r['p_zone']:.3f}"
 
 
+def _machines(provenance: dict | None) -> str:
+    """Which CPU ran each off-grid set of ``provenance`` (the surrogate's sets), as a
+    sentence."""
+    if not provenance:
+        return ""
+    by: dict[str, list[str]] = {}
+    for name, entry in sorted(provenance.items()):
+        by.setdefault(str(entry.get("machine")), []).append(f"`{name}`")
+    return " The off-grid sets ran on " + "; ".join(
+        f"{m} ({', '.join(n)})" for m, n in by.items()) + " (the nodes' machines: each" \
+        " table's README)."
+
+
 def _shape(sur: Surrogate) -> str:
     """The grid's shape, e.g. ``8 x 7 x 4 x 6 x 4 x 4 x 3 = 64,512 points``."""
     n = [len(sur.levels[a]) for a in AXES] + [len(sur.fields)]
@@ -87,9 +100,10 @@ def _table(err: pd.DataFrame) -> list[str]:
     return lines
 
 
-def make_page(sur: Surrogate, cmp: pd.DataFrame, docs: Path | None, source: str) -> str:
+def make_page(sur: Surrogate, cmp: pd.DataFrame, docs: Path | None, source: str,
+              provenance: dict | None = None) -> str:
     """The page's text; with ``docs``, written to DOCS/surrogate.md with its figure in
-    DOCS/surrogate/validation.png."""
+    DOCS/surrogate/validation.png. ``provenance``: the sets' (who ran them)."""
     rnd = cmp["group"].astype(str).to_numpy() == "offgrid"
     err = error_table(cmp[rnd])
     meta = sur.meta
@@ -109,7 +123,8 @@ def make_page(sur: Surrogate, cmp: pd.DataFrame, docs: Path | None, source: str)
         f"{', uncommitted changes' if meta.get('git_dirty') else ', a clean tree'})."
         " **Stochastic**: the nodes and the"
         " validation points are 8-replica ensembles; another seed or CPU gives other"
-        " values within their error bars.",
+        " values within their error bars."
+        + _machines(provenance),
         "",
         f"The grid ({_shape(sur)}: {_grid_words(sur)}) is a full tensor product, so"
         " it can be read as a function of six continuous parameters per dispersion"
