@@ -168,8 +168,10 @@ def make_page(sur: Surrogate, cmp: pd.DataFrame, docs: Path | None, source: str,
         + "; ".join(f"{', '.join(ax)} for {q}" for q in QUANTITIES
                     if (ax := sur.quadratic_axes(q)))
         + " (with three levels the quadratic through all three, with more the mean of the"
-        " quadratics through the cell's two nodes and each neighbour)"
-        + " (measured better: `python benchmarks/surrogate_methods.py`); at a node it"
+        " quadratics through the cell's two nodes and each neighbour; the axes chosen by"
+        " their measured error on the calibration set, `python"
+        " benchmarks/surrogate_methods.py --quadratic 3`, against scipy's tensor-grid"
+        " interpolators by `python benchmarks/surrogate_methods.py`); at a node it"
         " returns the node. `W_c` is interpolated over the corners with a zone only (NaN"
         " where no corner has one). `p_zone` is the interpolant of the nodes' 0/1 outcome,"
         " recalibrated where it is strictly between 0 and 1 by p' = 1 / (1 + exp(-(a + b"
