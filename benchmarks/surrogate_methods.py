@@ -78,29 +78,13 @@ def join_lx(join, at, u, x):
     cell's two nodes and each neighbour (one at an end cell; with three levels, the
     quadratic through all three: the surrogate's quadratic reading); ``pchip``, scipy's
     monotone cubic."""
-    n = len(u)
-    j = np.clip(np.searchsorted(u, x, side="right") - 1, 0, n - 2)
     rows = np.arange(len(x))
-    if join == "linear":
-        t = (x - u[j]) / (u[j + 1] - u[j])
-        return (1 - t) * at[rows, j] + t * at[rows, j + 1]
     if join == "pchip":
         from scipy.interpolate import PchipInterpolator
         return np.array([PchipInterpolator(u, at[i])(x[i]) for i in rows])
-    total, count = np.zeros(len(x)), np.zeros(len(x))
-    for k in (j - 1, j):                   # the quadratic through nodes k, k+1, k+2
-        ok = (k >= 0) & (k + 2 <= n - 1)
-        kk = np.clip(k, 0, n - 3)
-        val = np.zeros(len(x))
-        for a in range(3):
-            w = np.ones(len(x))
-            for b in range(3):
-                if b != a:
-                    w *= (x - u[kk + b]) / (u[kk + a] - u[kk + b])
-            val += w * at[rows, kk + a]
-        total += np.where(ok, val, 0.0)
-        count += ok
-    return total / count
+    from herman2019.surrogate.grid import axis_weights  # the surrogate's own reading
+    start, w = axis_weights(u, x, join == "quadratic")
+    return sum(w[:, c] * at[rows, start + c] for c in range(w.shape[1]))
 
 
 #: An axis is read quadratically only if that lowers the median error by this share.
