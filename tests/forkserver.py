@@ -134,26 +134,26 @@ def command(request, fds):
 
 gc.freeze()  # the children's collections leave the server's objects (and pages) alone
 sock.send(json.dumps({"ready": os.getpid()}).encode())
-children = set()
+children = {}  # pid -> the request's number: a pid is unique only until it is reaped
 while True:
     ready, _, _ = select.select([sock], [], [], 0.005 if children else None)
     if ready:
         message, fds, _, _ = socket.recv_fds(sock, 1 << 20, 3)
         if not message:
             break
+        request = json.loads(message)
         pid = os.fork()
         if pid == 0:
-            child(json.loads(message), fds)
+            child(request, fds)
         for fd in fds:
             os.close(fd)
-        children.add(pid)
-        sock.send(json.dumps({"started": pid}).encode())
+        children[pid] = request["n"]
+        sock.send(json.dumps({"started": pid, "n": request["n"]}).encode())
     while children:
         pid, status = os.waitpid(-1, os.WNOHANG)
         if pid == 0:
             break
-        children.discard(pid)
-        sock.send(json.dumps({"ended": pid, "status": status}).encode())
+        sock.send(json.dumps({"ended": children.pop(pid), "status": status}).encode())
 """
 
 
@@ -167,16 +167,23 @@ class _Server:
             env=env, cwd=Path(__file__).resolve().parent.parent,
             stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL)
         theirs.close()
+        # wait statuses by request number, not by pid: the kernel hands an ended command's
+        # pid to a later process (pid_max is 32768 here, and a full test run starts more
+        # processes than that), and a status kept by pid would be read as the new one's
         self.status: dict[int, int] = {}
+        self.requests = 0
         self.ready = False
         self.env = env
 
-    def start(self, request: dict, fds: list[int]) -> int:
-        socket.send_fds(self.sock, [json.dumps(request).encode()], fds)
+    def start(self, request: dict, fds: list[int]) -> tuple[int, int]:
+        """The command's pid and its request number (the key of its status)."""
+        self.requests += 1
+        n = self.requests
+        socket.send_fds(self.sock, [json.dumps({**request, "n": n}).encode()], fds)
         while True:
             message = self._receive(None)
-            if "started" in message:
-                return message["started"]
+            if message.get("n") == n and "started" in message:
+                return message["started"], n
 
     def _receive(self, timeout: float | None) -> dict | None:
         self.sock.settimeout(timeout)  # 0: only what has arrived
@@ -192,15 +199,16 @@ class _Server:
             self.status[message["ended"]] = message["status"]
         return message
 
-    def wait(self, pid: int, timeout: float | None) -> int | None:
-        """The wait status of ``pid``, or ``None`` if it has not ended after ``timeout``
-        seconds (0: the messages the server has sent so far are read, none awaited)."""
+    def wait(self, n: int, timeout: float | None) -> int | None:
+        """The wait status of request ``n``'s command, or ``None`` if it has not ended after
+        ``timeout`` seconds (0: the messages the server has sent so far are read, none
+        awaited)."""
         deadline = None if timeout is None else time.monotonic() + timeout
-        while pid not in self.status:
+        while n not in self.status:
             left = None if deadline is None else max(0.0, deadline - time.monotonic())
             if self._receive(left) is None:
                 break
-        return self.status.get(pid)
+        return self.status.get(n)
 
     def close(self) -> None:
         self.sock.close()
@@ -279,7 +287,7 @@ class Forked:
             else:
                 theirs.append(how if isinstance(how, int) else how.fileno())
         try:
-            self.pid = self._server.start(
+            self.pid, self._n = self._server.start(
                 {"args": [str(a) for a in args], "module": module, "code": code, "env": env,
                  "cwd": str(Path.cwd() if cwd is None else cwd),
                  "new_session": bool(start_new_session)}, theirs)
@@ -303,11 +311,11 @@ class Forked:
 
     def poll(self) -> int | None:
         if self.returncode is None:
-            self._set(self._server.wait(self.pid, 0))
+            self._set(self._server.wait(self._n, 0))
         return self.returncode
 
     def wait(self, timeout: float | None = None) -> int:
-        if self.returncode is None and self._set(self._server.wait(self.pid, timeout)) is None:
+        if self.returncode is None and self._set(self._server.wait(self._n, timeout)) is None:
             raise subprocess.TimeoutExpired(self.args, timeout)
         return self.returncode
 

@@ -5,6 +5,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import h5py
 import pytest
@@ -88,6 +89,37 @@ def test_signals_reach_the_command_and_end_it_as_they_would(tmp_path):
         assert "KeyboardInterrupt" in err
     with pytest.raises(subprocess.TimeoutExpired):
         forkserver.run([], code="import time; time.sleep(60)", timeout=0.2)
+
+
+NS_LAST_PID = Path("/proc/sys/kernel/ns_last_pid")
+
+
+@pytest.mark.skipif(os.geteuid() != 0, reason="choosing the next pid (ns_last_pid) needs root"
+                    " (CI runs as root)")
+def test_a_command_given_an_ended_commands_pid_is_not_taken_for_ended():
+    """The kernel gives an ended command's pid to a later process (pid_max is 32768 on
+    these machines; a full test run starts more processes than that). A command started
+    with the pid of one whose end the server has reported is running, not ended with that
+    one's status, and a signal reaches it. (Kept by pid, the old status was read as the new
+    command's: send_signal() saw it ended and sent nothing, and communicate() waited out
+    its timeout: CI's one failure at 3105c08's successor.) The pid is arranged by writing
+    the pid before it to ns_last_pid; another process may fork in between, so a few tries."""
+    first = forkserver.popen([], code="pass")
+    assert isinstance(first, forkserver.Forked) and first.wait(60) == 0
+    for _ in range(100):
+        NS_LAST_PID.write_text(str(first.pid - 1))
+        p = forkserver.popen([], code="import time; print('up', flush=True); time.sleep(60)",
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        if p.pid == first.pid:
+            break
+        p.kill()
+        p.communicate(timeout=60)
+    assert p.pid == first.pid, "the old pid could not be given to a new command"
+    assert p.stdout.readline() == "up\n"
+    assert p.poll() is None
+    p.send_signal(signal.SIGTERM)
+    p.communicate(timeout=60)
+    assert p.returncode == -signal.SIGTERM
 
 
 def test_poll_sees_an_end_and_the_exit_is_the_interpreters(tmp_path):
