@@ -127,3 +127,52 @@ class KernelSourcesLocator(_caching._CacheLocator):
 _IMPL = getattr(_caching, "CacheImpl", None) or _caching._CacheImpl
 if KernelSourcesLocator not in _IMPL._locator_classes:
     _IMPL._locator_classes.insert(0, KernelSourcesLocator)
+
+
+# ------------------------------------------------------------------ the cache's data files
+#
+# numba names a function's cached code by a counter: the first signature saved goes to
+# ``<function>.1.nbc``, the next to ``.2.nbc``, and so on, the number chosen from the index
+# file as the saving process last read it, the index written before the data. Two processes
+# compiling one function for *different* signatures into one empty cache at once (the ranks of
+# an MPI job with a cold cache; the kernels are compiled per literal flag, e.g. a drag pass for
+# Literal[bool](False) and (True)) both chose ``.1.nbc``; the index of one could end up naming
+# the other's code, and a third load of that signature ran the other specialisation: another
+# result for one configuration (tests/test_reproducible.py's concurrent compile, intermittent
+# in CI, 2026-12-07). For the kernel files' functions the data file is named by the key
+# (signature, target, closure) itself, so different keys never share a file, and written
+# before the index entry that names it (re-read just before it is written, so that another
+# process's entries are kept).
+
+class KernelCacheFile(_caching.IndexDataCacheFile):
+    """numba's index-and-data cache file; for a kernel file's function (its source stamp
+    holds :func:`kernel_fingerprint`) a save is safe against other processes saving the same
+    function at once (see above). Other functions keep numba's own behaviour."""
+
+    def __init__(self, cache_path, filename_base, source_stamp):
+        super().__init__(cache_path=cache_path, filename_base=filename_base,
+                         source_stamp=source_stamp)
+        self._base = filename_base
+        try:
+            self._keyed = (isinstance(source_stamp, tuple) and len(source_stamp) == 2
+                           and source_stamp[1] == kernel_fingerprint())
+        except OSError:
+            self._keyed = False
+
+    def save(self, key, data):
+        if not self._keyed:
+            return super().save(key, data)
+        taken = {name for k, name in self._load_index().items() if k != key}
+        name = f"{self._base}.{hashlib.sha256(repr(key).encode()).hexdigest()[:16]}.nbc"
+        stem, n = name[:-4], 1
+        while name in taken:  # two keys of one repr: never seen, but never one file
+            name, n = f"{stem}-{n}.nbc", n + 1
+        self._save_data(name, data)
+        overloads = self._load_index()
+        if overloads.get(key) != name:
+            overloads[key] = name
+            self._save_index(overloads)
+
+
+if _caching.IndexDataCacheFile is not KernelCacheFile:
+    _caching.IndexDataCacheFile = KernelCacheFile

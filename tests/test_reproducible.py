@@ -110,6 +110,42 @@ def test_point_bits_do_not_depend_on_the_jit_cache(tmp_path):
         assert concurrent[name] == cold[name], f"{name}: a concurrent compile changes the bits"
 
 
+def test_two_processes_saving_one_kernel_at_once_never_mix_their_code(tmp_path):
+    """The race of the concurrent compile above, replayed in order: process 2 saves the
+    ``True`` specialisation of a kernel; in the middle of it (after it chose its data file,
+    before it wrote it) process 1, which read the index before process 2 wrote it, saves the
+    ``False`` one. With numba's counter-named data files both chose ``.1.nbc``: the index
+    named process 1's key and the file held process 2's code, and a load of ``False`` ran
+    ``True`` (CI, 2026-12-07). Each key must load its own data, and both entries be kept.
+    A function of another file keeps numba's names (``<base>.1.nbc``)."""
+    from numba.core import caching
+
+    from floewave import _jit
+
+    assert caching.IndexDataCacheFile is _jit.KernelCacheFile  # what numba's Cache builds
+    stamp = ((1.0, 2), _jit.kernel_fingerprint())
+    base = "_drag.drag_pass-191.py311"
+    one, two, reader = (caching.IndexDataCacheFile(str(tmp_path), base, stamp)
+                        for _ in range(3))
+    key_false, key_true = ("sig", "Literal[bool](False)"), ("sig", "Literal[bool](True)")
+    before = one._load_index()  # process 1 read the index before process 2 wrote it
+    one._load_index = lambda: dict(before)
+    save_data = two._save_data
+
+    def interrupted(name, data):  # process 1 saves while process 2 is in its save
+        one.save(key_false, "code for False")
+        save_data(name, data)
+
+    two._save_data = interrupted
+    two.save(key_true, "code for True")
+    assert reader.load(key_false) == "code for False"
+    assert reader.load(key_true) == "code for True"
+    assert set(reader._load_index()) == {key_false, key_true}
+    other = caching.IndexDataCacheFile(str(tmp_path), "elsewhere.f-1.py311", (1.0, 2))
+    other.save(key_true, "x")
+    assert other._load_index() == {key_true: "elsewhere.f-1.py311.1.nbc"}
+
+
 CALLEE_SCRIPT = textwrap.dedent("""
     import json
     import numpy as np
