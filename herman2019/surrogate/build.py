@@ -41,6 +41,12 @@ FIELD_NAMES = ("zone",) + tuple(f"{p}_{q}" for q in QUANTITIES for p in ("y", "s
 #: a_end_rel 1.11 -> 0.43 %; W_c 7.73 % (no axis helps it).
 QUADRATIC = {"alpha_all": ("L_x", "T", "d_f"), "alpha_edge": ("L_x",), "a_end_rel": ("C_sd",),
              "W_c": ()}
+#: The axes whose intervals each have their own interpolation-error terms (each of the
+#: others shares one scale over its intervals): L_x, whose eight levels are far from evenly
+#: spread in its coordinate, and d_f, whose widest interval (0.02-0.05, 0.92 in log against
+#: 0.69) the first surrogate's error bar covered worst along d_f alone (RMS z of
+#: alpha_edge 1.94 at d_f 0.035 against 0.62 at 0.007 on calibration_axes_lx8).
+INTERVALS = ("L_x", "d_f")
 #: Statuses with results.
 DONE = ("converged", "converged_noisy", "not_converged")
 
@@ -128,6 +134,7 @@ def build(table: pd.DataFrame, source: str = "", commit: str = "",
     if lx_order is not None:
         quad = {q: ("L_x",) if lx_order.get(q, 1) == 2 else () for q in QUANTITIES}
     # (a quadratic needs three levels)
+    meta["intervals"] = [a for a in AXES if a in INTERVALS]
     meta["quadratic"] = {q: [a for a in AXES if a in quad.get(q, ()) and len(levels[a]) >= 3]
                          for q in QUANTITIES}
     return Surrogate(levels, fields, FIELD_NAMES, {q: 1.0 for q in QUANTITIES}, meta)

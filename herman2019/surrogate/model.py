@@ -18,7 +18,10 @@ of ``results/calibration/factors.csv`` where the table is of that model version)
 interpolation error between the nodes: per axis a curvature term (the node values'
 curvature along it, from the leave-one-out residual at each interior node with its noise
 taken out, :mod:`.build`, times (t(1-t)h^2)^2) and a flat one ((4t(1-t))^2), each with its
-own scale per quantity (each of L_x's intervals apart), combined with a power p
+own scale per quantity (each interval of the axes of ``meta["intervals"]`` apart: L_x's,
+and d_f's), and a *missing* term, (1 - w)^2 where w is the weight of the cell's corners
+the value is read from (a corner without a value weighs nothing: W_c at the margin of the
+compact zones' region, a node without an SE), combined with a power p
 (:func:`combine`); scales and p fitted on off-grid points run for the purpose, never on
 the validation sets (:func:`.validate.fit_scale`). At a node every term is zero, and the
 surrogate returns the node's own value and SE.
@@ -150,15 +153,27 @@ class Surrogate:
         """The interpolation-error terms, each with its own scale per quantity: per axis
         the curvature's term, ``AXIS``, and a flat one, ``AXIS:flat`` ((4 t(1 - t))^2: 1
         mid-cell, 0 at the nodes), which keeps an error between the nodes where the
-        curvature seen at them is nil. L_x's intervals each have their own: ``L_x`` the
-        first, then ``L_x:upper`` (three levels) or ``L_x:i1``, ``L_x:i2``... (more)."""
-        base = (*AXES, *self._lx_names()[1:])
-        return base + tuple(f"{n}:flat" for n in base)
+        curvature seen at them is nil; and ``missing``, (1 - w)^2 with w the weight of
+        the corners the value is read from. The intervals of the axes of
+        :meth:`interval_axes` each have their own: ``AXIS`` the first, then
+        ``L_x:upper`` (L_x with three levels) or ``AXIS:i1``, ``AXIS:i2``... (more)."""
+        base = (*AXES, *(n for a in self.interval_axes() for n in self._interval_names(a)[1:]))
+        return base + tuple(f"{n}:flat" for n in base) + ("missing",)
 
-    def _lx_names(self) -> list[str]:
-        """The name of the L_x term of each of its intervals."""
-        n = len(self.levels["L_x"]) - 1
-        return ["L_x", "L_x:upper"] if n == 2 else ["L_x"] + [f"L_x:i{j}" for j in range(1, n)]
+    def interval_axes(self) -> tuple[str, ...]:
+        """The axes whose intervals each have their own error terms (``meta["intervals"]``;
+        a file of the first surrogates: L_x alone)."""
+        return tuple(a for a in AXES if a in self.meta.get("intervals", ("L_x",)))
+
+    def _interval_names(self, axis: str) -> list[str]:
+        """The name of the axis's term in each of its intervals (one name: every
+        interval shares it)."""
+        if axis not in self.interval_axes():
+            return [axis]
+        n = len(self.levels[axis]) - 1
+        if axis == "L_x" and n == 2:
+            return ["L_x", "L_x:upper"]
+        return [axis] + [f"{axis}:i{j}" for j in range(1, n)]
 
     def combine_power(self, qn: str) -> float:
         """How the terms' variances combine: (sum v_n^(p/2))^(2/p); p = 2 adds them, a
@@ -166,8 +181,10 @@ class Surrogate:
         return float(self.meta.get("combine", {}).get(qn, 2.0))
 
     def _scale(self, qn: str, name: str) -> float:
-        """The term's fitted scale; unfitted: 1 for a curvature term, 0 for a flat one."""
-        default = 0.0 if name.endswith(":flat") else self.scale.get(qn, 1.0)
+        """The term's fitted scale; unfitted: 1 for a curvature term, 0 for a flat one and
+        for ``missing`` (a file without it reads as before)."""
+        default = (0.0 if name.endswith(":flat") or name == "missing"
+                   else self.scale.get(qn, 1.0))
         return float(self.scale.get(f"{qn}:{name}", default))
 
     def _predict_one(self, d: str, q: Mapping[str, np.ndarray], detail: bool | str
@@ -176,9 +193,10 @@ class Surrogate:
         idx, w, t, h = cell_weights(self.levels, q)
         pos = (t * (1.0 - t) * h**2) ** 2                      # (t(1-t)h^2)^2
         flat = (4.0 * t * (1.0 - t)) ** 2                      # 1 mid-cell, 0 at nodes
-        lx_stride = int(np.prod([len(self.levels[a]) for a in AXES[1:]]))
-        interval = idx[:, 0] // lx_stride                      # L_x's interval, from 0
-        lx_names = self._lx_names()
+        strides = np.cumprod([1] + [len(self.levels[a]) for a in AXES[:0:-1]])[::-1]
+        split = {a: (self._interval_names(a), (idx[:, 0] // int(strides[k]))
+                     % len(self.levels[a]))               # the axis's interval, from 0
+                 for k, a in enumerate(AXES) if a in self.interval_axes()}
         windows: dict[tuple[str, ...], tuple[np.ndarray, np.ndarray]] = {}
         zone = col["zone"][idx]                # NaN at a node without a result: left out
         known = np.isfinite(zone)
@@ -188,14 +206,18 @@ class Surrogate:
         res: dict[str, np.ndarray] = {"p_zone": self._p_zone(p)}
         for qn in QUANTITIES:
             every = detail == "terms"           # else a term of scale 0 is not computed
-            need = {a for a in AXES if every or self._scale(qn, a) > 0
-                    or (a == "L_x" and any(self._scale(qn, n) > 0 for n in lx_names))}
-            mean, noise2, terms, bad = _linear(col, idx, w, pos, qn, need)
+            need = {a for a in AXES if every or any(
+                self._scale(qn, n) > 0 for n in self._interval_names(a))}
+            mean, noise2, terms, bad, used_w = _linear(col, idx, w, pos, qn, need)
             named = {}
             for suffix, arr in (("", terms), (":flat", flat)):
                 named |= {a + suffix: arr[:, k] for k, a in enumerate(AXES)}
-                for j, name in enumerate(lx_names):          # L_x: one per interval
-                    named[name + suffix] = np.where(interval == j, arr[:, 0], 0.0)
+                for k, a in enumerate(AXES):                  # one per interval
+                    if a in split:
+                        names, interval = split[a]
+                        for j, name in enumerate(names):
+                            named[name + suffix] = np.where(interval == j, arr[:, k], 0.0)
+            named["missing"] = np.clip(1.0 - used_w, 0.0, 1.0) ** 2
             used = [self._scale(qn, n) ** 2 * v for n, v in named.items()
                     if every or self._scale(qn, n) > 0]
             interp2 = (combine(np.stack(used, axis=1), self.combine_power(qn)) if used
@@ -252,8 +274,8 @@ def combine(v: np.ndarray, p: float) -> np.ndarray:
 def _linear(col: Mapping[str, np.ndarray], idx: np.ndarray, w: np.ndarray, pos: np.ndarray,
             qn: str, need=AXES):
     """Multilinear over the corners where ``qn`` has a value (weights renormalised): mean
-    of log q, its noise variance, the interpolation-error terms per axis (n, 6), and where
-    no corner has a value."""
+    of log q, its noise variance, the interpolation-error terms per axis (n, 6), where
+    no corner has a value, and the weight of the corners with one."""
     y, s = col[f"y_{qn}"][idx], col[f"s_{qn}"][idx]
     m = np.isfinite(y) & np.isfinite(s)
     every = bool(m.all())
@@ -277,4 +299,4 @@ def _linear(col: Mapping[str, np.ndarray], idx: np.ndarray, w: np.ndarray, pos: 
                 wk = np.where(mk, w, 0.0)
                 kk = np.sum(wk * np.where(mk, kappa, 0.0), axis=1) / wk.sum(axis=1)
             terms[:, k] = np.nan_to_num(kk) * pos[:, k]
-    return mean, noise2, terms, bad
+    return mean, noise2, terms, bad, np.where(m.all(axis=1), 1.0, tot)

@@ -10,7 +10,15 @@ import pandas as pd
 
 from herman2019.surrogate.grid import AXES, DISPERSIONS
 from herman2019.surrogate.model import QUANTITIES, Surrogate
-from herman2019.surrogate.validate import SETS, brier, by_region, error_table, reliability
+from herman2019.surrogate.validate import (
+    ROLES,
+    brier,
+    by_region,
+    error_table,
+    reliability,
+    set_names,
+    set_spec,
+)
 
 __all__ = ["make_page", "COMMAND", "TARGET_RMS", "TARGET_MEDIAN"]
 
@@ -78,10 +86,6 @@ def _tail(cmp: pd.DataFrame, q: str, rms: float) -> str:
             f" z is {rms:.2f}, outside the target; its largest |z|, {abs(z[i]):.1f}, is one"
             f" point ({where}; p_zone {cmp['p_zone'].iloc[i]:.2f}), without which RMS z is"
             f" {rest:.2f}.")
-    if q == "W_c":
-        text += (" W_c is read from the corners of a point's cell that have a compact zone;"
-                 " at the margin of the zone's region few do, and the error bar does not"
-                 " carry that reading's own error.")
     return text
 
 
@@ -183,8 +187,14 @@ def make_page(sur: Surrogate, cmp: pd.DataFrame, docs: Path | None, source: str,
         "- **Interpolation error**: per axis, a term that vanishes at the nodes, the"
         " curvature of log(value) along the axis (from the leave-one-out residual at each"
         " interior node, its noise taken out) times (t(1-t) h^2)^2 inside a cell of width"
-        " h; each term with its own scale per quantity (each of L_x's intervals apart),"
-        " fitted by likelihood on the *calibration sets* "
+        " h, and a flat one, (4t(1-t))^2 (1 mid-cell); each of "
+        + " and ".join(sur.interval_axes())
+        + "'s intervals apart; and `missing`, (1 - w)^2 with w the weight of the cell's"
+        " corners the value is read from (a corner without a value weighs nothing: W_c"
+        " at the margin of the compact zones' region, a node whose ensemble gave no SE),"
+        " which is 0 where every corner has one. Each term has its own scale per"
+        " quantity, fitted by likelihood (the better of two starts, the flat terms at"
+        " 100 % and at 1 %) on the *calibration sets* "
         f"({cal.get('points', '?')} off-grid points run for the purpose: "
         + ", ".join(f"{k}: {v[1]} {_KIND[v[0]]}, draw seed {v[2]}"
                     for k, v in cal.get("sets", {}).items())
@@ -212,6 +222,18 @@ def make_page(sur: Surrogate, cmp: pd.DataFrame, docs: Path | None, source: str,
         "",
         "## Its error on the validation sets (never fitted on)",
         "",
+        "The validation sets, "
+        + ", ".join(f"`{n}`" for n in set_names(sur.levels, "validation"))
+        + ", were drawn after the error model's last change and looked at by this check"
+        " alone. "
+        + ("The sets first drawn to validate it, "
+           + ", ".join(f"`{n}`" for n in set_names(sur.levels, "calibration")
+                       if not n.startswith(ROLES["calibration"][0]))
+           + ", were looked at point by point (their worst residuals showed the `missing`"
+           " term and the flat terms' fit stopping at its bound), so they are calibration"
+           " sets now."
+           if len(ROLES["calibration"]) > 1 else ""),
+        "",
         "z = (log q_surrogate - log q_model) / sqrt(se_surrogate^2 + se_model^2), in log"
         " (so relative), with the model point's calibrated SE; W_c where the model point"
         " has a compact zone and the surrogate's cell one at a corner. Target (issue 48):"
@@ -223,7 +245,8 @@ def make_page(sur: Surrogate, cmp: pd.DataFrame, docs: Path | None, source: str,
         "",
         *_table(err),
         "",
-        f"**Each axis alone** ({int((~rnd).sum())} points: {SETS['validation_axes'][1]}"
+        f"**Each axis alone** ({int((~rnd).sum())} points:"
+        f" {set_spec(set_names(sur.levels, 'validation')[1])[1]}"
         " grid nodes of the other five axes per axis, the axis at values between its"
         " levels; the surrogate interpolates along that axis only):",
         "",

@@ -537,9 +537,9 @@ def test_a_grid_with_six_floe_lengths_has_its_own_axis_sets_off_its_nodes():
     six = {a: np.asarray(v, float) for a, v in (LEVELS | {
         "L_x": [0.5, 0.75, 1.0, 1.5, 2.0, 3.0]}).items()}
     three = {a: np.asarray(v, float) for a, v in LEVELS.items()}
-    assert set_names(three, "validation") == ("validation", "validation_axes")
+    assert set_names(three, "validation") == ("blind", "blind_axes")
     names = set_names(six, "calibration")
-    assert names == ("calibration", "calibration_axes_lx6")
+    assert names == ("calibration", "calibration_axes_lx6", "validation", "validation_axes_lx6")
     assert set_spec(names[1])[2] != set_spec("calibration_axes")[2]
     pts = draw_set(names[1], six)
     moved = pts[pts["group"] == "axis:L_x"]["L_x"].to_numpy()
@@ -616,3 +616,58 @@ def test_a_build_s_own_output_does_not_make_its_tree_dirty(tmp_path, monkeypatch
     assert not command._dirty(out) and command._dirty()
     (repo / "code.py").write_text("x = 2\n")
     assert command._dirty(out)
+
+
+def test_the_missing_term_is_the_weight_of_the_corners_without_a_value():
+    """W_c is read over the corners with a compact zone only: the ``missing`` term is
+    (1 - w)^2 with w the multilinear weight of those corners (checked against the weights
+    of :func:`cell_weights` directly), 0 where every corner has a zone and at a node; with
+    a scale it adds to W_c's error bar, and a file without that scale (the first
+    surrogates) predicts as before. alpha_all, known at every corner, has none."""
+    def zone(p):
+        return p["eps"] >= 0.5        # no zone at eps 0.2: cells between 0.2 and 0.5 mix
+    df = synthetic(lambda u: 0.2 * u["T"] - 0.1 * u["eps"], se_rel=0.02, zone=zone)
+    sur = build(df, quadratic=LINEAR)
+    q = _query(400, seed=7)
+    p = sur.predict("ml", detail="terms", **q)
+    levels = {a: np.asarray(v, float) for a, v in LEVELS.items()}
+    idx, w, _, _ = cell_weights(levels, q)
+    has = df.sort_values(list(AXES))["compact_zone"].ne("none").to_numpy()[idx]
+    want = (1 - np.sum(w * has, axis=1)) ** 2
+    inside = np.sum(w * has, axis=1) > 0
+    np.testing.assert_allclose(p["W_c_term_missing"][inside], want[inside], atol=1e-12)
+    assert (p["W_c_term_missing"][q["eps"] > 0.5] == 0).all() and (want[inside] > 0.01).any()
+    assert (p["alpha_all_term_missing"] == 0).all()
+    before = sur.predict("ml", detail=True, **q)
+    sur.scale["W_c:missing"] = 0.5
+    after = sur.predict("ml", detail=True, **q)
+    np.testing.assert_allclose(after["W_c_se_interp"] ** 2 - before["W_c_se_interp"] ** 2,
+                               0.25 * want * inside, atol=1e-12)   # p = 2: added
+    node = sur.predict("ml", detail=True, **{a: df[a].to_numpy() for a in AXES})
+    assert np.nanmax(node["W_c_se_interp"]) == 0
+    old = Surrogate(sur.levels, sur.fields, sur.names, {
+        k: v for k, v in sur.scale.items() if k != "W_c:missing"}, dict(sur.meta))
+    pd.testing.assert_frame_equal(old.predict("ml", detail=True, **q), before)
+
+
+def test_d_f_has_a_term_per_interval_and_a_first_surrogate_keeps_one():
+    """With ``meta["intervals"]`` = L_x and d_f (the build's), each d_f interval has its
+    own term, seen only by points in it; a file without ``intervals`` (the first
+    surrogates) keeps one d_f term (and L_x's)."""
+    levels = LEVELS | {"d_f": [0.005, 0.01, 0.02, 0.05]}
+    sur = build(synthetic(lambda u: 0.4 * u["d_f"] ** 2 + 0.1 * u["T"] ** 2, levels=levels),
+                quadratic=LINEAR)
+    assert sur.meta["intervals"] == ["L_x", "d_f"]
+    assert {"d_f", "d_f:i1", "d_f:i2", "d_f:i2:flat", "L_x:upper", "missing"} \
+        <= set(sur.term_names())
+    rng = np.random.default_rng(3)
+    q = _query(300, seed=3) | {"d_f": np.exp(rng.uniform(np.log(0.005), np.log(0.05), 300))}
+    p = sur.predict("ml", detail="terms", **q)
+    interval = np.minimum(np.searchsorted(np.log(levels["d_f"]), np.log(q["d_f"]),
+                                          side="right") - 1, 2)
+    for j, name in enumerate(["d_f", "d_f:i1", "d_f:i2"]):
+        assert (p.loc[interval == j, f"alpha_all_term_{name}"] > 0).any()
+        assert (p.loc[interval != j, f"alpha_all_term_{name}"] == 0).all()
+    first = Surrogate(sur.levels, sur.fields, sur.names, sur.scale,
+                      {k: v for k, v in sur.meta.items() if k != "intervals"})
+    assert "d_f:i1" not in first.term_names() and "L_x:upper" in first.term_names()
