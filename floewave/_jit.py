@@ -140,9 +140,14 @@ if KernelSourcesLocator not in _IMPL._locator_classes:
 # the other's code, and a third load of that signature ran the other specialisation: another
 # result for one configuration (tests/test_reproducible.py's concurrent compile, intermittent
 # in CI, 2026-12-07). For the kernel files' functions the data file is named by the key
-# (signature, target, closure) itself, so different keys never share a file, and written
-# before the index entry that names it (re-read just before it is written, so that another
-# process's entries are kept).
+# (signature, target, closure) and the kernel sources' fingerprint, so different keys, or
+# two versions of the kernels sharing a NUMBA_CACHE_DIR, never share a file; and it is
+# written before the index entry that names it. The index is re-read just before it is
+# written, which keeps most of another process's entries; one saved in between is lost
+# from the index (its file stays): a later process compiles that signature again, never
+# runs other code. Files of keys no longer in use (another CPU, an edited kernel) stay
+# in the cache directory, as numba's numbered files of a stale index did; deleting the
+# cache directory is always safe.
 
 class KernelCacheFile(_caching.IndexDataCacheFile):
     """numba's index-and-data cache file; for a kernel file's function (its source stamp
@@ -163,7 +168,8 @@ class KernelCacheFile(_caching.IndexDataCacheFile):
         if not self._keyed:
             return super().save(key, data)
         taken = {name for k, name in self._load_index().items() if k != key}
-        name = f"{self._base}.{hashlib.sha256(repr(key).encode()).hexdigest()[:16]}.nbc"
+        digest = hashlib.sha256(f"{self._source_stamp[1]}\0{key!r}".encode()).hexdigest()
+        name = f"{self._base}.{digest[:16]}.nbc"
         stem, n = name[:-4], 1
         while name in taken:  # two keys of one repr: never seen, but never one file
             name, n = f"{stem}-{n}.nbc", n + 1

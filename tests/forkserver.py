@@ -153,7 +153,9 @@ while True:
         pid, status = os.waitpid(-1, os.WNOHANG)
         if pid == 0:
             break
-        sock.send(json.dumps({"ended": children.pop(pid), "status": status}).encode())
+        n = children.pop(pid, None)  # (a child of no request: none is forked so)
+        if n is not None:
+            sock.send(json.dumps({"ended": n, "status": status}).encode())
 """
 
 

@@ -9,12 +9,12 @@
 
 ``--build``: the node arrays from the grid's tables read together (:mod:`.build`; the
 paper's grid and its extensions in L_x), the calibration sets' points run (resumable,
-``DIR/calibration/runs.csv.gz`` and ``DIR/calibration_axes/`` or, for a grid with n
-levels of L_x other than three, ``DIR/calibration_axes_lx<n>/``:
-:func:`.validate.set_names`), the interpolation error's model fitted on them
-(:func:`.validate.fit_scale`), ``DIR/surrogate.npz`` written. ``--validate``: the
-validation sets' points run (``DIR/validation/``, ``DIR/validation_axes[_lx<n>]/``),
-compared with the surrogate
+``DIR/<set>/runs.csv.gz`` for each set of :func:`.validate.set_names`'s "calibration":
+``calibration``, ``validation`` and their axes sets, ``<name>_axes`` or, for a grid with
+n levels of L_x other than three, ``<name>_axes_lx<n>``), the interpolation error's model
+fitted on them (:func:`.validate.fit_scale`), ``DIR/surrogate.npz`` written.
+``--validate``: the validation sets' points run (``DIR/blind/``,
+``DIR/blind_axes[_lx<n>]/``), compared with the surrogate
 (``DIR/validation.csv.gz``: every point's model values beside the surrogate's), the error
 tables printed and, with ``--docs``, ``DOCS/surrogate.md`` and its figure written. Exit
 status 0; 2 for a bad argument, a bad CSV or a point outside the box; 3 for a missing

@@ -187,9 +187,10 @@ def make_page(sur: Surrogate, cmp: pd.DataFrame, docs: Path | None, source: str,
         "- **Interpolation error**: per axis, a term that vanishes at the nodes, the"
         " curvature of log(value) along the axis (from the leave-one-out residual at each"
         " interior node, its noise taken out) times (t(1-t) h^2)^2 inside a cell of width"
-        " h, and a flat one, (4t(1-t))^2 (1 mid-cell); each of "
-        + " and ".join(sur.interval_axes())
-        + "'s intervals apart; and `missing`, (1 - w)^2 with w the weight of the cell's"
+        " h, and a flat one, (4t(1-t))^2 (1 mid-cell)"
+        + (("; each of " + " and ".join(sur.interval_axes()) + "'s intervals apart")
+           if sur.interval_axes() else "")
+        + "; and `missing`, (1 - w)^2 with w the weight of the cell's"
         " corners the value is read from (a corner without a value weighs nothing: W_c"
         " at the margin of the compact zones' region, a node whose ensemble gave no SE),"
         " which is 0 where every corner has one. Each term has its own scale per"

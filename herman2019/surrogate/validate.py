@@ -1,5 +1,6 @@
 """Off-grid points run with the model, to fit the surrogate's interpolation-error scale
-(the *calibration* set) and to check it (the *validation* set, never fitted on).
+(the *calibration* sets) and to check it (the *validation* sets, never fitted on: which
+sets play which role, :data:`ROLES`).
 
 **The points** (:func:`draw_points`): uniform inside the grid's box in each axis's
 interpolation coordinate (log for L_x, a0, C_sd, d_f: the coordinate the grid's levels
@@ -241,8 +242,9 @@ def fit_scale(sur: Surrogate, calibration: pd.DataFrame) -> dict[str, float]:
     interval of the axes of ``meta["intervals"]`` apart; the missing corners') and the power
     p of their combination, by maximum likelihood of
     the log residuals as normal with variance noise + (sum (scale^2 term)^(p/2))^(2/p)
-    (a ridge of :data:`RIDGE` on the log-scales, the curvature terms' about their mean
-    and the flat terms' about theirs), then one common factor so that the mean over the
+    (a ridge of :data:`RIDGE` on the log-scales, the curvature terms' about their mean,
+    the flat terms' about theirs, ``missing`` alone; the better of the starts of
+    :data:`FLAT_STARTS`), then one common factor so that the mean over the
     calibration sets' kinds (``group``: uniform in the box, one axis alone) of their mean
     z^2 is 1, each kind weighing the same whatever its size. Parameters that end on a
     bound of the fit are listed in ``sur.meta["at_bound"]``. Also p_zone's
@@ -292,6 +294,11 @@ def fit_scale(sur: Surrogate, calibration: pd.DataFrame) -> dict[str, float]:
         fits = [minimize(nll, np.append(np.where(flat, start, 0.0), 0.0), method="L-BFGS-B",
                          bounds=bounds) for start in FLAT_STARTS]
         p = min(fits, key=lambda f: f.fun).x
+        # a term no calibration point sees takes its group's mean log-scale, or 0 (a
+        # scale of the common factor) when none of the group is seen: for ``missing``
+        # (alpha_all: no node lacks a value; a_end_rel: one node of ow) a corner without
+        # a value then costs up to its weight in relative error, on purpose (nothing
+        # measured the reading there; an error bar of 0 would claim it exact)
         for group in groups:
             fill = p[:-1][seen & group]
             p[:-1][~seen & group] = fill.mean() if fill.size else 0.0
