@@ -12,7 +12,8 @@ after taking the lock file's flock a writer checks that the file it locked is st
 one at the path (an unlinked lock file is retried). On filesystems where ``flock`` is
 not available (``ENOLCK``/``EOPNOTSUPP``, e.g. NFS without a lock manager) the identity
 in the lock file decides: a lock naming another live process on this host, or any
-process on another host, is refused; a lock naming a dead process on this host is stale.
+process on another host, is refused; a lock naming a dead process on this host, or a pid
+now held by a process that started after the lock was taken (a reused pid), is stale.
 HDF5's own file locking is not used (it fails on NFS: h5py issue #1101).
 """
 from __future__ import annotations
@@ -30,7 +31,7 @@ from typing import Any
 
 from sweep.errors import StoreError, StoreLockedError
 
-__all__ = ["Lock", "lock_path", "pid_alive", "holders_of", "flock_waiting",
+__all__ = ["Lock", "lock_path", "pid_alive", "process_start", "holders_of", "flock_waiting",
            "writer_alive", "KILLED_WRITER_WAIT"]
 
 _NO_FLOCK = {errno.ENOLCK, errno.EOPNOTSUPP, errno.ENOSYS, errno.EINVAL}
@@ -59,8 +60,28 @@ def lock_path(path: str | Path) -> Path:
     return Path(str(path) + ".lock")
 
 
-def pid_alive(pid: int) -> bool:
-    """Whether process ``pid`` exists on this host."""
+#: [s] how much later than a lock's ``since`` its writer's process may seem to have
+#: started (``since`` is cut to the second, the boot time is a whole second).
+START_SLACK = 2.0
+
+
+def process_start(pid: int) -> float | None:
+    """When process ``pid`` started, in seconds since the epoch (Linux: ``/proc``), or
+    ``None`` where that cannot be read."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+        btime = next(int(line.split()[1]) for line in
+                     Path("/proc/stat").read_text().splitlines() if line.startswith("btime "))
+        return btime + int(fields[19]) / os.sysconf("SC_CLK_TCK")   # field 22, starttime
+    except (OSError, IndexError, StopIteration, ValueError):
+        return None
+
+
+def pid_alive(pid: int, since: str | None = None) -> bool:
+    """Whether process ``pid`` exists on this host; with ``since`` (a lock's ISO time),
+    whether it is the process that took the lock then: the kernel gives a dead writer's
+    pid to later processes (pid_max is 32768 on many machines), and one that started
+    after ``since`` is another process."""
     if pid <= 0:
         return False
     try:
@@ -68,7 +89,15 @@ def pid_alive(pid: int) -> bool:
     except ProcessLookupError:
         return False
     except PermissionError:
-        return True
+        pass
+    if since is not None:
+        start = process_start(pid)
+        try:
+            taken = _dt.datetime.fromisoformat(since).timestamp()
+        except (TypeError, ValueError):
+            return True
+        if start is not None and start > taken + START_SLACK:
+            return False
     return True
 
 
@@ -102,7 +131,7 @@ def writer_alive(store: str | Path) -> bool:
         pid, host = int(who["pid"]), str(who["host"])
     except (OSError, ValueError, KeyError, TypeError):
         return False  # no lock file (released), or one without an identity
-    return host != socket.gethostname() or pid_alive(pid)
+    return host != socket.gethostname() or pid_alive(pid, who.get("since"))
 
 
 def _identity() -> dict[str, Any]:
@@ -200,7 +229,8 @@ class Lock:
             pid, where = int(who["pid"]), str(who["host"])
         except (ValueError, KeyError, TypeError):
             return
-        if where != socket.gethostname() or (pid != os.getpid() and pid_alive(pid)):
+        if where != socket.gethostname() or (pid != os.getpid()
+                                             and pid_alive(pid, who.get("since"))):
             os.close(fd)
             raise StoreLockedError(
                 f"{self.path}: held by {_describe(text)} and flock is not available on"

@@ -91,3 +91,44 @@ def test_the_lock_file_names_its_holder(tmp_path):
         assert who["pid"] == os.getpid() and who["host"]
     finally:
         lock.release()
+
+
+def test_a_lock_naming_a_pid_now_held_by_a_later_process_is_not_a_live_writer(
+        tmp_path, monkeypatch):
+    """A writer killed by SIGKILL leaves its lock file behind; the kernel may give its pid
+    to a later process (pid_max is 32768 on these machines). That process is not the
+    writer: ``writer_alive`` (``sweep status``'s "running" or "died") says no, and where
+    flock is unavailable a new writer takes the lock over instead of refusing it. The
+    lock names the same live process with a ``since`` after its start: alive, refused."""
+    import datetime as dt
+    import errno
+    import socket
+
+    from sweep.store import lock as lk
+    store = tmp_path / "s.h5"
+    path = lock_path(store)
+    later = forkserver.popen([], code="import time; time.sleep(60)")
+    try:
+        now = dt.datetime.now(dt.UTC)
+
+        def name(since):
+            path.write_text(json.dumps({"pid": later.pid, "host": socket.gethostname(),
+                                        "since": since.isoformat(timespec="seconds")}))
+        name(now - dt.timedelta(hours=1))          # its writer took the lock an hour ago
+        assert pid_alive(later.pid) and not lk.writer_alive(store)
+        name(now + dt.timedelta(seconds=5))        # the live process took it
+        assert lk.writer_alive(store)
+
+        def no_flock(fd, op):
+            raise OSError(errno.ENOLCK, "No locks available")
+        monkeypatch.setattr(lk.fcntl, "flock", no_flock)
+        with pytest.raises(StoreLockedError, match="flock is not available"):
+            Lock(path).acquire()
+        name(now - dt.timedelta(hours=1))
+        lock = Lock(path)
+        lock.acquire()
+        assert str(later.pid) in lock.stale_owner and not lock.flock
+        lock.release()
+    finally:
+        later.kill()
+        later.wait()
