@@ -685,3 +685,31 @@ def test_the_shipped_fit_did_not_stop_at_a_bound_on_alpha_all_s_flat_terms():
     flats = [v for k, v in sur.scale.items() if k.startswith("alpha_all:")
              and k.endswith(":flat")]
     assert max(flats) > 0.01
+
+
+def test_a_first_surrogate_s_file_predicts_as_its_own_code_did():
+    """tests/data/surrogate_first.npz was built, given scales, combination powers and a
+    p_zone recalibration, and read at 300 points by the first surrogate's code (commit
+    923a0ed, before the ``missing`` term and d_f's intervals: tests/data/
+    make_surrogate_first.py, run with that commit's ``herman2019`` first on the path).
+    This code reads that file (no
+    ``intervals``, no ``missing`` scale) to the same values and SEs, bit for bit (on a CPU
+    of the kind that made them; elsewhere a log may round differently: then to 1e-12)."""
+    from pathlib import Path
+    data = Path(__file__).resolve().parents[1] / "data"
+    sur = Surrogate.load(data / "surrogate_first.npz")
+    assert "intervals" not in sur.meta and not any(k.endswith(":missing") for k in sur.scale)
+    with np.load(data / "surrogate_first_predictions.npz") as z:
+        want = {k: z[k] for k in z.files}
+    got = sur.predict(want["dispersion"].astype(str), detail=True,
+                      **{a: want[a] for a in AXES})
+    assert set(got.columns) - {"dispersion"} == set(want) - {"dispersion"}
+    for c, v in want.items():
+        if c != "dispersion":
+            np.testing.assert_allclose(got[c].to_numpy(float), v, rtol=1e-12, atol=0,
+                                       equal_nan=True, err_msg=c)
+    # cells at the compact zones' margin (W_c read over some corners) and nodes whose
+    # alpha_edge has no SE are among them: where the new code's missing term would act
+    mixed = (want["p_zone"] > 0) & (want["p_zone"] < 1)
+    assert mixed.sum() > 30 and np.isfinite(want["W_c"][mixed]).all()
+    assert np.isnan(sur.fields["ml"][:, sur.column("s_alpha_edge")]).any()
