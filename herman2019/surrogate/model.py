@@ -193,9 +193,8 @@ class Surrogate:
         idx, w, t, h = cell_weights(self.levels, q)
         pos = (t * (1.0 - t) * h**2) ** 2                      # (t(1-t)h^2)^2
         flat = (4.0 * t * (1.0 - t)) ** 2                      # 1 mid-cell, 0 at nodes
-        strides = np.cumprod([1] + [len(self.levels[a]) for a in AXES[:0:-1]])[::-1]
-        split = {a: (self._interval_names(a), (idx[:, 0] // int(strides[k]))
-                     % len(self.levels[a]))               # the axis's interval, from 0
+        lower = np.unravel_index(idx[:, 0], [len(self.levels[a]) for a in AXES])
+        split = {a: (self._interval_names(a), lower[k])   # the axis's interval, from 0
                  for k, a in enumerate(AXES) if a in self.interval_axes()}
         windows: dict[tuple[str, ...], tuple[np.ndarray, np.ndarray]] = {}
         zone = col["zone"][idx]                # NaN at a node without a result: left out
